@@ -1,0 +1,5 @@
+"""Run mzc as ``python -m mzc``."""
+
+from mzc.cli import main
+
+main()

@@ -1,0 +1,89 @@
+"""The ``mzc`` command group.
+
+Subcommands live in ``mzc/commands/`` and are imported only when invoked, so ``mzc
+--help`` stays fast. Any MzcError becomes one line on stderr and exit status 1; click
+usage errors exit 2.
+"""
+
+import importlib
+import os
+import sys
+
+import click
+
+from mzc import __version__
+from mzc.errors import MzcError
+
+COMMANDS = {
+    "slice": "Cut a mesh or point cloud into a z-grid.",
+    "encode": "Compress a z-grid.",
+    "decode": "Decompress an mzc file into a z-grid.",
+    "densify": "Insert rows between the planes of a z-grid (the PDE step).",
+    "triangulate": "Turn a z-grid into a triangle mesh.",
+    "diff": "Compare two surfaces (meshes or z-grids).",
+    "info": "Describe any mzc file.",
+    "sample": "Write a built-in sample surface.",
+}
+
+
+class LazyGroup(click.Group):
+    """A click group that imports a subcommand's module only when it runs."""
+
+    def list_commands(self, ctx):
+        return list(COMMANDS)
+
+    def get_command(self, ctx, name):
+        if name not in COMMANDS:
+            return None
+        module = importlib.import_module(f"mzc.commands.{name}")
+        return module.command
+
+    def format_commands(self, ctx, formatter):
+        rows = [(name, summary) for name, summary in COMMANDS.items()]
+        with formatter.section("Commands"):
+            formatter.write_dl(rows)
+
+
+@click.group(cls=LazyGroup, context_settings={"help_option_names": ["-h", "--help"]})
+@click.version_option(__version__, prog_name="mzc")
+def group():
+    """Compress 3D surface patches into small files and rebuild dense meshes.
+
+    Every command reads a file argument or stdin ('-' or nothing) and writes '-o FILE'
+    or stdout, so they chain in pipelines:
+
+    \b
+      mzc slice a.obj | mzc encode --dwt -q 10 > a.mzw
+      mzc decode < a.mzw | mzc densify -n 3 | mzc triangulate -o b.ply
+    """
+
+
+def main():
+    """Entry point: run the group, turning MzcError and other failures into one line on stderr."""
+    try:
+        group.main(standalone_mode=False, prog_name="mzc")
+    except click.exceptions.Exit as done:
+        sys.exit(done.exit_code)
+    except click.ClickException as usage:
+        usage.show()
+        sys.exit(usage.exit_code)
+    except click.exceptions.Abort:
+        click.echo("mzc: aborted", err=True)
+        sys.exit(130)
+    except MzcError as error:
+        click.echo(f"mzc: {error}", err=True)
+        sys.exit(1)
+    except BrokenPipeError:
+        # The reader went away (mzc ... | head): not an error of ours.
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+        sys.exit(1)
+    except MemoryError:
+        click.echo("mzc: out of memory", err=True)
+        sys.exit(1)
+    except Exception as error:  # noqa: BLE001 - the promise is one line, never a traceback
+        if os.environ.get("MZC_DEBUG"):
+            raise
+        click.echo(f"mzc: internal error: {type(error).__name__}: {error} "
+                   "(set MZC_DEBUG=1 for a traceback)", err=True)
+        sys.exit(3)

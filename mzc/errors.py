@@ -1,0 +1,37 @@
+"""The one exception type that the command line turns into a one-line error message."""
+
+
+class MzcError(Exception):
+    """Bad input or an impossible request.
+
+    The command line prints it as one line on stderr (``source:line: field: message``)
+    and exits with status 1; it never shows a traceback.
+    """
+
+    def __init__(self, message, *, source=None, line=None, field=None):
+        super().__init__(message)
+        self.message = message
+        self.source = source
+        self.line = line
+        self.field = field
+
+    def located(self, *, source=None, line=None, field=None):
+        """Return this error with missing location parts filled in."""
+        return MzcError(
+            self.message,
+            source=self.source or source,
+            line=self.line if self.line is not None else line,
+            field=self.field or field,
+        )
+
+    def __str__(self):
+        where = ""
+        if self.source:
+            where = str(self.source)
+            if self.line is not None:
+                where += f":{self.line}"
+            where += ": "
+        elif self.line is not None:
+            where = f"line {self.line}: "
+        field = f"{self.field}: " if self.field else ""
+        return f"{where}{field}{self.message}"

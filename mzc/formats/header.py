@@ -1,0 +1,197 @@
+"""Parsing and writing of the text header shared by every mzc format.
+
+Every mzc file starts with a magic line ``mzc-KIND MAJOR.MINOR``, then header lines
+``keyword value...`` (``#`` starts a comment line), then a line ``data`` after which the
+body follows. Readers ignore header keywords they do not know (files from a newer minor
+version stay readable) and refuse a newer major version. The grid fields (rows, cols,
+d1, d2, origin, transform, units, nodata) are common to the z-grid and the compressed
+formats; see spec/zgrid.md.
+"""
+
+import math
+
+import numpy as np
+
+from mzc.errors import MzcError
+from mzc.grid import IDENTITY_TRANSFORM, ZGrid
+
+MAX_DIMENSION = 1_000_000
+MAX_NODES = 100_000_000
+RIGID_TOLERANCE = 1e-6
+
+
+def split_magic(data, source):
+    """Return (kind, major, minor) from the first line of ``data`` (bytes), or raise."""
+    first = data[:200].split(b"\n", 1)[0].strip()
+    parts = first.split()
+    if len(parts) != 2 or not parts[0].startswith(b"mzc-"):
+        raise MzcError("not an mzc file: missing magic line 'mzc-KIND VERSION'", source=source, line=1)
+    kind = parts[0][4:].decode("ascii", "replace")
+    try:
+        major, minor = (int(p) for p in parts[1].split(b"."))
+    except ValueError:
+        raise MzcError(f"bad version {parts[1].decode('ascii', 'replace')!r} in magic line",
+                       source=source, line=1) from None
+    return kind, major, minor
+
+
+class Header:
+    """The keyword lines of a header, with the line number of each for error messages."""
+
+    def __init__(self, source):
+        self.source = source
+        self.fields = {}
+
+    def add(self, keyword, values, line):
+        if keyword in self.fields:
+            raise MzcError(f"header keyword given twice (first on line {self.fields[keyword][1]})",
+                           source=self.source, line=line, field=keyword)
+        self.fields[keyword] = (values, line)
+
+    def has(self, keyword):
+        return keyword in self.fields
+
+    def error(self, keyword, message):
+        line = self.fields[keyword][1] if keyword in self.fields else None
+        return MzcError(message, source=self.source, line=line, field=keyword)
+
+    def tokens(self, keyword, count=None, required=True):
+        """The value tokens of ``keyword``; None when optional and absent."""
+        if keyword not in self.fields:
+            if required:
+                raise MzcError("required header line missing", source=self.source, field=keyword)
+            return None
+        values = self.fields[keyword][0]
+        if count is not None and len(values) != count:
+            raise self.error(keyword, f"expected {count} value(s), found {len(values)}")
+        return values
+
+    def integer(self, keyword, low=None, high=None, required=True, default=None):
+        """An integer field checked against [low, high]."""
+        values = self.tokens(keyword, 1, required)
+        if values is None:
+            return default
+        try:
+            value = int(values[0])
+        except ValueError:
+            raise self.error(keyword, f"not an integer: {values[0]!r}") from None
+        if (low is not None and value < low) or (high is not None and value > high):
+            raise self.error(keyword, f"{value} is outside {low}..{high}")
+        return value
+
+    def floats(self, keyword, count, required=True, default=None):
+        """``count`` finite floats."""
+        values = self.tokens(keyword, count, required)
+        if values is None:
+            return default
+        try:
+            numbers = [float(v) for v in values]
+        except ValueError:
+            raise self.error(keyword, f"not a number in {' '.join(values)!r}") from None
+        if not all(math.isfinite(v) for v in numbers):
+            raise self.error(keyword, "values must be finite")
+        return numbers
+
+    def positive(self, keyword, required=True, default=None):
+        """One finite float > 0."""
+        values = self.floats(keyword, 1, required)
+        if values is None:
+            return default
+        if values[0] <= 0:
+            raise self.error(keyword, f"must be > 0, found {values[0]}")
+        return values[0]
+
+    def word(self, keyword, choices=None, required=True, default=None):
+        """One token, optionally from ``choices``."""
+        values = self.tokens(keyword, 1, required)
+        if values is None:
+            return default
+        if choices is not None and values[0] not in choices:
+            raise self.error(keyword, f"{values[0]!r} is not one of {', '.join(choices)}")
+        return values[0]
+
+
+def read_header(data, source, kind, supported_major):
+    """Parse magic and header lines of ``data``; return (Header, body bytes, first body line number)."""
+    found, major, _minor = split_magic(data, source)
+    if found != kind:
+        raise MzcError(f"expected an mzc-{kind} file, found mzc-{found}", source=source, line=1)
+    if major > supported_major:
+        raise MzcError(f"mzc-{kind} version {major}.x is newer than this mzc reads "
+                       f"({supported_major}.x); upgrade mzc", source=source, line=1)
+    header = Header(source)
+    position = data.index(b"\n") + 1 if b"\n" in data else len(data)
+    line_number = 1
+    while True:
+        if position >= len(data):
+            raise MzcError("header ends without a 'data' line", source=source, line=line_number)
+        end = data.find(b"\n", position)
+        end = len(data) if end < 0 else end
+        line_number += 1
+        try:
+            text = data[position:end].decode("utf-8").strip()
+        except UnicodeDecodeError:
+            raise MzcError("header line is not UTF-8 text", source=source, line=line_number) from None
+        position = end + 1
+        if not text or text.startswith("#"):
+            continue
+        if text == "data":
+            return header, data[position:], line_number + 1
+        keyword, *values = text.split()
+        header.add(keyword, values, line_number)
+
+
+def read_grid_fields(header):
+    """The grid header fields as keyword arguments for ZGrid (without z), plus (rows, cols).
+
+    Declared sizes are checked here, before any caller allocates memory for them.
+    """
+    rows = header.integer("rows", 1, MAX_DIMENSION)
+    cols = header.integer("cols", 1, MAX_DIMENSION)
+    if rows * cols > MAX_NODES:
+        raise header.error("cols", f"{rows} x {cols} nodes is more than the {MAX_NODES} this mzc accepts")
+    transform = header.floats("transform", 12, required=False)
+    if transform is None:
+        transform = IDENTITY_TRANSFORM
+    else:
+        transform = np.array(transform).reshape(3, 4)
+        rotation = transform[:, :3]
+        if (np.abs(rotation.T @ rotation - np.eye(3)).max() > RIGID_TOLERANCE
+                or np.linalg.det(rotation) < 0):
+            raise header.error("transform", "the 3x3 part is not a rotation (orthonormal, det +1)")
+    fields = dict(
+        d1=header.positive("d1"),
+        d2=header.positive("d2"),
+        origin=tuple(header.floats("origin", 2, required=False, default=[0.0, 0.0])),
+        transform=transform,
+        units=header.word("units", required=False),
+        nodata=header.word("nodata", required=False, default="nan"),
+    )
+    if fields["nodata"].lower() in ("inf", "+inf", "-inf", "infinity"):
+        raise header.error("nodata", "the no-data marker cannot be infinite")
+    return fields, rows, cols
+
+
+def format_number(value):
+    """The shortest text that reads back as ``value`` (``3`` rather than ``3.0``)."""
+    text = repr(float(value))
+    return text[:-2] if text.endswith(".0") else text
+
+
+def grid_header_lines(grid):
+    """Header lines for the grid fields of ``grid`` (rows and cols come from z's shape)."""
+    rows, cols = grid.shape
+    lines = [
+        f"rows {rows}",
+        f"cols {cols}",
+        f"d1 {format_number(grid.d1)}",
+        f"d2 {format_number(grid.d2)}",
+        f"origin {format_number(grid.origin[0])} {format_number(grid.origin[1])}",
+    ]
+    if not np.array_equal(grid.transform, IDENTITY_TRANSFORM):
+        lines.append("transform " + " ".join(format_number(v) for v in grid.transform.ravel()))
+    if grid.units:
+        lines.append(f"units {grid.units}")
+    lines.append(f"nodata {grid.nodata}")
+    return lines
+

@@ -1,0 +1,41 @@
+"""Shared fixtures: the real faces under ../shared/data (skipped cleanly when absent) and a CLI runner."""
+
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+REPO = Path(__file__).resolve().parents[1]
+FACES = REPO.parent / "shared" / "data" / "faces"
+FACE_NAMES = sorted(p.name for p in FACES.glob("*.ply")) if FACES.is_dir() else []
+
+
+def face_path(name):
+    """Path of a shared face, skipping the test when the shared data is not there."""
+    path = FACES / name
+    if not path.is_file():
+        pytest.skip(f"shared face data not available ({path})")
+    return path
+
+
+@pytest.fixture
+def f18():
+    """The f18 face (binary PLY, millimetres)."""
+    return face_path("f18.ply")
+
+
+def run_mzc(*args, input=None, check=False, cwd=None):
+    """Run ``python -m mzc ARGS`` as a subprocess; ``input`` is bytes for stdin."""
+    result = subprocess.run([sys.executable, "-m", "mzc", *map(str, args)], input=input,
+                            capture_output=True, cwd=cwd, env={**os.environ, "MZC_DEBUG": ""})
+    if check and result.returncode != 0:
+        raise AssertionError(f"mzc {' '.join(map(str, args))} failed: {result.stderr.decode()}")
+    return result
+
+
+@pytest.fixture
+def mzc():
+    """The run_mzc helper as a fixture."""
+    return run_mzc
