@@ -1,0 +1,37 @@
+"""``mzc info FILE``: one screen about any mzc file."""
+
+import click
+
+from mzc.commands import input_argument
+
+
+@click.command(help="""Describe any mzc file: format, version, grid size, spacings, valid nodes, bytes.
+
+Every header line is shown as written; the file is decoded to count its valid nodes.""")
+@input_argument
+def command(input):
+    from mzc.formats import detect
+    from mzc.formats.header import read_header, split_magic
+    from mzc.streams import display_name, read_input
+
+    data = read_input(input)
+    source = display_name(input)
+    module = detect(data, source)
+    kind, major, minor = split_magic(data, source)
+    header, _body, _line = read_header(data, source, kind, major)
+    grid = module.read(data, source)
+    valid = int(grid.valid.sum())
+    rows, cols = grid.shape
+    lines = [
+        f"file      {source}",
+        f"format    mzc-{kind} {major}.{minor}",
+        f"bytes     {len(data)}",
+        f"grid      {rows} rows x {cols} cols, d1 {grid.d1:g} d2 {grid.d2:g}{' ' + grid.units if grid.units else ''}",
+        f"valid     {valid} of {grid.z.size} nodes ({100 * valid / grid.z.size:.1f}%)",
+    ]
+    if valid:
+        lines.append(f"z range   {float(grid.z[grid.valid].min()):g} .. {float(grid.z[grid.valid].max()):g}")
+        lines.append(f"bits/node {8 * len(data) / valid:.3f} (per valid node)")
+    lines.append("header")
+    lines += [f"  {keyword} {' '.join(values)}" for keyword, (values, _) in header.fields.items()]
+    click.echo("\n".join(lines))

@@ -1,0 +1,26 @@
+"""``mzc triangulate``: a z-grid (or any mzc file) to a triangle mesh in the input's frame."""
+
+import click
+
+from mzc.commands import input_argument, output_option, read_grid
+
+FORMATS = ("obj", "ply", "vtk", "stl", "off")
+
+
+@click.command(help="""Turn a z-grid into a triangle mesh.
+
+Each grid cell gives the thesis's triangles 1-2-3 and 2-3-4 wherever their corners are
+valid; vertices are placed back in the input surface's frame. The output format follows
+the -o extension or --format; OBJ text goes to stdout when there is no -o.""")
+@input_argument
+@output_option
+@click.option("--format", "file_format", type=click.Choice(FORMATS),
+              help="Mesh format (default: from the -o extension; obj on stdout).")
+def command(input, output, file_format):
+    from mzc.meshes import Mesh, write_mesh
+    from mzc.streams import check_not_input
+    from mzc.triangulation import grid_to_mesh
+
+    check_not_input(output, input)
+    points, triangles = grid_to_mesh(read_grid(input))
+    write_mesh(output, Mesh(points, triangles), file_format)
