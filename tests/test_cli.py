@@ -1,0 +1,118 @@
+"""Command-line conventions: help, errors on one line, atomic output, the pipeline as subprocesses."""
+
+import json
+import subprocess
+import sys
+
+import pytest
+
+from conftest import face_path
+
+
+def test_help_lists_every_command_without_importing_numerics():
+    result = subprocess.run([sys.executable, "-X", "importtime", "-m", "mzc", "--help"],
+                            capture_output=True, text=True, check=True)
+    for name in ("slice", "encode", "decode", "densify", "triangulate", "diff", "info", "sample"):
+        assert f"\n  {name} " in result.stdout
+    imported = {line.split("|")[-1].strip() for line in result.stderr.splitlines()}
+    assert not imported & {"numpy", "scipy", "meshio", "matplotlib", "pywt"}
+
+
+def test_version(mzc):
+    assert mzc("--version", check=True).stdout.decode().startswith("mzc, version ")
+
+
+def assert_one_line_error(result, *fragments):
+    err = result.stderr.decode()
+    assert result.returncode == 1, err
+    assert err.startswith("mzc: ") and err.count("\n") == 1 and "Traceback" not in err
+    for fragment in fragments:
+        assert fragment in err
+    assert result.stdout == b""
+
+
+def test_missing_file_is_one_line(mzc):
+    assert_one_line_error(mzc("triangulate", "nope.zg"), "nope.zg", "no such file")
+
+
+def test_a_mesh_given_where_a_grid_is_expected(mzc, tmp_path):
+    mesh = tmp_path / "m.obj"
+    mesh.write_text("v 0 0 0\n")
+    assert_one_line_error(mzc("triangulate", mesh), "not an mzc file")
+
+
+def test_bad_grid_names_file_and_line(mzc, tmp_path):
+    bad = tmp_path / "bad.zg"
+    bad.write_bytes(b"mzc-zgrid 1.0\nrows 2\ncols 2\nd1 1\nd2 1\ndata\n1 2\n3 oops\n")
+    assert_one_line_error(mzc("info", bad), "bad.zg:8", "oops")
+
+
+def test_usage_errors_exit_2(mzc):
+    result = mzc("diff", "only-one")
+    assert result.returncode == 2 and "Traceback" not in result.stderr.decode()
+
+
+def test_failure_leaves_an_existing_output_untouched_and_no_temp_files(mzc, tmp_path):
+    out = tmp_path / "out.obj"
+    out.write_text("precious")
+    result = mzc("triangulate", "-o", out, input=b"mzc-zgrid 1.0\nrows 5\ncols 1\nd1 1\nd2 1\ndata\n1\n")
+    assert_one_line_error(result, "header says rows 5")
+    assert out.read_text() == "precious"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["out.obj"]
+
+
+def test_output_over_the_input_is_refused(mzc, tmp_path):
+    grid = tmp_path / "g.zg"
+    grid.write_bytes(b"mzc-zgrid 1.0\nrows 2\ncols 2\nd1 1\nd2 1\ndata\n1 2\n3 4\n")
+    before = grid.read_bytes()
+    assert_one_line_error(mzc("densify", grid, "-n", "1", "-o", grid), "overwrite an input")
+    assert grid.read_bytes() == before
+
+
+def test_sample_slice_triangulate_diff_pipeline(mzc, tmp_path):
+    mesh = tmp_path / "bump.obj"
+    mzc("sample", "bump", "-o", mesh, check=True)
+    grid = mzc("slice", mesh, "--d1", "1", "--d2", "1", check=True).stdout
+    assert grid.startswith(b"mzc-zgrid 1.0\n")
+    rebuilt = tmp_path / "rebuilt.ply"
+    mzc("triangulate", "-o", rebuilt, input=grid, check=True)
+    report = json.loads(mzc("diff", mesh, rebuilt, "--json", check=True).stdout)
+    assert report["count"] > 10_000
+    # A 1 mm slice of a smooth bump, rebuilt linearly, stays within a few hundredths of a mm.
+    assert report["p50"] < 0.01 and report["p95"] < 0.05
+
+
+def test_info_describes_a_grid(mzc, tmp_path):
+    grid = mzc("slice", "-", input=mzc("sample", "bump", check=True).stdout)
+    if grid.returncode != 0:  # slicing a mesh from stdin is allowed to be unsupported
+        mesh = tmp_path / "b.obj"
+        mzc("sample", "bump", "-o", mesh, check=True)
+        grid = mzc("slice", mesh, check=True)
+    text = mzc("info", input=grid.stdout, check=True).stdout.decode()
+    assert "format    mzc-zgrid 1.0" in text and "rows x" in text and "valid" in text
+    assert f"bytes     {len(grid.stdout)}" in text
+
+
+def test_face_round_trip_meets_the_issue_targets(mzc, tmp_path):
+    face = face_path("f18.ply")
+    grid = mzc("slice", face, "--d1", "0.5", "--d2", "0.5", check=True).stdout
+    out = tmp_path / "out.ply"
+    mzc("triangulate", "-o", out, input=grid, check=True)
+    report = json.loads(mzc("diff", face, out, "--json", check=True).stdout)
+    assert report["p50"] < 0.01 and report["p95"] < 0.1, report
+
+
+def test_diff_surface_distance_of_a_face_against_itself_is_zero(mzc):
+    face = face_path("f18.ply")
+    report = json.loads(mzc("diff", face, face, "--surface", "--samples", "20000", "--json", check=True).stdout)
+    assert report["rmse"] == 0 and report["surface_rms"] < 1e-9
+
+
+def test_error_grid_is_a_zgrid_of_b_minus_a(mzc, tmp_path):
+    a, b = tmp_path / "a.zg", tmp_path / "b.zg"
+    a.write_bytes(b"mzc-zgrid 1.0\nrows 2\ncols 2\nd1 1\nd2 1\ndata\n1 2\n3 4\n")
+    b.write_bytes(b"mzc-zgrid 1.0\nrows 2\ncols 2\nd1 1\nd2 1\ndata\n1.5 2\n3 nan\n")
+    errors = tmp_path / "e.zg"
+    report = json.loads(mzc("diff", a, b, "--json", "--error-grid", errors, check=True).stdout)
+    assert report["count"] == 3 and report["max"] == pytest.approx(0.5)
+    assert errors.read_text().endswith("data\n0.5 0\n0 nan\n")

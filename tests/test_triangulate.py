@@ -1,0 +1,59 @@
+"""Connectivity derived from the grid, and meshes placed back in the input frame."""
+
+import numpy as np
+import pytest
+
+from mzc.grid import ZGrid
+from mzc.triangulation import grid_to_mesh, grid_triangles
+
+
+def test_full_cell_gives_the_thesis_triangles_facing_up():
+    triangles = grid_triangles(np.ones((2, 2), bool))
+    assert sorted(map(sorted, triangles.tolist())) == [[0, 1, 2], [1, 2, 3]]
+    grid = ZGrid(np.zeros((2, 2)), 1, 1)
+    points, triangles = grid_to_mesh(grid)
+    a, b, c = (points[triangles[:, i]] for i in range(3))
+    assert (np.cross(b - a, c - a)[:, 2] > 0).all()
+
+
+@pytest.mark.parametrize("invalid, expected", [((0, 0), 1), ((0, 1), 0), ((1, 0), 0), ((1, 1), 1)])
+def test_a_triangle_needs_all_three_corners_valid(invalid, expected):
+    valid = np.ones((2, 2), bool)
+    valid[invalid] = False
+    assert len(grid_triangles(valid)) == expected
+
+
+def test_triangle_count_on_a_grid_with_a_hole():
+    z = np.zeros((5, 6))
+    z[2, 3] = np.nan
+    # 4 x 5 cells give 40 triangles; the hole node is a corner of 6 of them.
+    assert len(grid_triangles(~np.isnan(z))) == 40 - 6
+
+
+def test_unused_nodes_are_dropped_and_vertices_land_in_the_input_frame():
+    z = np.array([[np.nan, 2.0, 3.0], [4.0, 5.0, 6.0]])
+    transform = np.array([[0, -1, 0, 10], [1, 0, 0, 20], [0, 0, 1, 30]], float)
+    grid = ZGrid(z, d1=2, d2=0.5, origin=(1, -1), transform=transform)
+    points, triangles = grid_to_mesh(grid)
+    assert triangles.max() < len(points)
+    # node (1, 2): x = 1 + 2*0.5 = 2, y = -1 + 2 = 1, z = 6 -> R p + t = (-1 + 10, 2 + 20, 36)
+    assert any(np.allclose(p, [9, 22, 36]) for p in points)
+    assert len(points) == 5
+
+
+def test_triangulate_cli_writes_mesh_in_the_original_frame(tmp_path, mzc):
+    import meshio
+
+    grid_file = tmp_path / "g.zg"
+    from mzc.formats import zgrid
+
+    transform = np.array([[1, 0, 0, 100], [0, 1, 0, 0], [0, 0, 1, 0]], float)
+    grid_file.write_bytes(zgrid.write(ZGrid(np.arange(12.0).reshape(3, 4), 1, 1, transform=transform)))
+    for extension in ("ply", "obj", "vtk", "stl", "off"):
+        out = tmp_path / f"m.{extension}"
+        mzc("triangulate", grid_file, "-o", out, check=True)
+        mesh = meshio.read(out)
+        assert mesh.points[:, 0].min() == pytest.approx(100)
+        assert sum(len(c.data) for c in mesh.cells if c.type == "triangle") == 2 * 2 * 3
+    text = mzc("triangulate", input=grid_file.read_bytes(), check=True).stdout.decode()
+    assert text.count("\nv ") + text.startswith("v ") == 12 and text.count("\nf ") == 12
