@@ -14,6 +14,11 @@ from mzc.formats.header import split_magic
 # kind -> module name under mzc.formats; imported on first use to keep start-up fast.
 REGISTRY = {
     "zgrid": "zgrid",
+    "dwt2d": "dwt2d",
+    "poly": "poly",
+    "dft": "dft",
+    "dct": "dct",
+    "dwt": "dwt",
 }
 
 

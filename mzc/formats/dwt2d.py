@@ -1,0 +1,264 @@
+"""The wavelet z-grid codec (``mzc-dwt2d 1.0``, extension ``.mzw2``): see spec/dwt2d.md.
+
+Text header (grid fields, wavelet, levels, per-band steps, correction step), a ``data``
+line, then a binary payload: the validity mask as row spans, the quantised wavelet
+bands, and an optional correction layer of residuals that makes ``max_error`` hold at
+every valid node of the decoder's own reconstruction. All integers are entropy coded
+by mzc.entropy (magnitude classes through rANS with one model per context).
+"""
+
+import numpy as np
+
+from mzc import wavelet2d as w2
+from mzc.entropy import Decoder, Encoder
+from mzc.errors import MzcError
+from mzc.formats.header import format_number, grid_header_lines, read_grid_fields, read_header
+from mzc.grid import ZGrid
+
+KIND = "dwt2d"
+VERSION = (1, 0)
+EXTENSIONS = (".mzw2",)
+MAGIC = f"mzc-{KIND} {VERSION[0]}.{VERSION[1]}"
+CODER = "rans-classes"
+CONTEXTS = 3               # per detail band: parent/sibling activity zero, small, large
+DEFAULT_WAVELET = "bior4.4"
+ALPHAS = (1.6, 2.4, 3.2)   # max_error: wavelet step = alpha * E, the smallest file wins
+DEADZONE = 0.6             # encoder-only rounding offset; the decoder never sees it
+
+# model ids (the order of first use in the payload)
+MASK_COUNT, MASK_SAME, MASK_NEW, APPROXIMATION = 0, 1, 2, 3
+FIRST_DETAIL = 4
+
+
+def detail_model(band, context):
+    """Model id of a detail band (1-based index in the flat band list) and context."""
+    return FIRST_DETAIL + CONTEXTS * (band - 1) + context
+
+
+def correction_model(levels):
+    """Model id of the correction layer (after every detail model)."""
+    return FIRST_DETAIL + CONTEXTS * 3 * levels
+
+
+# --------------------------------------------------------------------------- mask
+
+
+def mask_transitions(valid):
+    """Per row, the columns where validity flips (row padded with invalid on both sides)."""
+    padded = np.zeros((valid.shape[0], valid.shape[1] + 2), dtype=np.int8)
+    padded[:, 1:-1] = valid
+    flips = np.diff(padded, axis=1) != 0
+    return [np.flatnonzero(row) for row in flips]
+
+
+def encode_mask(encoder, valid):
+    """Span counts (as change from the row above), then rows whose count did not change as
+    moves of each flip from the row above, then the other rows as gaps between flips."""
+    transitions = mask_transitions(valid)
+    counts = np.array([len(t) // 2 for t in transitions])
+    encoder.add(MASK_COUNT, np.diff(counts, prepend=0))
+    same, new = [], []
+    previous = np.zeros(0, dtype=np.int64)
+    for flips in transitions:
+        if len(flips) == len(previous):
+            same.append(flips - previous)
+        else:
+            new.append(np.diff(flips, prepend=-1) - 1)
+        previous = flips
+    encoder.add(MASK_SAME, np.concatenate(same or [[]]))
+    encoder.add(MASK_NEW, np.concatenate(new or [[]]))
+
+
+def decode_mask(decoder, rows, cols):
+    """The validity mask (rows x cols) from the payload; refuses impossible spans."""
+    counts = np.cumsum(decoder.read(MASK_COUNT, rows))
+    if counts.min() < 0 or counts.max() > (cols + 1) // 2:
+        raise decoder.error(f"a mask row has a span count outside 0..{(cols + 1) // 2}")
+    lengths = 2 * counts
+    unchanged = lengths == np.concatenate([[0], lengths[:-1]])
+    same = decoder.read(MASK_SAME, int(lengths[unchanged].sum()))
+    new = decoder.read(MASK_NEW, int(lengths[~unchanged].sum()))
+    edges = np.zeros((rows, cols + 2), dtype=np.int64)
+    previous = np.zeros(0, dtype=np.int64)
+    used_same = used_new = 0
+    for r in range(rows):
+        n = int(lengths[r])
+        if unchanged[r]:
+            flips = previous + same[used_same:used_same + n]
+            used_same += n
+        else:
+            flips = np.cumsum(new[used_new:used_new + n] + 1) - 1
+            used_new += n
+        if n and (flips[0] < 0 or flips[-1] > cols or (np.diff(flips) <= 0).any()):
+            raise decoder.error(f"mask row {r + 1} has spans outside the row or out of order")
+        edges[r, flips] = np.where(np.arange(n) % 2 == 0, 1, -1)
+        previous = flips
+    return np.cumsum(edges, axis=1)[:, :cols] > 0
+
+
+# --------------------------------------------------------------------------- bands
+
+
+def contexts(flat, index, steps):
+    """Context (0..2) of every coefficient of detail band ``index`` from bands already coded.
+
+    Activity = |parent| (same orientation, one level coarser, in this band's step units)
+    plus |q| of the earlier orientations of the same level at the same place.
+    """
+    shape = flat[index].shape
+    activity = np.zeros(shape)
+    orientation = (index - 1) % 3
+    if index > 3:
+        parent = flat[index - 3]
+        r = np.minimum(np.arange(shape[0]) // 2, parent.shape[0] - 1)
+        c = np.minimum(np.arange(shape[1]) // 2, parent.shape[1] - 1)
+        activity += np.abs(parent[np.ix_(r, c)]) * (steps[index - 3] / steps[index])
+    for sibling in range(index - orientation, index):
+        activity += np.abs(flat[sibling])
+    return np.digitize(activity, [0.5, 2.5])
+
+
+def encode_bands(encoder, qflat, relevant, steps):
+    """The approximation as left/up differences, then each detail band by context."""
+    approximation = qflat[0]
+    residual = np.diff(approximation, axis=1, prepend=0)
+    residual[:, 0] = np.diff(approximation[:, 0], prepend=0)
+    encoder.add(APPROXIMATION, residual)
+    for index in range(1, len(qflat)):
+        context = contexts(qflat, index, steps)
+        for k in range(CONTEXTS):
+            encoder.add(detail_model(index, k), qflat[index][relevant[index] & (context == k)])
+
+
+def decode_bands(decoder, relevant, steps):
+    """Inverse of encode_bands: the flat list of integer bands."""
+    residual = decoder.read(APPROXIMATION, relevant[0].size).reshape(relevant[0].shape)
+    residual[:, 0] = np.cumsum(residual[:, 0])
+    qflat = [np.cumsum(residual, axis=1)]
+    for index in range(1, len(relevant)):
+        band = np.zeros(relevant[index].shape, dtype=np.int64)
+        context = contexts(qflat + [band], index, steps)
+        for k in range(CONTEXTS):
+            where = relevant[index] & (context == k)
+            band[where] = decoder.read(detail_model(index, k), int(where.sum()))
+        qflat.append(band)
+    return qflat
+
+
+# --------------------------------------------------------------------------- encoder
+
+
+class Prepared:
+    """Everything about one grid that does not depend on the steps: mask, fill, transform."""
+
+    def __init__(self, grid, wavelet, levels):
+        if wavelet not in w2.WAVELETS:
+            raise MzcError(f"unknown wavelet {wavelet!r} (known: {', '.join(w2.WAVELETS)})", field="wavelet")
+        if np.isinf(grid.z).any():
+            raise MzcError("the grid holds infinite heights", field="z")
+        self.grid, self.wavelet = grid, wavelet
+        self.valid = grid.valid
+        self.levels = w2.default_levels(grid.shape, wavelet) if levels is None else int(levels)
+        if not 0 <= self.levels <= w2.MAX_LEVELS:
+            raise MzcError(f"levels must be 0..{w2.MAX_LEVELS}", field="levels")
+        self.filled = w2.laplace_fill(grid.z, self.valid)
+        self.bands = w2.forward(self.filled, wavelet, self.levels)
+        self.relevant = w2.flatten(w2.relevance(self.valid, wavelet, self.levels))
+
+    def decoded(self, steps, deadzone=DEADZONE):
+        """(integer bands as coded, the decoder's wavelet-only reconstruction)."""
+        qbands = w2.mask_bands(w2.quantise(self.bands, steps, deadzone),
+                               w2.unflatten(self.relevant, self.levels))
+        z = w2.inverse(w2.dequantise(qbands, steps), self.grid.shape, self.wavelet, self.levels)
+        return w2.flatten(qbands), z
+
+    def encode(self, steps, max_error=None):
+        """File bytes for these steps; with ``max_error`` a correction layer bounds every valid node."""
+        qflat, decoded = self.decoded(steps)
+        encoder = Encoder()
+        encode_mask(encoder, self.valid)
+        encode_bands(encoder, qflat, self.relevant, steps)
+        step = 0.0
+        if max_error is not None:
+            step = w2.correction_step(max_error)
+            encoder.add(correction_model(self.levels), w2.corrections(self.grid.z, decoded, self.valid, step))
+        return self.header(steps, step, max_error) + encoder.finish()
+
+    def header(self, steps, correction, max_error):
+        """The text header up to and including the ``data`` line."""
+        lines = [MAGIC, *grid_header_lines(self.grid), f"wavelet {self.wavelet}", f"levels {self.levels}",
+                 "steps " + " ".join(format_number(s) for s in steps),
+                 f"correction {format_number(correction)}", f"coder {CODER}"]
+        if max_error is not None:
+            lines.append(f"max_error {format_number(max_error)}")
+        return ("\n".join(lines + ["data"]) + "\n").encode("ascii")
+
+    def rms(self, steps):
+        """RMS height error at the valid nodes of the wavelet-only reconstruction."""
+        _, decoded = self.decoded(steps)
+        error = (decoded - self.grid.z)[self.valid]
+        return float(np.sqrt(np.mean(error ** 2))) if error.size else 0.0
+
+    def height_range(self):
+        """Spread of the valid heights (at least 1e-6): scales the step searches."""
+        z = self.grid.z[self.valid]
+        return max(float(z.max() - z.min()), 1e-6) if z.size else 1.0
+
+
+def write(grid, max_error=None, rmse=None, size=None, wavelet=DEFAULT_WAVELET, levels=None):
+    """Encode a ZGrid; exactly one of ``max_error`` (bound at every valid node, grid units),
+    ``rmse`` (target RMS error) or ``size`` (target file bytes, not exceeded when reachable)."""
+    given = [name for name, v in (("max_error", max_error), ("rmse", rmse), ("size", size)) if v is not None]
+    if len(given) != 1:
+        raise MzcError("give exactly one of max_error, rmse or size", field="dwt2d")
+    target = float({"max_error": max_error, "rmse": rmse, "size": size}[given[0]])
+    if not np.isfinite(target) or target <= 0:
+        raise MzcError(f"must be a positive number, found {target}", field=given[0])
+    prepared = Prepared(grid, wavelet, levels)
+    steps_for = lambda base: w2.level_steps(base, prepared.levels)  # noqa: E731
+    if max_error is not None:
+        return min((prepared.encode(steps_for(a * target), target) for a in ALPHAS), key=len)
+    span = prepared.height_range()
+    if rmse is not None:
+        step = w2.search_step(lambda s: prepared.rms(steps_for(s)), target, 1e-9 * span, 4.0 * span)
+        return prepared.encode(steps_for(step))
+    # size falls as the step grows, so search the largest 1/step whose file still fits
+    step = 1.0 / w2.search_step(lambda inv: len(prepared.encode(steps_for(1.0 / inv))), target,
+                                1.0 / (4.0 * span), 1e9 / span, iterations=20)
+    return prepared.encode(steps_for(step))
+
+
+# --------------------------------------------------------------------------- decoder
+
+
+def read_codec_fields(header):
+    """(wavelet, levels, steps, correction step) from the header, each checked."""
+    wavelet = header.word("wavelet", w2.WAVELETS)
+    levels = header.integer("levels", 0, w2.MAX_LEVELS)
+    steps = header.floats("steps", 1 + 3 * levels)
+    if min(steps) <= 0:
+        raise header.error("steps", "every step must be > 0")
+    correction = header.floats("correction", 1)[0]
+    if correction < 0:
+        raise header.error("correction", "must be >= 0")
+    header.word("coder", (CODER,))
+    return wavelet, levels, steps, correction
+
+
+def read(data, source="<stdin>"):
+    """Decode dwt2d bytes into a ZGrid; any bad input raises MzcError."""
+    header, body, _first = read_header(data, source, KIND, VERSION[0])
+    fields, rows, cols = read_grid_fields(header)
+    wavelet, levels, steps, correction = read_codec_fields(header)
+    decoder = Decoder(body, source)
+    valid = decode_mask(decoder, rows, cols)
+    relevant = w2.flatten(w2.relevance(valid, wavelet, levels))
+    qflat = decode_bands(decoder, relevant, steps)
+    with np.errstate(over="ignore", invalid="ignore"):
+        z = w2.inverse(w2.dequantise(w2.unflatten(qflat, levels), steps), (rows, cols), wavelet, levels)
+        if correction > 0:
+            z[valid] += correction * decoder.read(correction_model(levels), int(valid.sum()))
+    if not np.isfinite(z[valid]).all():
+        raise MzcError("decoded heights are not finite (corrupt steps or payload)", source=source, field="data")
+    z[~valid] = np.nan
+    return ZGrid(z=z, **fields)

@@ -1,0 +1,196 @@
+"""The mzc-dwt2d codec: error bounds on real faces, exact masks, rate targets, hostile input, the spec example."""
+
+import re
+import time
+from functools import lru_cache
+from pathlib import Path
+
+import numpy as np
+import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+from mzc.entropy import Decoder, TABLE_BITS
+from mzc.errors import MzcError
+from mzc.formats import dwt2d, read_any
+from mzc.grid import ZGrid
+from conftest import FACE_NAMES, face_path
+
+SPEC = Path(__file__).resolve().parents[1] / "spec" / "dwt2d.md"
+
+
+@lru_cache(maxsize=None)
+def face_grid(name):
+    """A face sliced at 0.5 mm (cached: several tests share it)."""
+    from mzc.meshes import read_mesh
+    from mzc.slicing import slice_surface
+    return slice_surface(read_mesh(face_path(name)), d1=0.5, d2=0.5)
+
+
+def errors(grid, data):
+    """|decoded - input| at the valid nodes, after checking the mask came back exactly."""
+    decoded = dwt2d.read(data)
+    assert np.array_equal(decoded.valid, grid.valid)
+    return np.abs(decoded.z - grid.z)[grid.valid]
+
+
+@pytest.mark.parametrize("name", FACE_NAMES or ["f18.ply"])
+def test_max_error_holds_at_every_valid_node_of_every_face(name):
+    grid = face_grid(name)
+    for bound in (0.01, 0.05, 0.1, 0.5):
+        assert errors(grid, dwt2d.write(grid, max_error=bound)).max() <= bound
+
+
+def test_bigger_bounds_give_smaller_files(f18):
+    grid = face_grid("f18.ply")
+    sizes = [len(dwt2d.write(grid, max_error=e)) for e in (0.01, 0.05, 0.1, 0.5)]
+    assert sizes == sorted(sizes, reverse=True)
+    assert sizes[2] < 20_000          # 0.1 mm everywhere: well under Draco's 35 KB for 0.083 mm RMS
+
+
+def test_rmse_target_lands_just_under(f18):
+    grid = face_grid("f18.ply")
+    for target in (0.03, 0.1):
+        error = errors(grid, dwt2d.write(grid, rmse=target))
+        assert 0.85 * target <= np.sqrt(np.mean(error ** 2)) <= target
+
+
+def test_size_target_lands_just_under(f18):
+    grid = face_grid("f18.ply")
+    for target in (8_000, 16_000):
+        assert 0.95 * target <= len(dwt2d.write(grid, size=target)) <= target
+
+
+def test_encode_plus_decode_of_a_face_takes_under_half_a_second(f18):
+    grid = face_grid("f18.ply")
+    best = np.inf
+    for _ in range(3):
+        start = time.process_time()
+        dwt2d.read(dwt2d.write(grid, max_error=0.05))
+        best = min(best, time.process_time() - start)
+    assert best < 0.5
+
+
+def test_mask_with_holes_and_ragged_spans_round_trips_exactly():
+    rng = np.random.default_rng(3)
+    z = rng.normal(size=(40, 57)).cumsum(axis=1)
+    z[:, :5] = np.nan                      # a blank margin
+    z[10:15, 20:30] = np.nan               # a hole
+    z[25, :] = np.nan                      # an empty row
+    z[30:, 40:] = np.nan                   # ragged right edge
+    z[rng.random(z.shape) < 0.05] = np.nan  # scattered holes
+    grid = ZGrid(z=z, d1=1.0, d2=0.5)
+    assert errors(grid, dwt2d.write(grid, max_error=0.01)).max() <= 0.01
+
+
+def test_grid_fields_survive():
+    grid = ZGrid(z=np.arange(12.0).reshape(3, 4), d1=0.25, d2=2.0, origin=(1.5, -2.0), units="mm")
+    decoded = read_any(dwt2d.write(grid, max_error=0.1), "x")
+    assert (decoded.d1, decoded.d2, decoded.origin, decoded.units) == (0.25, 2.0, (1.5, -2.0), "mm")
+
+
+def test_all_invalid_grid_round_trips():
+    grid = ZGrid(z=np.full((5, 7), np.nan), d1=1, d2=1)
+    assert not dwt2d.read(dwt2d.write(grid, max_error=0.1)).valid.any()
+
+
+@pytest.mark.parametrize("options", [{}, {"max_error": 0.1, "rmse": 0.1}, {"max_error": -1},
+                                     {"size": float("nan")}, {"max_error": 0.1, "wavelet": "nope"},
+                                     {"max_error": 0.1, "levels": 13}])
+def test_bad_options_are_refused(options):
+    with pytest.raises(MzcError):
+        dwt2d.write(ZGrid(z=np.zeros((4, 4)), d1=1, d2=1), **options)
+
+
+@st.composite
+def small_grids(draw):
+    """Random rough grids of 1..24 x 1..24 nodes with random masks."""
+    rows, cols = draw(st.integers(1, 24)), draw(st.integers(1, 24))
+    seed = draw(st.integers(0, 2 ** 32 - 1))
+    rng = np.random.default_rng(seed)
+    z = rng.normal(scale=draw(st.sampled_from([0.01, 1.0, 100.0])), size=(rows, cols)).cumsum(axis=0)
+    z[rng.random((rows, cols)) < draw(st.floats(0, 1))] = np.nan
+    return ZGrid(z=z, d1=1, d2=1)
+
+
+@settings(max_examples=150, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(small_grids(), st.sampled_from([0.001, 0.05, 0.5]), st.sampled_from([None, 0, 1, 2, 3]),
+       st.sampled_from(["bior4.4", "bior2.2", "haar"]))
+def test_random_grids_round_trip_within_the_bound(grid, bound, levels, wavelet):
+    data = dwt2d.write(grid, max_error=bound, levels=levels, wavelet=wavelet)
+    assert errors(grid, data).max(initial=0) <= bound
+
+
+@settings(max_examples=40, deadline=None)
+@given(small_grids(), st.sampled_from([0.05, 0.5]))
+def test_random_grids_meet_the_rmse_target(grid, target):
+    error = errors(grid, dwt2d.write(grid, rmse=target))
+    assert np.sqrt(np.mean(error ** 2)) <= target if error.size else True
+
+
+@lru_cache(maxsize=None)
+def fuzz_base():
+    """A small encoded grid with holes and two levels, to corrupt."""
+    rng = np.random.default_rng(7)
+    z = rng.normal(size=(12, 17)).cumsum(axis=0)
+    z[rng.random(z.shape) < 0.3] = np.nan
+    return dwt2d.write(ZGrid(z=z, d1=1, d2=1), max_error=0.05, levels=2)
+
+
+@settings(max_examples=400, deadline=2000)
+@given(st.data())
+def test_corrupt_or_truncated_payloads_raise_only_mzc_errors(data):
+    original = fuzz_base()
+    body = original.index(b"\ndata\n") + 6
+    damaged = bytearray(original)
+    if data.draw(st.booleans()):
+        damaged = damaged[: data.draw(st.integers(0, len(damaged)))]
+    for _ in range(data.draw(st.integers(0, 4)) if damaged else 0):
+        low = body if data.draw(st.booleans()) and body < len(damaged) else 0
+        damaged[data.draw(st.integers(low, len(damaged) - 1))] = data.draw(st.integers(0, 255))
+    damaged += data.draw(st.binary(max_size=8))
+    try:
+        decoded = dwt2d.read(bytes(damaged))
+    except MzcError:
+        return
+    assert np.isfinite(decoded.z[decoded.valid]).all()
+
+
+def spec_example():
+    """(file bytes, expected heights) from the fenced blocks of spec/dwt2d.md."""
+    text = SPEC.read_text()
+    block = re.search(r"```mzc-example-hex\n(.*?)```", text, re.S).group(1)
+    header, hex_payload = block.split("data\n")
+    expected = re.search(r"```expected\n(.*?)```", text, re.S).group(1)
+    values = np.array([[float(v) for v in line.split()] for line in expected.strip().splitlines()])
+    return (header + "data\n").encode() + bytes.fromhex(hex_payload), values
+
+
+def test_spec_example_decodes_to_the_expected_heights():
+    data, expected = spec_example()
+    decoded = dwt2d.read(data, "spec")
+    assert np.array_equal(np.isnan(decoded.z), np.isnan(expected))
+    assert np.allclose(decoded.z, expected, atol=1e-7, equal_nan=True)
+
+
+def test_spec_rans_description_matches_the_coder():
+    """Decode the example's first mask classes with the rANS steps exactly as the spec states them."""
+    data, _ = spec_example()
+    payload = data[data.index(b"\ndata\n") + 6:]
+    decoder = Decoder(payload, "spec")
+    table = decoder.tables[0] << (24 - TABLE_BITS)
+    cumulative = np.concatenate([[0], np.cumsum(table)])
+    start = payload.index(bytes([3, 0x00, 0x3C, 0xBD, 0xA5])) + 1
+    words = [int.from_bytes(payload[i:i + 4], "little") for i in range(start, start + 12, 4)]
+    state = words.pop()
+    while state < 1 << 32 and words:
+        state = (state << 32) | words.pop()
+    found = []
+    for _ in range(4):
+        m = state & ((1 << 24) - 1)
+        s = int(np.searchsorted(cumulative, m, side="right") - 1)
+        state = int(table[s]) * (state >> 24) + m - int(cumulative[s])
+        if state < 1 << 32 and words:
+            state = (state << 32) | words.pop()
+        found.append(s)
+    assert found == [1, 0, 1, 1]            # span-count changes 1, 0, 1, -1
