@@ -77,4 +77,5 @@ def write_plot(path, reference, errors, stats):
     """The three quality panels of the thesis (§6.4) for this comparison."""
     from mzc.plots import error_plot
 
-    error_plot(path, errors.z, reference.z + errors.z, reference.xs(), reference.ys(), stats)
+    error_plot(path, errors.z, reference.z + errors.z, reference.xs(), reference.ys(), stats,
+               units=reference.units)

@@ -1,0 +1,38 @@
+"""``mzc densify``: insert rows between the planes of a z-grid (the thesis's PDE step, §6.2.3)."""
+
+import click
+
+from mzc.commands import input_argument, output_option, read_grid, write_grid
+
+METHODS = ("thesis", "laplace", "biharmonic")
+DEFAULT_METHOD = "biharmonic"   # lowest error on the shared faces (see mzc.densify)
+
+
+@click.command(help="""Insert N rows between each pair of rows of a z-grid.
+
+The row step becomes d1/(N+1) and there are (rows-1)(N+1)+1 rows; the original rows are
+kept exactly. Rows are only inserted in columns valid in both neighbouring rows.
+
+\b
+  biharmonic  thin-plate surface over the whole grid, smooth across planes (default)
+  laplace     Laplace's equation between each pair of rows, true steps, solved exactly
+  thesis      the thesis's Jacobi iteration (equal steps, --iterations sweeps)""")
+@input_argument
+@output_option
+@click.option("-n", "count", required=True, type=click.IntRange(min=0), metavar="N",
+              help="Rows to insert between each pair of rows (0 copies the grid).")
+@click.option("--method", type=click.Choice(METHODS), default=DEFAULT_METHOD, show_default=True,
+              help="How to fill the inserted rows.")
+@click.option("--iterations", type=click.IntRange(min=0), default=100, show_default=True, metavar="K",
+              help="Jacobi sweeps of --method thesis.")
+@click.option("--tol", type=click.FloatRange(min=0, min_open=True), metavar="T",
+              help="Stop the thesis sweeps once no node moves by T or more.")
+@click.option("--precision", type=click.IntRange(0, 17), metavar="DIGITS",
+              help="Decimal digits of the written heights.")
+def command(input, output, count, method, iterations, tol, precision):
+    from mzc.densify import densify_grid
+    from mzc.streams import check_not_input
+
+    check_not_input(output, input)
+    grid = read_grid(input)
+    write_grid(densify_grid(grid, count, method, iterations=iterations, tol=tol), output, precision=precision)

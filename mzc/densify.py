@@ -1,0 +1,284 @@
+"""Restore the mesh density: insert rows between the cutting planes (METHOD.md §5, thesis §6.2.3).
+
+A z-grid of k1 rows becomes (k1-1)(n+1)+1 rows with row step d1/(n+1); original row r
+lands unchanged on dense row r*(n+1). Three ways to fill the inserted rows:
+
+``thesis``
+    The thesis exactly (§6.2.3, eq. 3.40): each pair of rows bounds its own rectangle,
+    the left/right sides are straight lines between the corner values, the interior
+    starts at 0 and is Jacobi-averaged over the 4 neighbours (equal steps assumed) a
+    fixed number of times or until the update falls below a tolerance.
+``laplace``
+    The same boundary value problem solved to convergence with the true steps
+    (d1/(n+1) across rows, d2 along them) by one sparse direct solve.
+``biharmonic``
+    The step the thesis names as future work (§8.2-8.3): the discrete thin-plate energy
+    (u_xx² + 2u_xy² + u_yy², true steps) minimised over the whole dense grid at once with
+    the original rows held fixed, so each inserted row feels the planes beyond its two
+    neighbours and the surface stays smooth (C¹) across planes. Edges of the data get the
+    natural boundary conditions of a free plate: only difference stencils whose nodes all
+    hold data enter the energy.
+
+Holes. Inserted nodes exist only in columns valid in both neighbouring rows; everything
+else stays NaN, so no surface is invented outside the data and non-overlapping rows
+insert nothing. (Columns valid in both rows always lie inside the thesis's domain
+U_left = max of the first valid columns .. U_right = min of the last valid ones.) A row
+with interior holes splits a gap into runs of such columns; for ``thesis`` and
+``laplace`` every run is its own rectangle with the thesis's straight-line sides at its
+two end columns (a run of one or two columns is just those lines), which is the thesis
+itself when there are no holes. ``biharmonic`` treats run ends as free edges instead.
+"""
+
+import numpy as np
+
+from mzc.errors import MzcError
+from mzc.formats.header import MAX_DIMENSION, MAX_NODES
+
+METHODS = ("thesis", "laplace", "biharmonic")
+DEFAULT_METHOD = "biharmonic"
+DEFAULT_ITERATIONS = 100   # the thesis's fixed Jacobi count (§6.2.3)
+
+
+def densify_grid(grid, n, method=DEFAULT_METHOD, iterations=DEFAULT_ITERATIONS, tol=None):
+    """``grid`` (a ZGrid) with ``n`` rows inserted between each pair of rows; row step d1/(n+1)."""
+    dense = densify(grid.z, n, grid.d1, grid.d2, method=method, iterations=iterations, tol=tol)
+    return grid.with_z(dense, d1=grid.d1 / (n + 1))
+
+
+def densify(z, n, d1, d2, method=DEFAULT_METHOD, iterations=DEFAULT_ITERATIONS, tol=None):
+    """Heights ``z`` (rows x cols, NaN = invalid) with ``n`` rows inserted between each pair of rows.
+
+    ``d1`` and ``d2`` are the row and column steps of ``z``. Returns (k1-1)(n+1)+1 rows
+    (k1 rows when k1 < 2); original row r is dense row r*(n+1), bit for bit.
+    ``iterations`` and ``tol`` drive the ``thesis`` Jacobi sweeps only.
+    """
+    z = np.asarray(z, dtype=float)
+    check_request(z, n, d1, d2, method, iterations, tol)
+    if n == 0 or z.shape[0] < 2:
+        return z.copy()
+    step = d1 / (n + 1)
+    if method == "thesis":
+        inserted = thesis_inserted(z, n, iterations, tol)
+    elif method == "laplace":
+        inserted = laplace_inserted(z, n, step, d2)
+    else:
+        inserted = biharmonic_inserted(z, n, step, d2)
+    return interleave(z, inserted)
+
+
+def check_request(z, n, d1, d2, method, iterations, tol):
+    """Refuse impossible requests before allocating the dense grid."""
+    if z.ndim != 2:
+        raise MzcError("heights must be a 2D grid")
+    if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 0:
+        raise MzcError(f"must be a whole number >= 0, not {n!r}", field="n")
+    if method not in METHODS:
+        raise MzcError(f"unknown method {method!r} (choose {', '.join(METHODS)})", field="method")
+    for name, value in (("d1", d1), ("d2", d2)):
+        if not (np.isfinite(value) and value > 0):
+            raise MzcError(f"spacing must be a positive number, not {value}", field=name)
+    if iterations < 0:
+        raise MzcError(f"must be >= 0, not {iterations}", field="iterations")
+    if tol is not None and not tol > 0:
+        raise MzcError(f"must be a positive number, not {tol}", field="tol")
+    rows = (z.shape[0] - 1) * (n + 1) + 1
+    if rows > MAX_DIMENSION or rows * z.shape[1] > MAX_NODES:
+        raise MzcError(f"{rows} x {z.shape[1]} dense nodes is more than this mzc accepts "
+                       f"({MAX_DIMENSION} rows, {MAX_NODES} nodes): use a smaller n", field="n")
+
+
+def interleave(z, inserted):
+    """Dense grid from the original rows and ``inserted`` (gaps, n, cols) rows between them."""
+    gaps, n, cols = inserted.shape
+    blocks = np.concatenate([z[:-1, None, :], inserted], axis=1)
+    return np.concatenate([blocks.reshape(gaps * (n + 1), cols), z[-1:]], axis=0)
+
+
+# --------------------------------------------------------------------------- domains
+
+
+def gap_domains(z):
+    """(gaps, cols) mask of the columns valid in both rows of each gap: where rows are inserted."""
+    valid = ~np.isnan(z)
+    return valid[:-1] & valid[1:]
+
+
+def run_interiors(domain):
+    """The domain columns whose left and right neighbours are in the domain too (not run ends)."""
+    interior = np.zeros_like(domain)
+    interior[:, 1:-1] = domain[:, :-2] & domain[:, 1:-1] & domain[:, 2:]
+    return interior
+
+
+def straight_lines(z, n):
+    """(gaps, n, cols) heights on the straight lines between each pair of rows (the thesis's sides)."""
+    t = (np.arange(1, n + 1) / (n + 1))[None, :, None]
+    return (1 - t) * z[:-1, None, :] + t * z[1:, None, :]
+
+
+def gap_stack(z, n, inside):
+    """(gaps, n+2, cols) rectangles: top row, ``inside`` rows, bottom row; NaN outside the data."""
+    return np.concatenate([z[:-1, None, :], inside, z[1:, None, :]], axis=1)
+
+
+# --------------------------------------------------------------------------- thesis
+
+
+def thesis_inserted(z, n, iterations, tol):
+    """Inserted rows by the thesis's Jacobi iteration (eq. 3.40), all gaps stacked and swept at once."""
+    domain = gap_domains(z)
+    free = run_interiors(domain)[:, None, :]
+    start = np.where(free, 0.0, straight_lines(z, n))
+    u = np.nan_to_num(gap_stack(z, n, start))
+    for _ in range(iterations):
+        neighbours = 0.25 * (u[:, :-2, 1:-1] + u[:, 2:, 1:-1] + u[:, 1:-1, :-2] + u[:, 1:-1, 2:])
+        update = np.where(free[:, :, 1:-1], neighbours - u[:, 1:-1, 1:-1], 0.0)
+        u[:, 1:-1, 1:-1] += update
+        if tol is not None and np.abs(update).max(initial=0.0) < tol:
+            break
+    return np.where(domain[:, None, :], u[:, 1:-1], np.nan)
+
+
+# --------------------------------------------------------------------------- laplace
+
+
+def laplace_inserted(z, n, step, d2):
+    """Inserted rows solving the 5-point Laplace equation with true steps, one sparse solve for all gaps.
+
+    Dirichlet data: the two rows of each gap and the thesis's straight lines at the run ends.
+    """
+    from scipy.sparse import csr_matrix
+    from scipy.sparse.linalg import spsolve
+
+    domain = gap_domains(z)
+    free = np.broadcast_to(run_interiors(domain)[:, None, :], (len(domain), n, z.shape[1]))
+    known = np.nan_to_num(gap_stack(z, n, straight_lines(z, n)))
+    # Unknowns numbered gap by gap, column by column, row by row: the matrix is banded (width n).
+    order = np.full(known.shape, -1)
+    gap, col, row = np.nonzero(np.pad(free, ((0, 0), (1, 1), (0, 0))).transpose(0, 2, 1))
+    order[gap, row, col] = np.arange(len(gap))
+    weights = {(-1, 0): step**-2, (1, 0): step**-2, (0, -1): d2**-2, (0, 1): d2**-2}
+    rows, cols, values = [np.arange(len(gap))], [np.arange(len(gap))], [np.full(len(gap), -sum(weights.values()))]
+    rhs = np.zeros(len(gap))
+    for (drow, dcol), weight in weights.items():
+        neighbour = order[gap, row + drow, col + dcol]
+        unknown = neighbour >= 0
+        rows.append(np.nonzero(unknown)[0])
+        cols.append(neighbour[unknown])
+        values.append(np.full(unknown.sum(), weight))
+        rhs -= np.where(unknown, 0.0, weight * known[gap, row + drow, col + dcol])
+    matrix = csr_matrix((np.concatenate(values), (np.concatenate(rows), np.concatenate(cols))),
+                        shape=(len(gap), len(gap)))
+    inside = np.where(domain[:, None, :], known[:, 1:-1], np.nan)
+    if len(gap):
+        inside[gap, row - 1, col] = spsolve(matrix, rhs, permc_spec="NATURAL")
+    return inside
+
+
+# --------------------------------------------------------------------------- biharmonic
+
+
+def biharmonic_inserted(z, n, step, d2):
+    """Inserted rows minimising the thin-plate energy over the whole dense grid.
+
+    The normal equations A u = b of the least-squares problem |D_u u + D_k z_k|² couple
+    the gaps only through the across-row second differences centred on the original
+    rows. A sparse LU of A (SuperLU) takes seconds on a face; conjugate gradients
+    preconditioned by the exact banded Cholesky factor of each gap's own block reach
+    round-off in about 20 steps, starting from the straight lines between the rows.
+    """
+    domain = gap_domains(z)
+    inside = np.where(domain[:, None, :], straight_lines(z, n), np.nan)
+    dense = interleave(z, inside)
+    valid = ~np.isnan(dense)
+    # Unknowns numbered gap by gap, column by column, row by row: each gap's block is banded.
+    gap, col, row = np.nonzero(~np.isnan(inside).transpose(0, 2, 1))
+    unknown = np.ravel_multi_index((gap * (n + 1) + row + 1, col), dense.shape)
+    fixed = np.setdiff1d(np.flatnonzero(valid), unknown, assume_unique=True)
+    if len(unknown):
+        operator = thin_plate_operator(valid, step, d2)
+        on_unknown = operator[:, unknown]
+        normal = (on_unknown.T @ on_unknown).tocsr()
+        rhs = -(on_unknown.T @ (operator[:, fixed] @ dense.ravel()[fixed]))
+        preconditioner = gap_block_solver(normal, gap, 2 * n)
+        dense.flat[unknown] = conjugate_gradients(normal, rhs, preconditioner, dense.ravel()[unknown])
+    return dense[:-1].reshape(len(domain), n + 1, -1)[:, 1:]
+
+
+def gap_block_solver(matrix, gap, bandwidth):
+    """Solve with the gap-diagonal blocks of ``matrix`` (SPD, banded within ``bandwidth``) by banded Cholesky."""
+    from scipy.linalg import cho_solve_banded, cholesky_banded
+
+    entries = matrix.tocoo()
+    upper = (entries.col >= entries.row) & (gap[entries.row] == gap[entries.col])
+    offset = entries.col[upper] - entries.row[upper]
+    band = np.zeros((bandwidth + 1, matrix.shape[0]))
+    band[bandwidth - offset, entries.col[upper]] = entries.data[upper]
+    factor = cholesky_banded(band, check_finite=False)
+    return lambda vector: cho_solve_banded((factor, False), vector, check_finite=False)
+
+
+def conjugate_gradients(matrix, rhs, preconditioner, start, rtol=1e-12, max_steps=1000):
+    """Preconditioned conjugate gradients for SPD ``matrix`` until |residual| <= rtol |rhs|.
+
+    Inner products are plain numpy sums, not BLAS: threaded BLAS on a busy machine
+    costs more in synchronisation than these short vectors take to multiply.
+    """
+    solution = start.copy()
+    residual = rhs - matrix @ solution
+    direction = preconditioner(residual)
+    product = inner(residual, direction)
+    goal = rtol**2 * inner(rhs, rhs)
+    for _ in range(max_steps):
+        if inner(residual, residual) <= goal:
+            break
+        image = matrix @ direction
+        length = product / inner(direction, image)
+        solution += length * direction
+        residual -= length * image
+        smoothed = preconditioner(residual)
+        product, previous = inner(residual, smoothed), product
+        direction = smoothed + (product / previous) * direction
+    return solution
+
+
+def inner(u, v):
+    """Inner product of two vectors."""
+    return float(np.sum(u * v))
+
+
+def thin_plate_operator(valid, step, d2):
+    """Sparse difference operator D with |D u|² = the discrete thin-plate energy of u on ``valid`` nodes.
+
+    One row per stencil whose nodes all hold data (the free plate's natural boundary
+    conditions): second differences along rows (/d2²) and across rows (/step²), and the
+    twist over each 2x2 cell (/(step·d2), weight √2 for the factor 2 of u_xy²). Nodes
+    are numbered row-major over the grid.
+    """
+    from scipy.sparse import csr_matrix
+
+    number = np.arange(valid.size).reshape(valid.shape)
+    stencils = [
+        ([(0, -1), (0, 0), (0, 1)], [1.0, -2.0, 1.0], d2**-2),
+        ([(-1, 0), (0, 0), (1, 0)], [1.0, -2.0, 1.0], step**-2),
+        ([(0, 0), (0, 1), (1, 0), (1, 1)], [1.0, -1.0, -1.0, 1.0], np.sqrt(2) / (step * d2)),
+    ]
+    entries, count = [], 0
+    for offsets, coefficients, scale in stencils:
+        rows, cols = stencil_centres(valid, offsets)
+        for (drow, dcol), coefficient in zip(offsets, coefficients):
+            entries.append((count + np.arange(len(rows)), number[rows + drow, cols + dcol],
+                            np.full(len(rows), coefficient * scale)))
+        count += len(rows)
+    stencil, node, value = (np.concatenate(part) for part in zip(*entries))
+    return csr_matrix((value, (stencil, node)), shape=(count, valid.size))
+
+
+def stencil_centres(valid, offsets):
+    """(rows, cols) index arrays of the nodes where every offset of a stencil lands on a valid node."""
+    padded = np.pad(valid, 1)
+    rows, cols = valid.shape
+    fits = np.ones(valid.shape, dtype=bool)
+    for drow, dcol in offsets:
+        fits &= padded[1 + drow: 1 + drow + rows, 1 + dcol: 1 + dcol + cols]
+    return np.nonzero(fits)

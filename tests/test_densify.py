@@ -1,0 +1,238 @@
+"""mzc.densify and ``mzc densify``: analytic solutions, holes, layout, speed and the CLI."""
+
+import time
+
+import numpy as np
+import pytest
+
+from mzc.densify import METHODS, densify, densify_grid
+from mzc.errors import MzcError
+from mzc.grid import ZGrid
+
+D1, D2, N = 3.0, 0.25, 3
+STEP = D1 / (N + 1)
+
+
+def dense_coordinates(rows, cols, step=STEP, d2=D2):
+    """(y, x) of a dense grid with ``rows`` original rows and N rows inserted between them."""
+    y = np.arange((rows - 1) * (N + 1) + 1)[:, None] * step
+    x = np.arange(cols)[None, :] * d2
+    return y + 0 * x, x + 0 * y
+
+
+def sparse(dense_heights):
+    """The original rows of a dense grid."""
+    return dense_heights[:: N + 1]
+
+
+def converged(method):
+    """Options that run the thesis iteration to convergence (ignored by the direct methods)."""
+    return {"iterations": 20_000, "tol": 1e-14} if method == "thesis" else {}
+
+
+@pytest.mark.parametrize("method", METHODS)
+def test_a_plane_is_exact_for_every_method(method):
+    y, x = dense_coordinates(8, 50)
+    truth = 1.5 + 0.3 * x - 0.7 * y
+    result = densify(sparse(truth), N, D1, D2, method=method, **converged(method))
+    np.testing.assert_allclose(result, truth, atol=1e-9)
+
+
+@pytest.mark.parametrize("method", METHODS)
+def test_a_bilinear_twist_is_exact_for_every_method(method):
+    """x*y is harmonic, has straight sides and zero thin-plate curvature across planes."""
+    y, x = dense_coordinates(8, 50)
+    truth = 0.2 * x * y
+    result = densify(sparse(truth), N, D1, D2, method=method, **converged(method))
+    np.testing.assert_allclose(result, truth, atol=1e-9)
+
+
+def middle_columns(cols, margin):
+    """Columns far enough from the straight-line sides that their influence has died out."""
+    return slice(margin, cols - margin)
+
+
+def test_laplace_reproduces_a_function_harmonic_for_the_true_steps():
+    y, x = dense_coordinates(8, 241)
+    truth = x**2 - y**2
+    middle = middle_columns(241, 80)    # side error decays like exp(-pi x / D1): ~1e-9 at 20 mm
+    laplace = densify(sparse(truth), N, D1, D2, method="laplace")
+    thesis = densify(sparse(truth), N, D1, D2, method="thesis", **converged("thesis"))
+    np.testing.assert_allclose(laplace[:, middle], truth[:, middle], atol=1e-6)
+    assert np.abs(thesis - truth)[:, middle].max() > 0.1   # equal steps: wrong operator
+
+
+def test_thesis_reproduces_a_function_harmonic_in_index_space():
+    y, x = dense_coordinates(8, 241)
+    truth = (x / D2) ** 2 - (y / STEP) ** 2
+    middle = middle_columns(241, 80)
+    thesis = densify(sparse(truth), N, D1, D2, method="thesis", **converged("thesis"))
+    laplace = densify(sparse(truth), N, D1, D2, method="laplace")
+    np.testing.assert_allclose(thesis[:, middle], truth[:, middle], atol=1e-6)
+    assert np.abs(laplace - truth)[:, middle].max() > 1.0
+
+
+def test_thesis_stops_after_the_given_iterations_and_starts_from_zero():
+    y, x = dense_coordinates(3, 20)
+    truth = 10 + 0 * x
+    untouched = densify(sparse(truth), N, D1, D2, method="thesis", iterations=0)
+    assert np.all(untouched[1:N + 1, 1:-1] == 0)                 # interior starts at 0
+    np.testing.assert_array_equal(untouched[1:N + 1, [0, -1]], 10)  # straight-line sides
+    one = densify(sparse(truth), N, D1, D2, method="thesis", iterations=1)
+    assert one[2, 5] == 0 and one[1, 5] == 2.5                   # one average of 4 neighbours
+
+
+def test_thesis_tolerance_ends_the_iteration_early():
+    y, x = dense_coordinates(6, 80)
+    truth = np.sin(x) + y
+    loose = densify(sparse(truth), N, D1, D2, method="thesis", iterations=100_000, tol=1e-3)
+    tight = densify(sparse(truth), N, D1, D2, method="thesis", iterations=100_000, tol=1e-13)
+    exact = densify(sparse(truth), N, D1, D2, method="thesis", iterations=100_000)
+    assert 0 < np.abs(loose - exact).max() < 1e-1
+    assert np.abs(tight - exact).max() < 1e-11
+
+
+def test_biharmonic_reproduces_a_cubic_across_planes_away_from_the_far_edge():
+    """(y/10)^3 has zero curvature at the first plane, so the thin plate's natural condition
+    holds there; at the last plane it does not, and that error shrinks ~4x per plane away
+    from it. Laplace bends a cubic wherever it has curvature."""
+    y, x = dense_coordinates(30, 41)
+    truth = (y / 10) ** 3
+    near_first = slice(0, 12 * (N + 1))
+    biharmonic = densify(sparse(truth), N, D1, D2, method="biharmonic")
+    laplace = densify(sparse(truth), N, D1, D2, method="laplace")
+    np.testing.assert_allclose(biharmonic[near_first], truth[near_first], atol=1e-8)
+    assert np.abs(laplace - truth)[near_first].max() > 1e-2
+    far_error = np.abs(biharmonic - truth).max(axis=1)[2 :: N + 1]
+    assert far_error[-1] > 10 * far_error[-3] > 100 * far_error[-5]
+
+
+def test_biharmonic_is_smooth_across_planes_where_laplace_kinks():
+    """Each Laplace gap is solved alone, so the slope across a plane jumps; the thin plate
+    bends through the plane like the true surface does."""
+    y, x = dense_coordinates(10, 41)
+    truth = np.sin(y / 4)
+    plane = 5 * (N + 1)
+
+    def curvature_error(method):
+        z = densify(sparse(truth), N, D1, D2, method=method)[:, 20] - truth[:, 20]
+        return abs(z[plane + 1] - 2 * z[plane] + z[plane - 1])
+
+    assert curvature_error("biharmonic") < 0.05 * curvature_error("laplace")
+
+
+@pytest.mark.parametrize("method", METHODS)
+def test_holes_stay_holes_and_original_rows_are_untouched(method):
+    rng = np.random.default_rng(1)
+    z = rng.normal(size=(6, 40))
+    z[2, 10:15] = np.nan     # an interior hole in one row
+    z[4, :8] = np.nan        # a ragged edge
+    z[0, 30:] = np.nan
+    result = densify(z, N, D1, D2, method=method)
+    assert result.shape == ((6 - 1) * (N + 1) + 1, 40)
+    np.testing.assert_array_equal(result[:: N + 1], z)
+    valid = ~np.isnan(z)
+    both = valid[:-1] & valid[1:]
+    inserted_valid = ~np.isnan(np.delete(result, np.s_[:: N + 1], axis=0)).reshape(5, N, 40)
+    np.testing.assert_array_equal(inserted_valid, np.repeat(both[:, None, :], N, axis=1))
+
+
+@pytest.mark.parametrize("method", METHODS)
+def test_rows_that_do_not_overlap_insert_nothing(method):
+    z = np.full((3, 30), np.nan)
+    z[0, :10] = 1.0
+    z[1, 15:] = 2.0
+    z[2, 15:] = 3.0
+    result = densify(z, 2, D1, D2, method=method)
+    assert np.isnan(result[1:3]).all()
+    assert not np.isnan(result[4:6, 15:]).any()
+
+
+@pytest.mark.parametrize("method", METHODS)
+def test_n_zero_is_the_identity_and_one_row_stays_one_row(method):
+    z = np.arange(12.0).reshape(3, 4)
+    np.testing.assert_array_equal(densify(z, 0, D1, D2, method=method), z)
+    np.testing.assert_array_equal(densify(z[:1], 5, D1, D2, method=method), z[:1])
+
+
+@pytest.mark.parametrize("bad", [-1, 1.5, True, "3"])
+def test_bad_n_is_refused(bad):
+    with pytest.raises(MzcError) as error:
+        densify(np.zeros((3, 3)), bad, D1, D2)
+    assert error.value.field == "n"
+
+
+def test_unknown_method_is_refused():
+    with pytest.raises(MzcError):
+        densify(np.zeros((3, 3)), 1, D1, D2, method="spline")
+
+
+def test_densify_grid_divides_the_row_step_and_keeps_the_frame():
+    grid = ZGrid(np.zeros((5, 7)), 3.0, 0.5, origin=(1.0, 2.0), units="mm")
+    dense = densify_grid(grid, 2, "laplace")
+    assert dense.shape == (13, 7)
+    assert dense.d1 == pytest.approx(1.0) and dense.d2 == 0.5
+    assert dense.origin == (1.0, 2.0) and dense.units == "mm"
+    np.testing.assert_allclose(dense.ys()[::3], grid.ys())
+
+
+@pytest.mark.parametrize("method", METHODS)
+def test_a_face_sized_grid_densifies_quickly(method):
+    y, x = dense_coordinates(70, 670)
+    truth = np.sin(x / 10) * np.cos(y / 15) * 20
+    outside = ((x - 84) / 84) ** 2 + ((y - 104) / 104) ** 2 > 1
+    z = sparse(np.where(outside, np.nan, truth))
+    densify(z, N, D1, D2, method=method)
+    started = time.process_time()
+    densify(z, N, D1, D2, method=method)
+    assert time.process_time() - started < 1.0   # CPU: ~0.08 s thesis/laplace, ~0.23 s biharmonic here
+
+
+def test_face_densified_is_close_to_the_face_sliced_densely(f18):
+    from mzc.meshes import read_mesh
+    from mzc.slicing import slice_surface
+
+    mesh = read_mesh(f18)
+    sparse_grid = slice_surface(mesh, d1=3, d2=0.25)
+    truth = slice_surface(mesh, d1=0.75, d2=0.25).z
+    errors = {}
+    for method in METHODS:
+        dense = densify_grid(sparse_grid, 3, method).z
+        rows = min(len(dense), len(truth))
+        errors[method] = np.sqrt(np.nanmean((dense[:rows] - truth[:rows]) ** 2))
+    assert errors["biharmonic"] < errors["thesis"] < errors["laplace"] < 1.5
+
+
+# --------------------------------------------------------------------------- CLI
+
+
+def zgrid_bytes(z, d1=D1, d2=D2):
+    from mzc.formats import zgrid
+
+    return zgrid.write(ZGrid(np.asarray(z, dtype=float), d1, d2))
+
+
+def test_cli_densifies_stdin_to_stdout(mzc):
+    from mzc.formats import read_any
+
+    y, x = dense_coordinates(5, 12)
+    truth = 2 + 0.5 * x - y
+    result = mzc("densify", "-n", "3", input=zgrid_bytes(sparse(truth)), check=True)
+    grid = read_any(result.stdout, "<stdout>")
+    assert grid.shape == truth.shape and grid.d1 == pytest.approx(STEP)
+    np.testing.assert_allclose(grid.z, truth, atol=1e-6)
+
+
+@pytest.mark.parametrize("bad", ["-1", "x", "1.5"])
+def test_cli_bad_n_is_a_usage_error(mzc, bad):
+    result = mzc("densify", "-n", bad, input=zgrid_bytes(np.zeros((2, 2))))
+    assert result.returncode == 2 and result.stdout == b""
+
+
+def test_cli_bad_file_is_one_line(mzc, tmp_path):
+    path = tmp_path / "bad.txt"
+    path.write_text("not a grid\n")
+    result = mzc("densify", "-n", "2", path, "-o", tmp_path / "out.zg")
+    assert result.returncode == 1
+    assert len(result.stderr.decode().strip().splitlines()) == 1
+    assert not (tmp_path / "out.zg").exists()
