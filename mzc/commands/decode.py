@@ -1,0 +1,31 @@
+"""``mzc decode``: any compressed mzc file (or a thesis file with --legacy) back to a z-grid."""
+
+import click
+
+from mzc.commands import input_argument, output_option, read_grid, write_grid
+
+LEGACY_KINDS = ("poly", "dft", "dct", "dwt")
+
+
+@click.command(help="""Decompress an mzc file into a z-grid.
+
+The codec is recognised by the file's magic line (mzc-poly, mzc-dft, mzc-dct, mzc-dwt, ...).
+Files written by the thesis's MATLAB code have no magic line: name their kind with
+--legacy. Invalid nodes (outside each row's span, and recorded holes) come back as nan.""")
+@input_argument
+@output_option
+@click.option("--legacy", type=click.Choice(LEGACY_KINDS),
+              help="Read a thesis file (Tables 6.1, 7.1, 7.2, §5.3.1) of this kind.")
+@click.option("--precision", type=click.IntRange(0, 17), default=4, show_default=True, metavar="DIGITS",
+              help="Decimals of the written heights.")
+def command(input, output, legacy, precision):
+    from mzc.streams import check_not_input, display_name, read_input
+
+    check_not_input(output, input)
+    if legacy:
+        from mzc.formats.legacy import read_legacy
+
+        grid = read_legacy(read_input(input), display_name(input), legacy)
+    else:
+        grid = read_grid(input)
+    write_grid(grid, output, precision=precision)

@@ -1,0 +1,97 @@
+"""``mzc encode``: compress a z-grid with one of the thesis's per-row codecs.
+
+The codec table below is the only place that knows the codecs: each entry names its
+format module, the option that selects it, and the tuning options it accepts. Adding a
+codec (e.g. ``--dwt2d``) is one entry, its selecting option and, if it brings new tuning
+options, their decorators.
+"""
+
+from dataclasses import dataclass
+
+import click
+
+from mzc.commands import input_argument, output_option, read_grid
+
+
+@dataclass(frozen=True)
+class Codec:
+    """A codec of ``mzc encode``: format module ``kind``, the tuning options it takes, and the
+    keyword that receives the selecting option's value (``--poly DEGREE`` -> degree)."""
+
+    kind: str
+    settings: tuple
+    value_keyword: str | None = None
+
+
+CODECS = {
+    "poly": Codec("poly", ("basis", "precision"), value_keyword="degree"),
+    "dft": Codec("dft", ("quality", "precision")),
+    "dct": Codec("dct", ("quality", "precision")),
+    "dwt": Codec("dwt", ("quality", "wavelet", "level", "precision")),
+}
+DEFAULTS = {"quality": 100, "precision": 4}
+
+
+def chosen_codec(selections):
+    """The one codec whose option was given, or a usage error."""
+    chosen = [name for name, value in selections.items() if value not in (None, False)]
+    if len(chosen) != 1:
+        given = ", ".join(f"--{name}" for name in chosen) or "none"
+        raise click.UsageError(f"give exactly one codec: --poly DEGREE, --dft, --dct or --dwt (given: {given})")
+    return chosen[0]
+
+
+def codec_arguments(name, value, settings):
+    """Keyword arguments for the codec's ``write``: its own settings, defaults filled in.
+
+    A tuning option that the codec does not use is a usage error rather than silently
+    ignored (``--dct --wavelet db4`` is a mistake worth telling).
+    """
+    codec = CODECS[name]
+    for setting, given in settings.items():
+        if given is not None and setting not in codec.settings:
+            raise click.UsageError(f"--{setting} does not apply to --{name}")
+    arguments = {s: settings[s] if settings[s] is not None else DEFAULTS[s]
+                 for s in codec.settings if settings[s] is not None or s in DEFAULTS}
+    if codec.value_keyword:
+        arguments[codec.value_keyword] = value
+    return arguments
+
+
+@click.command(help="""Compress a z-grid row by row with a transform of the thesis.
+
+Each row's valid span is coded on its own: a polynomial of a given degree, or the DFT,
+DCT or DWT with quality Q (the percentage of coefficients kept). Holes inside a span
+are recorded and come back invalid. Reads a z-grid (or any mzc file) from INPUT or
+stdin; writes the compressed file to -o or stdout.
+
+\b
+  mzc encode --dct -q 20 face.zg -o face.mzd
+  mzc encode --dwt -q 10 --wavelet db2 < face.zg > face.mzw
+  mzc encode --poly 30 face.zg -o face.mzp""")
+@input_argument
+@output_option
+@click.option("--poly", type=click.IntRange(0, 10_000), metavar="DEGREE",
+              help="Polynomial of DEGREE per row (Ch. 5); .mzp")
+@click.option("--dft", is_flag=True, help="Discrete Fourier transform (Ch. 6); .mzf")
+@click.option("--dct", is_flag=True, help="Discrete cosine transform (§7.2.2); .mzd")
+@click.option("--dwt", is_flag=True, help="Discrete wavelet transform (§7.2.3); .mzw")
+@click.option("-q", "--quality", type=click.IntRange(1, 100), metavar="Q",
+              help="Percentage of coefficients kept, 1..100 [default: 100]; not for --poly.")
+@click.option("--wavelet", metavar="NAME", help="DWT wavelet, e.g. db1, db2, sym4 [default: db1].")
+@click.option("--level", type=click.IntRange(1, 32), metavar="N",
+              help="DWT levels, capped per row to what its length allows [default: 3].")
+@click.option("--basis", type=click.Choice(["chebyshev", "power"]),
+              help="Polynomial basis: chebyshev (stable) or power (the thesis's polyfit) [default: chebyshev].")
+@click.option("--precision", type=click.IntRange(0, 17), metavar="DIGITS",
+              help="Decimals of the written coefficients [default: 4].")
+def command(input, output, poly, dft, dct, dwt, **settings):
+    from mzc.formats import module_for
+    from mzc.streams import check_not_input, write_output
+
+    selections = {"poly": poly, "dft": dft, "dct": dct, "dwt": dwt}
+    name = chosen_codec(selections)
+    arguments = codec_arguments(name, selections[name], settings)
+    check_not_input(output, input)
+    grid = read_grid(input)
+    write_output(output, module_for(CODECS[name].kind).write(grid, **arguments))

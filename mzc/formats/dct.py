@@ -1,0 +1,46 @@
+"""The DCT codec format (``mzc-dct 1.0``, extension ``.mzd``): see spec/dct.md.
+
+Each row's valid span is coded by its orthonormal DCT-II (thesis §7.2.2, Table 7.1);
+quality Q keeps the first floor(Q*m/100) coefficients of a span of m samples.
+"""
+
+from mzc.formats import rows
+from mzc.transforms import dct_forward, dct_inverse, kept
+
+KIND = "dct"
+VERSION = (1, 0)
+EXTENSIONS = (".mzd",)
+MAGIC = f"mzc-{KIND} {VERSION[0]}.{VERSION[1]}"
+
+
+def encode(spans, firsts, d2, options):
+    """Row tokens: the first floor(Q*m/100) DCT coefficients B."""
+    coefficients = dct_forward(spans)[:, :kept(options["quality"], spans.shape[1])]
+    return [rows.format_values(row, options["precision"]) for row in coefficients]
+
+
+def unpack(values, length, options):
+    """B as given; its count must be floor(Q*m/100)."""
+    expected = kept(options["quality"], length)
+    if values.size != expected:
+        raise rows.count_error(expected, values.size, f"DCT coefficients (span {length}, quality {options['quality']})")
+    return values
+
+
+def decode(vectors, length, firsts, d2, options):
+    """Inverse DCT, the dropped coefficients being zeros."""
+    return dct_inverse(vectors, length)
+
+
+CODEC = rows.RowCodec(KIND, VERSION, rows.common_options, rows.common_header_lines, encode, unpack, decode)
+
+
+def read(data, source="<stdin>"):
+    """Decode ``mzc-dct`` bytes into a ZGrid."""
+    return rows.read_grid(data, source, CODEC)
+
+
+def write(grid, quality=100, precision=rows.DEFAULT_PRECISION):
+    """Encode ``grid`` at quality Q (1..100) with coefficients rounded to ``precision`` decimals."""
+    options = {"quality": rows.check_quality(quality), "precision": rows.check_precision(precision)}
+    return rows.write_grid(grid, CODEC, options)

@@ -1,0 +1,69 @@
+"""The DFT codec format (``mzc-dft 1.0``, extension ``.mzf``): see spec/dft.md.
+
+Each row's valid span is coded by the thesis's sine-cosine series (§6.2.2, Table 6.1):
+``a0 aN L an(1..K) bn(1..K)`` with L = floor((m+1)/2) - 1 and K = floor(Q*L/100).
+"""
+
+import numpy as np
+
+from mzc.errors import MzcError
+from mzc.formats import rows
+from mzc.transforms import dft_forward, dft_inverse, dft_length, kept
+
+KIND = "dft"
+VERSION = (1, 0)
+EXTENSIONS = (".mzf",)
+MAGIC = f"mzc-{KIND} {VERSION[0]}.{VERSION[1]}"
+
+
+def encode(spans, firsts, d2, options):
+    """Row tokens: a0 aN L, then the first K of an and the first K of bn."""
+    a0, a_last, an, bn = dft_forward(spans)
+    count = kept(options["quality"], an.shape[1])
+    numbers = np.column_stack([a0, a_last, an[:, :count], bn[:, :count]])
+    tokens = [rows.format_values(row, options["precision"]) for row in numbers]
+    for row in tokens:
+        row.insert(2, str(an.shape[1]))
+    return tokens
+
+
+def unpack(values, length, options):
+    """[a0, aN, an (L, zero padded), bn (L, zero padded)] after checking L and the count."""
+    if values.size < 3:
+        raise rows.count_error("at least 3", values.size, "numbers (a0 aN L)")
+    big_l = rows.integer_field(values[2], "L")
+    if big_l != dft_length(length):
+        raise MzcError(f"L is {big_l} but a span of {length} samples has L = {dft_length(length)}", field="L")
+    count = kept(options["quality"], big_l)
+    if values.size != 3 + 2 * count:
+        raise rows.count_error(3 + 2 * count, values.size, f"numbers (a0 aN L and {count} an, {count} bn)")
+    return pack(values[0], values[1], values[3:3 + count], values[3 + count:], big_l)
+
+
+def pack(a0, a_last, an, bn, big_l):
+    """The vector [a0, aN, an, bn] with an and bn zero padded to L each."""
+    vector = np.zeros(2 + 2 * big_l)
+    vector[:2] = a0, a_last
+    vector[2:2 + len(an)] = an
+    vector[2 + big_l:2 + big_l + len(bn)] = bn
+    return vector
+
+
+def decode(vectors, length, firsts, d2, options):
+    """The inverse series evaluated at the span's true length."""
+    big_l = dft_length(length)
+    return dft_inverse(vectors[:, 0], vectors[:, 1], vectors[:, 2:2 + big_l], vectors[:, 2 + big_l:], length)
+
+
+CODEC = rows.RowCodec(KIND, VERSION, rows.common_options, rows.common_header_lines, encode, unpack, decode)
+
+
+def read(data, source="<stdin>"):
+    """Decode ``mzc-dft`` bytes into a ZGrid."""
+    return rows.read_grid(data, source, CODEC)
+
+
+def write(grid, quality=100, precision=rows.DEFAULT_PRECISION):
+    """Encode ``grid`` at quality Q (1..100) with coefficients rounded to ``precision`` decimals."""
+    options = {"quality": rows.check_quality(quality), "precision": rows.check_precision(precision)}
+    return rows.write_grid(grid, CODEC, options)

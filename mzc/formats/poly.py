@@ -1,0 +1,69 @@
+"""The polynomial codec format (``mzc-poly 1.0``, extension ``.mzp``): see spec/poly.md.
+
+Each row's valid span is fitted by a polynomial (thesis Ch. 5, §5.3.1) of degree
+min(n, m-1); the row line holds its coefficients and the degree follows from their count.
+There is no quality factor: the degree is the knob. The ``chebyshev`` basis (default) is
+stable at any degree; ``power`` is the thesis's polyfit on raw x and is unstable past ~40.
+"""
+
+from mzc.errors import MzcError
+from mzc.formats import rows
+from mzc.transforms import BASES, poly_degree, poly_forward, poly_inverse
+
+KIND = "poly"
+VERSION = (1, 0)
+EXTENSIONS = (".mzp",)
+MAGIC = f"mzc-{KIND} {VERSION[0]}.{VERSION[1]}"
+MAX_DEGREE = 10_000
+
+
+def read_options(header):
+    """The required ``basis`` and ``degree`` lines, and ``precision`` (informative)."""
+    return {"basis": header.word("basis", BASES),
+            "degree": header.integer("degree", 0, MAX_DEGREE),
+            "precision": header.integer("precision", 0, rows.MAX_PRECISION, required=False)}
+
+
+def header_lines(options):
+    lines = [f"basis {options['basis']}", f"degree {options['degree']}"]
+    if options["basis"] == "chebyshev":
+        lines.append(f"precision {options['precision']}")
+    return lines
+
+
+def encode(spans, firsts, d2, options):
+    """Row tokens: the coefficients (power basis: exact, since rounding x^n terms ruins the fit)."""
+    coefficients = poly_forward(spans, options["degree"], options["basis"], firsts, d2)
+    precision = options["precision"] if options["basis"] == "chebyshev" else None
+    return [rows.format_values(row, precision) for row in coefficients]
+
+
+def unpack(values, length, options):
+    """The coefficients; a span of m samples holds min(degree, m-1)+1 of them."""
+    expected = poly_degree(options["degree"], length) + 1
+    if values.size != expected:
+        raise rows.count_error(expected, values.size, f"coefficients (span {length}, degree {options['degree']})")
+    return values
+
+
+def decode(vectors, length, firsts, d2, options):
+    """The polynomials evaluated at the span's columns."""
+    return poly_inverse(vectors, length, options["basis"], firsts, d2)
+
+
+CODEC = rows.RowCodec(KIND, VERSION, read_options, header_lines, encode, unpack, decode)
+
+
+def read(data, source="<stdin>"):
+    """Decode ``mzc-poly`` bytes into a ZGrid."""
+    return rows.read_grid(data, source, CODEC)
+
+
+def write(grid, degree, basis="chebyshev", precision=rows.DEFAULT_PRECISION):
+    """Encode ``grid`` with polynomials of ``degree`` in ``basis``."""
+    if not 0 <= degree <= MAX_DEGREE:
+        raise MzcError(f"{degree} is outside 0..{MAX_DEGREE}", field="degree")
+    if basis not in BASES:
+        raise MzcError(f"{basis!r} is not one of {', '.join(BASES)}", field="basis")
+    options = {"degree": degree, "basis": basis, "precision": rows.check_precision(precision)}
+    return rows.write_grid(grid, CODEC, options)
