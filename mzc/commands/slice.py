@@ -1,0 +1,34 @@
+"""``mzc slice``: cut a mesh or point cloud into a z-grid with the thesis's cutting planes."""
+
+import click
+
+from mzc.commands import input_argument, output_option, write_grid
+
+
+@click.command("slice")
+@input_argument
+@output_option
+@click.option("--d1", type=float, metavar="F", help="Row spacing: distance between horizontal planes.")
+@click.option("--d2", type=float, metavar="F", help="Column spacing along each row [default: d1/10].")
+@click.option("--rows", type=int, metavar="N", help="Number of rows across y instead of --d1 [default: 72].")
+@click.option("--cols", type=int, metavar="N", help="Number of columns across x instead of --d2.")
+@click.option("--align", type=click.Choice(["none", "pca"]), default="none", show_default=True,
+              help="pca: rotate so the least spread is z and the most spread is y.")
+@click.option("--units", metavar="TEXT", help="Length unit to record, e.g. mm.")
+@click.option("--precision", type=click.IntRange(0, 17), metavar="DIGITS",
+              help="Decimal digits of the written heights.")
+def command(input, output, d1, d2, rows, cols, align, units, precision):
+    """Cut a mesh (OBJ, PLY, VTK, STL, OFF) or point cloud (x y z text, vertex-only PLY)
+    into a z-grid: each node holds the front-most height of the surface."""
+    from mzc.meshes import read_mesh
+    from mzc.slicing import slice_surface
+    from mzc.streams import check_not_input
+
+    if d1 is not None and rows is not None:
+        raise click.UsageError("--d1 and --rows both set the rows: give one")
+    if d2 is not None and cols is not None:
+        raise click.UsageError("--d2 and --cols both set the columns: give one")
+    check_not_input(output, input)
+    mesh = read_mesh(input)
+    grid = slice_surface(mesh, d1=d1, d2=d2, rows=rows, cols=cols, align=align, units=units)
+    write_grid(grid, output, precision=precision)

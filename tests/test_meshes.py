@@ -1,0 +1,244 @@
+"""Reading and writing meshes and point clouds: the dialects real files come in, and bad input."""
+
+import struct
+
+import meshio
+import numpy as np
+import pytest
+
+from conftest import face_path
+from mzc.errors import MzcError
+from mzc.meshes import Mesh, read_mesh, write_mesh
+
+# A unit square as two triangles, plus an off-square apex: 5 points, 4 triangles (a quad split
+# and a fan of 2 more) - small enough to write by hand in every dialect.
+POINTS = np.array([[0, 0, 0], [1, 0, 0.5], [1, 1, 1], [0, 1, 0.25], [2, 0.5, -1]], dtype=float)
+TRIANGLES = np.array([[0, 1, 2], [0, 2, 3], [1, 4, 2]])
+
+
+def write(tmp_path, name, content):
+    path = tmp_path / name
+    path.write_bytes(content if isinstance(content, bytes) else content.encode())
+    return path
+
+
+def assert_same_mesh(mesh, points=POINTS, triangles=TRIANGLES):
+    np.testing.assert_array_equal(mesh.points, points)
+    np.testing.assert_array_equal(mesh.triangles, triangles)
+
+
+PLAIN_OBJ = """v 0 0 0
+v 1 0 0.5
+v 1 1 1
+v 0 1 0.25
+v 2 0.5 -1
+f 1 2 3
+f 1 3 4
+f 2 5 3
+"""
+
+OBJ_DIALECTS = {
+    "plain": PLAIN_OBJ,
+    "slashes and groups": """# exported
+mtllib face.mtl
+o face
+v 0 0 0
+v 1 0 0.5
+v 1 1 1
+v 0 1 0.25
+v 2 0.5 -1 1.0
+vt 0 0
+vt 1 0
+vt 1 1
+vn 0 0 1
+g front
+usemtl skin
+s 1
+f 1/1/1 2/2/1 3/3/1
+f 1//1 3//1 4//1
+s off
+f 2/2 5/1 3/3  # trailing comment
+""",
+    "quad and negative indices": """v 0 0 0
+v 1 0 0.5
+v 1 1 1
+v 0 1 0.25
+f -4 -3 -2 -1
+v 2 0.5 -1
+f -4 -1 -3
+""",
+    "crlf and tabs": PLAIN_OBJ.replace("\n", "\r\n").replace("v ", "v\t"),
+    "vertex colours, indented lines": PLAIN_OBJ.replace("v 0 0 0", "  v 0 0 0 0.1 0.2 0.3"),
+}
+
+
+@pytest.mark.parametrize("dialect", OBJ_DIALECTS)
+def test_obj_dialects_read_the_same_mesh(tmp_path, dialect):
+    mesh = read_mesh(write(tmp_path, "m.obj", OBJ_DIALECTS[dialect]))
+    assert_same_mesh(mesh)
+
+
+def test_obj_polygon_is_fan_triangulated(tmp_path):
+    text = "v 0 0 0\nv 1 0 0\nv 2 1 0\nv 1 2 0\nv 0 1 0\nf 1 2 3 4 5\n"
+    mesh = read_mesh(write(tmp_path, "p.obj", text))
+    np.testing.assert_array_equal(mesh.triangles, [[0, 1, 2], [0, 2, 3], [0, 3, 4]])
+
+
+def test_obj_without_faces_is_a_point_cloud(tmp_path):
+    mesh = read_mesh(write(tmp_path, "cloud.obj", "v 1 2 3\nv 4 5 6\n"))
+    assert mesh.is_point_cloud and mesh.points.shape == (2, 3)
+
+
+def ply_header(fmt, vertex_properties, face_property="property list uchar int vertex_indices",
+               faces=len(TRIANGLES)):
+    lines = ["ply", f"format {fmt} 1.0", "comment test", f"element vertex {len(POINTS)}",
+             *vertex_properties]
+    if faces is not None:
+        lines += [f"element face {faces}", face_property]
+    return ("\n".join(lines) + "\nend_header\n").encode()
+
+
+def ascii_ply(extra_columns=0, face_property="property list uchar int vertex_indices"):
+    properties = ["property float x", "property float y", "property float z"]
+    properties += [f"property uchar extra{i}" for i in range(extra_columns)]
+    body = "".join(" ".join(f"{v:g}" for v in p) + " 7" * extra_columns + "\n" for p in POINTS)
+    body += "".join("3 " + " ".join(map(str, t)) + "\n" for t in TRIANGLES)
+    return ply_header("ascii", properties, face_property) + body.encode()
+
+
+def binary_ply(order="<", with_faces=True):
+    properties = ["property double x", "property double y", "property double z",
+                  "property uchar red"]
+    fmt = "binary_little_endian" if order == "<" else "binary_big_endian"
+    header = ply_header(fmt, properties, "property list uchar uint vertex_index",
+                        faces=len(TRIANGLES) if with_faces else None)
+    body = b"".join(struct.pack(order + "dddB", *p, 200) for p in POINTS)
+    if with_faces:
+        body += b"".join(struct.pack(order + "BIII", 3, *t) for t in TRIANGLES)
+    return header + body
+
+
+@pytest.mark.parametrize("content", [ascii_ply(), ascii_ply(extra_columns=2),
+                                     ascii_ply(face_property="property list uchar int vertex_index"),
+                                     binary_ply("<"), binary_ply(">")],
+                         ids=["ascii", "ascii extra columns", "ascii vertex_index",
+                              "binary little", "binary big"])
+def test_ply_dialects_read_the_same_mesh(tmp_path, content):
+    assert_same_mesh(read_mesh(write(tmp_path, "m.ply", content)))
+
+
+def test_vertex_only_ply_is_a_point_cloud(tmp_path):
+    mesh = read_mesh(write(tmp_path, "cloud.ply", binary_ply(with_faces=False)))
+    assert mesh.is_point_cloud
+    np.testing.assert_array_equal(mesh.points, POINTS)
+
+
+def test_binary_ply_with_mixed_polygons(tmp_path):
+    header = ("ply\nformat binary_little_endian 1.0\nelement vertex 5\nproperty float x\n"
+              "property float y\nproperty float z\nelement face 2\n"
+              "property list uchar int vertex_indices\nend_header\n").encode()
+    body = b"".join(struct.pack("<fff", *p) for p in POINTS)
+    body += struct.pack("<B4i", 4, 0, 1, 2, 3) + struct.pack("<B3i", 3, 1, 4, 2)
+    mesh = read_mesh(write(tmp_path, "mixed.ply", header + body))
+    np.testing.assert_array_equal(mesh.triangles, TRIANGLES)
+
+
+@pytest.mark.parametrize("extension", ["vtk", "stl", "off", "ply", "obj"])
+def test_write_then_read_round_trips(tmp_path, extension):
+    path = tmp_path / f"m.{extension}"
+    write_mesh(path, Mesh(POINTS, TRIANGLES))
+    mesh = read_mesh(path)
+    if extension == "stl":  # STL stores every triangle's corners on its own, in float32
+        np.testing.assert_allclose(mesh.points[mesh.triangles], POINTS[TRIANGLES], atol=1e-6)
+    else:
+        assert_same_mesh(mesh)
+
+
+def test_meshio_reads_what_we_write(tmp_path):
+    path = tmp_path / "m.ply"
+    write_mesh(path, Mesh(POINTS, TRIANGLES))
+    assert path.read_bytes().startswith(b"ply\nformat binary")
+    result = meshio.read(path)
+    np.testing.assert_array_equal(result.points, POINTS)
+    np.testing.assert_array_equal(result.cells[0].data, TRIANGLES)
+
+
+def test_write_to_stdout_is_obj_text(capsysbinary):
+    write_mesh("-", Mesh(POINTS, TRIANGLES))
+    text = capsysbinary.readouterr().out.decode()
+    assert text.splitlines()[0] == "v 0.0 0.0 0.0"
+    assert text.splitlines()[-1] == "f 2 5 3"
+
+
+def test_obj_writer_keeps_every_bit(tmp_path):
+    points = np.random.default_rng(1).normal(size=(50, 3)) * 1e3
+    path = tmp_path / "r.obj"
+    write_mesh(path, Mesh(points, np.array([[0, 1, 2]])))
+    np.testing.assert_array_equal(read_mesh(path).points, points)
+
+
+def test_unknown_output_format_is_refused(tmp_path):
+    with pytest.raises(MzcError, match="cannot write"):
+        write_mesh(tmp_path / "m.xyz", Mesh(POINTS, TRIANGLES))
+    assert not list(tmp_path.iterdir())
+
+
+@pytest.mark.parametrize("name,text", [
+    ("cloud.xyz", "# scan\n0 0 0\n1 0 0.5 255 0 0\n\n1 1 1\n0 1 0.25\n2 0.5 -1\n"),
+    ("cloud.txt", "0,0,0\n1,0,0.5\n1,1,1\n0,1,0.25\n2,0.5,-1\n"),
+    ("cloud.dat", "0 0 0\r\n1 0 0.5\r\n1 1 1\r\n0 1 0.25\r\n2 0.5 -1\r\n"),
+])
+def test_xyz_text_point_clouds(tmp_path, name, text):
+    mesh = read_mesh(write(tmp_path, name, text))
+    assert mesh.is_point_cloud
+    np.testing.assert_array_equal(mesh.points, POINTS)
+
+
+@pytest.mark.parametrize("content", [PLAIN_OBJ.encode(), ascii_ply(), binary_ply(),
+                                     b"0 0 0\n1 0 0.5\n1 1 1\n"], ids=["obj", "ply", "binary ply", "xyz"])
+def test_stdin_is_recognised_by_its_bytes(monkeypatch, content):
+    import io
+    import sys
+
+    monkeypatch.setattr(sys, "stdin", io.TextIOWrapper(io.BytesIO(content)))
+    mesh = read_mesh("-")
+    assert len(mesh.points) in (3, len(POINTS))
+
+
+@pytest.mark.parametrize("name,content,message,line", [
+    ("bad.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 4\n", "does not exist", 4),
+    ("bad.obj", "v 0 0 0\nv 1 0 0\nv 0 x 0\nf 1 2 3\n", "not a number", 3),
+    ("bad.obj", "v 0 0 0\nv 1 0\nv 0 1 0\n", "needs x y z", 2),
+    ("bad.obj", "v 0 0 0\nv 1 0 0\nf 1 2\n", "at least 3", 3),
+    ("bad.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 0\n", "does not exist", 4),
+    ("bad.obj", "v 0 0 0\nv nan 0 0\nv 0 1 0\nf 1 2 3\n", "NaN", None),
+    ("bad.obj", "# nothing here\n", "no 'v' lines", None),
+    ("bad.xyz", "0 0 0\n1 2\n", "at least 3 numbers", 2),
+    ("bad.xyz", "0 0 0\n1 2 inf\n", "infinite", None),
+    ("bad.xyz", "0 0 0\n1 2 three\n", "not a number", 2),
+    ("bad.ply", "ply\nformat ascii 1.0\nelement vertex 2\nproperty float x\n", "end_header", 1),
+    ("bad.stl", b"\x00\x01garbage" * 10, "cannot read|no points", None),
+    ("bad.ply", ascii_ply().replace(b"3 1 4 2", b"3 1 9 2"), "only 5 vertices", None),
+    ("empty.obj", "", "empty", None),
+    ("noise.bin", b"\x00\xff" * 100, "unrecognised", None),
+])
+def test_bad_input_names_file_and_line(tmp_path, name, content, message, line):
+    path = write(tmp_path, name, content)
+    with pytest.raises(MzcError, match=message) as caught:
+        read_mesh(path)
+    assert caught.value.source == str(path)
+    assert caught.value.line == line
+
+
+def test_missing_file(tmp_path):
+    with pytest.raises(MzcError, match="no such file"):
+        read_mesh(tmp_path / "absent.obj")
+
+
+def test_real_faces_read_like_meshio():
+    for name in ("f18.ply", "example.obj"):
+        path = face_path(name)
+        mesh, reference = read_mesh(path), meshio.read(path)
+        np.testing.assert_array_equal(mesh.points, reference.points)
+        np.testing.assert_array_equal(mesh.triangles, reference.cells[0].data)
+        assert mesh.points.shape == (30204, 3) and mesh.triangles.shape == (59697, 3)
