@@ -116,3 +116,23 @@ def test_error_grid_is_a_zgrid_of_b_minus_a(mzc, tmp_path):
     report = json.loads(mzc("diff", a, b, "--json", "--error-grid", errors, check=True).stdout)
     assert report["count"] == 3 and report["max"] == pytest.approx(0.5)
     assert errors.read_text().endswith("data\n0.5 0\n0 nan\n")
+
+
+def test_encode_dwt2d_holds_its_max_error_through_the_cli(mzc, tmp_path):
+    mesh = tmp_path / "bump.obj"
+    mzc("sample", "bump", "-o", mesh, check=True)
+    grid = tmp_path / "bump.zg"
+    mzc("slice", mesh, "--d1", "1", "--d2", "1", "-o", grid, check=True)
+    packed = mzc("encode", "--dwt2d", "--max-error", "0.02", grid, check=True).stdout
+    assert packed.startswith(b"mzc-dwt2d 1.0\n") and len(packed) < grid.stat().st_size / 10
+    decoded = tmp_path / "back.zg"
+    mzc("decode", "-o", decoded, input=packed, check=True)
+    report = json.loads(mzc("diff", grid, decoded, "--json", check=True).stdout)
+    assert report["max"] <= 0.02
+
+
+@pytest.mark.parametrize("options", [["--dwt2d"], ["--dwt2d", "--max-error", "1", "--rmse", "1"],
+                                     ["--dct", "--max-error", "1"], ["--dct", "--dwt2d", "--size", "100"]])
+def test_encode_codec_option_mistakes_are_usage_errors(mzc, options):
+    result = mzc("encode", *options, input=b"mzc-zgrid 1.0\nrows 1\ncols 2\nd1 1\nd2 1\ndata\n1 2\n")
+    assert result.returncode == 2 and result.stdout == b"" and "Traceback" not in result.stderr.decode()
