@@ -158,3 +158,109 @@ def surface_distance(mesh_a, mesh_b, samples=100_000, seed=0, keep_a=None, keep_
         summary[f"{name}mean"] = float(d.mean()) if d.size else float("nan")
         summary[f"{name}hausdorff"] = float(d.max()) if d.size else float("nan")
     return summary
+
+
+HEIGHTFIELD_NORMAL_Z = 0.5
+HEIGHTFIELD_CANDIDATES = 8
+
+
+def heightfield_filters(points_a, triangles_a, min_normal_z=HEIGHTFIELD_NORMAL_Z):
+    """(keep_a, keep_b) restricting ``surface_distance`` to the height-field part of mesh A.
+
+    A z-grid keeps one height per node, so it cannot represent a face's steep sides nor
+    what lies under an overhang (inside an ear's fold, under the nose). The height-field
+    part of A is its triangles whose unit normal has z above ``min_normal_z`` (0.5: within
+    60 degrees of +z) and that are seen from +z: no other triangle of A lies above their
+    centroid (``front_most``). keep_a keeps A-samples on those triangles. keep_b keeps
+    B-samples whose nearest A-triangle is one of them, the nearest being the closest (exact
+    point-triangle distance) among the HEIGHTFIELD_CANDIDATES triangles with the nearest
+    centroids; that differs from the true nearest only for samples about equally far from
+    two triangles, i.e. on the border between the parts, where either answer is right.
+    """
+    from scipy.spatial import cKDTree
+
+    points_a = np.asarray(points_a, dtype=float)
+    corners = points_a[np.asarray(triangles_a)]
+    normals = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
+    part = (normals[:, 2] > min_normal_z * np.linalg.norm(normals, axis=1)) & front_most(corners)
+    tree = cKDTree(corners.mean(axis=1))
+    k = min(HEIGHTFIELD_CANDIDATES, len(corners))
+
+    def keep_a(samples, triangle_index):
+        return part[triangle_index]
+
+    def keep_b(samples, triangle_index):
+        _, candidates = tree.query(samples, k=k)
+        candidates = candidates.reshape(len(samples), k)
+        sample_index = np.repeat(np.arange(len(samples)), k)
+        distance = distances_to(samples, sample_index, candidates.ravel(), corners).reshape(-1, k)
+        return part[candidates[np.arange(len(samples)), distance.argmin(axis=1)]]
+
+    return keep_a, keep_b
+
+
+def front_most(corners):
+    """True for each triangle whose centroid no other triangle covers from above (+z).
+
+    The vertical line through each centroid is tested against every triangle whose xy
+    bounding circle (searched by radius group, as in ``distance_to_mesh``) contains it (the same inclusive barycentric test as slicing); a hit
+    higher than the centroid by more than 1e-9 of the mesh size hides the triangle.
+    """
+    from scipy.spatial import cKDTree
+
+    from mzc.slicing import cross2, heights_on_triangles
+
+    centroids = corners.mean(axis=1)
+    radius = np.linalg.norm(corners[:, :, :2] - centroids[:, None, :2], axis=2).max(axis=1)
+    which, owner = [], []
+    for ids in radius_groups(radius):
+        found = cKDTree(centroids[ids, :2]).query_ball_point(centroids[:, :2], r=radius[ids].max())
+        counts = np.fromiter(map(len, found), dtype=np.int64, count=len(found))
+        which.append(np.repeat(np.arange(len(found)), counts))
+        owner.append(ids[np.concatenate(found).astype(np.int64)])
+    which, owner = np.concatenate(which), np.concatenate(owner)
+    flat = cross2(corners[:, 1, :2] - corners[:, 0, :2], corners[:, 2, :2] - corners[:, 0, :2]) != 0
+    test = flat[owner] & (owner != which)
+    which, owner = which[test], owner[test]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        z, hit = heights_on_triangles(corners, owner, centroids[which, 0], centroids[which, 1])
+    tolerance = 1e-9 * np.ptp(corners.reshape(-1, 3), axis=0).max()
+    hidden = np.zeros(len(corners), dtype=bool)
+    hidden[which[hit & (z > centroids[which, 2] + tolerance)]] = True
+    return ~hidden
+
+
+def surface_distance_parts(mesh_a, mesh_b, parts, samples=100_000, seed=0):
+    """``surface_distance`` under several sample filters at the cost of one call.
+
+    ``parts`` maps a name to (keep_a, keep_b), None keeping every sample. The filters act
+    after the samples are drawn, so each part's result is exactly what
+    surface_distance(mesh_a, mesh_b, samples, seed, keep_a, keep_b) returns, but each
+    sample's distance is computed once, for the union of the kept samples. This is what
+    the benchmarks and ``mzc diff --heightfield`` use to report the whole surface and its
+    height-field part together.
+    """
+    rng = np.random.default_rng(seed)
+    kept = {name: [] for name in parts}
+    for side, (source, target) in enumerate([(mesh_a, mesh_b), (mesh_b, mesh_a)]):
+        drawn, triangle_index = sample_surface(*source, samples, rng)
+        masks = {name: np.ones(len(drawn), dtype=bool) if keeps[side] is None else keeps[side](drawn, triangle_index)
+                 for name, keeps in parts.items()}
+        union = np.logical_or.reduce(list(masks.values()))
+        distances = np.full(len(drawn), np.nan)
+        distances[union] = distance_to_mesh(drawn[union], *target)
+        for name, mask in masks.items():
+            kept[name].append(distances[mask])
+    return {name: distance_summary(*directions) for name, directions in kept.items()}
+
+
+def distance_summary(a_to_b, b_to_a):
+    """RMS, mean and Hausdorff of the two directions' distances, each way and together
+    (the same keys as ``surface_distance``)."""
+    both = np.concatenate([a_to_b, b_to_a])
+    summary = {"samples": int(both.size)}
+    for name, d in [("", both), ("a_to_b_", a_to_b), ("b_to_a_", b_to_a)]:
+        summary[f"{name}rms"] = float(np.sqrt(np.mean(d**2))) if d.size else float("nan")
+        summary[f"{name}mean"] = float(d.mean()) if d.size else float("nan")
+        summary[f"{name}hausdorff"] = float(d.max()) if d.size else float("nan")
+    return summary

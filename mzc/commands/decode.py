@@ -16,8 +16,9 @@ Files written by the thesis's MATLAB code have no magic line: name their kind wi
 @output_option
 @click.option("--legacy", type=click.Choice(LEGACY_KINDS),
               help="Read a thesis file (Tables 6.1, 7.1, 7.2, §5.3.1) of this kind.")
-@click.option("--precision", type=click.IntRange(0, 17), default=4, show_default=True, metavar="DIGITS",
-              help="Decimals of the written heights.")
+@click.option("--precision", type=click.IntRange(0, 17), metavar="DIGITS",
+              help="Round the written heights to DIGITS decimals [default: exact, so the decoded "
+                   "grid is the one the codec's error bounds speak of].")
 def command(input, output, legacy, precision):
     from mzc.streams import check_not_input, display_name, read_input
 

@@ -14,7 +14,10 @@ else 1/1000 of A's longest side; --d1/--d2 override) and compared in z over the 
 valid in both: RMSE, max and mean absolute error, R^2 = 1 - SSE/SST, the 50/95/99th
 percentiles of |B - A| and the node count. All are printed unless some are chosen.
 --surface adds the symmetric point-to-surface distance (RMS, mean, Hausdorff) on
-area-weighted samples, which stays honest on steep walls where z error explodes.""")
+area-weighted samples, which stays honest on steep walls where z error explodes.
+--heightfield adds the same distance over A's height-field part (triangles facing
+within 60 degrees of +z and seen from +z, and the samples of B nearest to them), the
+part a z-grid can represent; the benchmarks report both.""")
 @click.argument("a", metavar="A")
 @click.argument("b", metavar="B")
 @click.option("--rmse", is_flag=True, help="Root mean square of B - A.")
@@ -24,6 +27,8 @@ area-weighted samples, which stays honest on steep walls where z error explodes.
 @click.option("--percentiles", is_flag=True, help="50th, 95th and 99th percentiles of |B - A|.")
 @click.option("--count", is_flag=True, help="Number of nodes compared.")
 @click.option("--surface", is_flag=True, help="Also the symmetric point-to-surface distance.")
+@click.option("--heightfield", is_flag=True,
+              help="Also the point-to-surface distance over A's height-field part (implies --surface).")
 @click.option("--samples", default=100_000, show_default=True, type=click.IntRange(100, 10_000_000),
               help="Samples per surface for --surface.")
 @click.option("--seed", default=0, show_default=True, help="Random seed of the --surface samples.")
@@ -32,10 +37,10 @@ area-weighted samples, which stays honest on steep walls where z error explodes.
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON object instead of text lines.")
 @click.option("--error-grid", metavar="FILE", help="Write the error surface B - A as a z-grid.")
 @click.option("--plot", metavar="FILE.png", help="Write the quality plots (error map, residuals, normal probability).")
-def command(a, b, rmse, max_, mean, r2, percentiles, count, surface, samples, seed, d1, d2,
+def command(a, b, rmse, max_, mean, r2, percentiles, count, surface, heightfield, samples, seed, d1, d2,
             as_json, error_grid, plot):
     from mzc.compare import error_grid as compute_error_grid
-    from mzc.metrics import grid_error_stats, surface_distance
+    from mzc.metrics import grid_error_stats
     from mzc.streams import check_not_input
     from mzc.surfaces import load_surface
 
@@ -47,10 +52,8 @@ def command(a, b, rmse, max_, mean, r2, percentiles, count, surface, samples, se
     stats = grid_error_stats(reference.z, reference.z + errors.z)
     chosen = [name for name, on in zip(STATISTICS, (rmse, max_, mean, r2, percentiles, count)) if on]
     report = select(stats, chosen or STATISTICS)
-    if surface:
-        distances = surface_distance((first.points, first.triangles), (second.points, second.triangles),
-                                     samples=samples, seed=seed)
-        report.update({f"surface_{k}": v for k, v in distances.items()})
+    if surface or heightfield:
+        report.update(surface_report(first, second, heightfield, samples, seed))
     if error_grid:
         from mzc.commands import write_grid
 
@@ -58,6 +61,18 @@ def command(a, b, rmse, max_, mean, r2, percentiles, count, surface, samples, se
     if plot:
         write_plot(plot, reference, errors, stats)
     click.echo(json.dumps(report, indent=2) if as_json else format_report(report))
+
+
+def surface_report(first, second, heightfield, samples, seed):
+    """surface_* entries (and surface_heightfield_* ones) of the point-to-surface distance."""
+    from mzc.metrics import heightfield_filters, surface_distance_parts
+
+    parts = {"surface_": (None, None)}
+    if heightfield:
+        parts["surface_heightfield_"] = heightfield_filters(first.points, first.triangles)
+    distances = surface_distance_parts((first.points, first.triangles), (second.points, second.triangles),
+                                       parts, samples=samples, seed=seed)
+    return {f"{prefix}{k}": v for prefix, summary in distances.items() for k, v in summary.items()}
 
 
 def select(stats, chosen):
