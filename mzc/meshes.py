@@ -654,7 +654,8 @@ def write_with_meshio(temp, mesh, file_format, path):
 
     if file_format == "stl" and mesh.is_point_cloud:
         raise MzcError("STL cannot hold a point cloud (no triangles)", source=path)
-    cells = [("triangle", mesh.triangles)] if len(mesh.triangles) else []
+    # int32 indices: PLY has no 64-bit integers, and meshio would warn on stderr.
+    cells = [("triangle", mesh.triangles.astype(np.int32))] if len(mesh.triangles) else []
     options = {"binary": True} if file_format == "ply" else {}
     with quiet():
         meshio.write(temp, meshio.Mesh(mesh.points, cells), file_format=file_format, **options)
