@@ -65,12 +65,20 @@ def atomic_path(output):
     except PermissionError:
         raise MzcError("permission denied", source=output) from None
     os.close(handle)
+    os.chmod(temp, 0o666 & ~current_umask())  # mkstemp makes it 0600; a new file should follow the umask
     try:
         yield temp
         os.replace(temp, output)
     finally:
         if os.path.exists(temp):
             os.unlink(temp)
+
+
+def current_umask():
+    """The process's file-creation mask (reading it means setting it, so set it straight back)."""
+    mask = os.umask(0)
+    os.umask(mask)
+    return mask
 
 
 def write_output(path, data):

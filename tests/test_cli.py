@@ -1,6 +1,7 @@
 """Command-line conventions: help, errors on one line, atomic output, the pipeline as subprocesses."""
 
 import json
+import os
 import subprocess
 import sys
 
@@ -136,3 +137,13 @@ def test_encode_dwt2d_holds_its_max_error_through_the_cli(mzc, tmp_path):
 def test_encode_codec_option_mistakes_are_usage_errors(mzc, options):
     result = mzc("encode", *options, input=b"mzc-zgrid 1.0\nrows 1\ncols 2\nd1 1\nd2 1\ndata\n1 2\n")
     assert result.returncode == 2 and result.stdout == b"" and "Traceback" not in result.stderr.decode()
+
+
+def test_output_files_follow_the_umask(mzc, tmp_path):
+    out = tmp_path / "bump.obj"
+    mask = os.umask(0o022)
+    try:
+        mzc("sample", "bump", "-o", out, check=True)
+    finally:
+        os.umask(mask)
+    assert out.stat().st_mode & 0o777 == 0o644
