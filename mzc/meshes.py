@@ -10,6 +10,7 @@ the file, and the line where it is known.
 """
 
 import contextlib
+import io
 import logging
 import os
 import re
@@ -155,10 +156,10 @@ def fan_triangulate_ragged(flat, counts):
 
 @contextlib.contextmanager
 def quiet():
-    """Silence meshio's warnings and log messages: errors reach the user as one line."""
+    """Silence meshio's warnings, log messages and prints: stdout carries data only."""
     logging.disable(logging.CRITICAL)
     try:
-        with warnings.catch_warnings():
+        with warnings.catch_warnings(), contextlib.redirect_stdout(io.StringIO()):
             warnings.simplefilter("ignore")
             yield
     finally:
@@ -182,13 +183,25 @@ def read_with_meshio(path, data, kind, source):
     """Read with meshio; any failure becomes an MzcError."""
     import meshio
 
+    if kind == "off" and not off_has_counts_line(data):
+        raise MzcError("OFF file ends before its counts line 'vertices faces edges'", source=source)
+    reader = getattr(meshio, kind).read  # meshio.read would print to stdout and sys.exit on failure
     try:
         with readable_file(path, data, kind) as name, quiet():
-            result = meshio.read(name, file_format=kind)
+            result = reader(name)
     except Exception as error:  # noqa: BLE001 - meshio raises many types on bad data
         message = str(error).strip().splitlines()[0] if str(error).strip() else type(error).__name__
         raise MzcError(f"cannot read as {kind.upper()}: {message}", source=source) from None
     return Mesh(xyz_of(result.points), surface_triangles(result.cells))
+
+
+def off_has_counts_line(data):
+    """True when an OFF file has a line after ``OFF`` that is neither blank nor a comment.
+
+    meshio's OFF reader skips such lines in a loop that never stops at the end of the file.
+    """
+    lines = data.split(b"\n")[1:]
+    return any(line.strip() and not line.strip().startswith(b"#") for line in lines)
 
 
 def xyz_of(points):

@@ -197,15 +197,23 @@ def read_record(r, tokens, cols, codec, options, source, line):
     return RowRecord(r, span[0], span[1], vector, line)
 
 
-def decode_records(records, rows, cols, d2, decode, options):
-    """The (rows x cols) heights of ``records``, inverted by ``decode`` in batches of equal shape."""
+def decode_records(records, rows, cols, d2, decode, options, source):
+    """The (rows x cols) heights of ``records``, inverted by ``decode`` in batches of equal shape.
+
+    Finite but huge coefficients can overflow the inverse transform: such a row is an error.
+    """
     z = np.full((rows, cols), np.nan)
     groups = defaultdict(list)
     for record in records:
         groups[(record.length, record.vector.shape[0])].append(record)
     for (length, _count), members in groups.items():
         firsts = np.array([m.first + 1 for m in members])
-        decoded = decode(np.stack([m.vector for m in members]), length, firsts, d2, options)
+        with np.errstate(over="ignore", invalid="ignore"):
+            decoded = decode(np.stack([m.vector for m in members]), length, firsts, d2, options)
+        overflowed = ~np.isfinite(decoded).all(axis=1)
+        if overflowed.any():
+            raise MzcError("coefficients too large: the decoded heights overflow", source=source,
+                           line=members[int(np.flatnonzero(overflowed)[0])].line)
         for member, values in zip(members, decoded):
             z[member.row, member.first:member.first + length] = values
     return z
@@ -258,7 +266,8 @@ def read_grid(data, source, codec):
                        source=source, line=first_line + len(lines))
     records = [read_record(r, text.split(), cols, codec, options, source, number)
                for r, (number, text) in enumerate(lines[:rows])]
-    z = decode_records([rec for rec in records if rec is not None], rows, cols, fields["d2"], codec.decode, options)
+    z = decode_records([rec for rec in records if rec is not None], rows, cols, fields["d2"], codec.decode,
+                       options, source)
     apply_holes(z, lines[rows:], source)
     return ZGrid(z=z, **fields)
 
