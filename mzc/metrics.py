@@ -77,7 +77,22 @@ def point_triangle_distance(p, a, b, c):
     choices = [a, b, c, edge_ab, edge_ac, edge_bc]
     for region, point in zip(reversed(regions), reversed(choices)):
         closest = np.where(region[:, None], point, closest)
-    return np.linalg.norm(p - closest, axis=1)
+    distance = np.linalg.norm(p - closest, axis=1)
+    flat = ~np.isfinite(distance) | (np.linalg.norm(np.cross(ab, ac), axis=1) == 0)
+    if flat.any():  # a zero-area triangle is its three edges
+        q, x, y, w = p[flat], a[flat], b[flat], c[flat]
+        distance[flat] = np.minimum.reduce([segment_distance(q, x, y), segment_distance(q, y, w),
+                                            segment_distance(q, w, x)])
+    return distance
+
+
+def segment_distance(p, a, b):
+    """Distance from points p to segments a-b (all (n, 3)); a segment may be a single point."""
+    ab = b - a
+    length2 = _dot(ab, ab)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        t = np.where(length2 > 0, np.clip(_dot(p - a, ab) / length2, 0, 1), 0.0)
+    return np.linalg.norm(p - (a + t[:, None] * ab), axis=1)
 
 
 def _dot(u, v):

@@ -59,3 +59,11 @@ def test_grid_error_stats_on_a_known_error():
     assert stats["rmse"] == pytest.approx(0.1) and stats["max"] == pytest.approx(0.1)
     assert stats["bias"] == pytest.approx(0.1 / 3)
     assert stats["r2"] == pytest.approx(1 - 0.03 / 2)
+
+
+def test_zero_area_triangles_are_measured_as_their_edges():
+    a = np.array([[0, 0, 0.0], [0, 0, 0.0]])
+    b = np.array([[2, 0, 0.0], [0, 0, 0.0]])
+    c = np.array([[1, 0, 0.0], [0, 0, 0.0]])  # a collinear triangle, and one collapsed to a point
+    p = np.array([[1, 1, 0.0], [3, 4, 0.0]])
+    np.testing.assert_allclose(point_triangle_distance(p, a, b, c), [1, 5])
