@@ -181,58 +181,59 @@ def laplace_inserted(z, n, step, d2):
 def biharmonic_inserted(z, n, step, d2):
     """Inserted rows minimising the thin-plate energy over the whole dense grid.
 
-    The normal equations A u = b of the least-squares problem |D_u u + D_k z_k|² couple
-    the gaps only through the across-row second differences centred on the original
-    rows. A sparse LU of A (SuperLU) takes seconds on a face; conjugate gradients
-    preconditioned by the exact banded Cholesky factor of each gap's own block reach
-    round-off in about 20 steps, starting from the straight lines between the rows.
+    The energy's normal equations A u = b couple the gaps only through the across-row
+    second differences centred on the original rows. A is assembled straight from the
+    stencils (no difference matrix, no sparse products): its within-gap part as a
+    symmetric band (width 2n, unknowns numbered gap by gap, column by column, row by
+    row) and the cross-gap part as a few scattered pairs. Conjugate gradients
+    preconditioned by the exact banded Cholesky factor of the within-gap part reach
+    round-off in about 20 steps from the straight lines between the rows; a sparse LU of
+    A (SuperLU) takes seconds on a face.
     """
+    from scipy.linalg import cho_solve_banded, cholesky_banded
+
     domain = gap_domains(z)
     inside = np.where(domain[:, None, :], straight_lines(z, n), np.nan)
     dense = interleave(z, inside)
-    valid = ~np.isnan(dense)
-    # Unknowns numbered gap by gap, column by column, row by row: each gap's block is banded.
-    gap, col, row = np.nonzero(~np.isnan(inside).transpose(0, 2, 1))
-    unknown = np.ravel_multi_index((gap * (n + 1) + row + 1, col), dense.shape)
-    fixed = np.setdiff1d(np.flatnonzero(valid), unknown, assume_unique=True)
-    if len(unknown):
-        operator = thin_plate_operator(valid, step, d2)
-        on_unknown = operator[:, unknown]
-        normal = (on_unknown.T @ on_unknown).tocsr()
-        rhs = -(on_unknown.T @ (operator[:, fixed] @ dense.ravel()[fixed]))
-        preconditioner = gap_block_solver(normal, gap, 2 * n)
-        dense.flat[unknown] = conjugate_gradients(normal, rhs, preconditioner, dense.ravel()[unknown])
-    return dense[:-1].reshape(len(domain), n + 1, -1)[:, 1:]
+    masks = stencil_masks(~np.isnan(dense), step, d2)
+    keep = np.broadcast_to(domain[:, :, None], (len(domain), z.shape[1], n)).ravel()
+    if keep.any():
+        band, coupling = normal_matrix(masks, n, z.shape, keep)
+        known = np.nan_to_num(interleave(z, np.zeros_like(inside)))
+        rhs = -gap_unknowns(plate_gradient(known, masks), n, keep)
+        factor = cholesky_banded(band, check_finite=False)
+        within = band_matrix(band)
+        solution = conjugate_gradients(
+            lambda vector: within @ vector + coupling @ vector, rhs, gap_unknowns(dense, n, keep),
+            lambda vector: cho_solve_banded((factor, False), vector, check_finite=False))
+        ordered = inside.transpose(0, 2, 1).copy()
+        ordered.reshape(-1)[keep] = solution
+        inside = ordered.transpose(0, 2, 1)
+    return inside
 
 
-def gap_block_solver(matrix, gap, bandwidth):
-    """Solve with the gap-diagonal blocks of ``matrix`` (SPD, banded within ``bandwidth``) by banded Cholesky."""
-    from scipy.linalg import cho_solve_banded, cholesky_banded
-
-    entries = matrix.tocoo()
-    upper = (entries.col >= entries.row) & (gap[entries.row] == gap[entries.col])
-    offset = entries.col[upper] - entries.row[upper]
-    band = np.zeros((bandwidth + 1, matrix.shape[0]))
-    band[bandwidth - offset, entries.col[upper]] = entries.data[upper]
-    factor = cholesky_banded(band, check_finite=False)
-    return lambda vector: cho_solve_banded((factor, False), vector, check_finite=False)
+def gap_unknowns(field, n, keep):
+    """Values of a dense-grid ``field`` at the inserted nodes in domain, numbered gap, column, row."""
+    gaps = (len(field) - 1) // (n + 1)
+    inserted = field[:-1].reshape(gaps, n + 1, -1)[:, 1:]
+    return inserted.transpose(0, 2, 1).reshape(-1)[keep]
 
 
-def conjugate_gradients(matrix, rhs, preconditioner, start, rtol=1e-12, max_steps=1000):
-    """Preconditioned conjugate gradients for SPD ``matrix`` until |residual| <= rtol |rhs|.
+def conjugate_gradients(apply, rhs, start, preconditioner, rtol=1e-12, max_steps=1000):
+    """Preconditioned conjugate gradients for an SPD ``apply`` (v -> A v) until |residual| <= rtol |rhs|.
 
     Inner products are plain numpy sums, not BLAS: threaded BLAS on a busy machine
     costs more in synchronisation than these short vectors take to multiply.
     """
     solution = start.copy()
-    residual = rhs - matrix @ solution
+    residual = rhs - apply(solution)
     direction = preconditioner(residual)
     product = inner(residual, direction)
     goal = rtol**2 * inner(rhs, rhs)
     for _ in range(max_steps):
         if inner(residual, residual) <= goal:
             break
-        image = matrix @ direction
+        image = apply(direction)
         length = product / inner(direction, image)
         solution += length * direction
         residual -= length * image
@@ -247,38 +248,102 @@ def inner(u, v):
     return float(np.sum(u * v))
 
 
-def thin_plate_operator(valid, step, d2):
-    """Sparse difference operator D with |D u|² = the discrete thin-plate energy of u on ``valid`` nodes.
+def stencil_masks(valid, step, d2):
+    """The thin-plate stencils as (offsets, coefficients, weights): weights = scale² where the stencil fits.
 
-    One row per stencil whose nodes all hold data (the free plate's natural boundary
-    conditions): second differences along rows (/d2²) and across rows (/step²), and the
-    twist over each 2x2 cell (/(step·d2), weight √2 for the factor 2 of u_xy²). Nodes
-    are numbered row-major over the grid.
+    |D u|² = the discrete thin-plate energy of u on the ``valid`` nodes: one term per
+    stencil whose nodes all hold data (the free plate's natural boundary conditions):
+    second differences along rows (/d2²) and across rows (/step²), and the twist over
+    each 2x2 cell (/(step·d2), weight √2 for the factor 2 of u_xy²). weights[p] belongs
+    to the stencil on the nodes p + offsets.
     """
-    from scipy.sparse import csr_matrix
-
-    number = np.arange(valid.size).reshape(valid.shape)
     stencils = [
         ([(0, -1), (0, 0), (0, 1)], [1.0, -2.0, 1.0], d2**-2),
         ([(-1, 0), (0, 0), (1, 0)], [1.0, -2.0, 1.0], step**-2),
         ([(0, 0), (0, 1), (1, 0), (1, 1)], [1.0, -1.0, -1.0, 1.0], np.sqrt(2) / (step * d2)),
     ]
-    entries, count = [], 0
+    masks = []
     for offsets, coefficients, scale in stencils:
-        rows, cols = stencil_centres(valid, offsets)
+        fits = np.ones(valid.shape, dtype=bool)
+        for drow, dcol in offsets:
+            fits &= shifted(valid, -drow, -dcol)
+        masks.append((offsets, coefficients, np.where(fits, scale**2, 0.0)))
+    return masks
+
+
+def shifted(field, drow, dcol):
+    """``field`` moved by (drow, dcol): result[p] = field[p - (drow, dcol)], zero where that leaves the grid."""
+    rows, cols = field.shape
+    out = np.zeros_like(field)
+    out[max(drow, 0): rows + min(drow, 0), max(dcol, 0): cols + min(dcol, 0)] = \
+        field[max(-drow, 0): rows + min(-drow, 0), max(-dcol, 0): cols + min(-dcol, 0)]
+    return out
+
+
+def plate_gradient(u, masks):
+    """D^T D u on the dense grid: half the gradient of the thin-plate energy of ``u`` (NaN-free)."""
+    out = np.zeros_like(u)
+    for offsets, coefficients, weights in masks:
+        difference = weights * sum(a * shifted(u, -dr, -dc) for (dr, dc), a in zip(offsets, coefficients))
         for (drow, dcol), coefficient in zip(offsets, coefficients):
-            entries.append((count + np.arange(len(rows)), number[rows + drow, cols + dcol],
-                            np.full(len(rows), coefficient * scale)))
-        count += len(rows)
-    stencil, node, value = (np.concatenate(part) for part in zip(*entries))
-    return csr_matrix((value, (stencil, node)), shape=(count, valid.size))
+            out += coefficient * shifted(difference, drow, dcol)
+    return out
 
 
-def stencil_centres(valid, offsets):
-    """(rows, cols) index arrays of the nodes where every offset of a stencil lands on a valid node."""
-    padded = np.pad(valid, 1)
-    rows, cols = valid.shape
-    fits = np.ones(valid.shape, dtype=bool)
-    for drow, dcol in offsets:
-        fits &= padded[1 + drow: 1 + drow + rows, 1 + dcol: 1 + dcol + cols]
-    return np.nonzero(fits)
+def normal_matrix(masks, n, shape, keep):
+    """The normal matrix A on the ``keep`` unknowns: (within-gap upper band, cross-gap CSR).
+
+    Entry A[p, p+d] sums weight·a_j·a_k over the stencils holding p and p+d; it is
+    gathered per displacement d on the dense grid, then laid out on the padded
+    (gap, col, row) numbering. Removing the columns outside the domain keeps every
+    non-zero band entry on its offset: nodes on both sides of a removed column share
+    no stencil. Across-row stencils centred on an original row pair the last inserted
+    row of a gap with the first of the next: those pairs lie off the band.
+    """
+    from scipy.sparse import csr_matrix
+
+    gaps, cols = shape[0] - 1, shape[1]
+    fields = {}
+    for offsets, coefficients, weights in masks:
+        for j, (first, a) in enumerate(zip(offsets, coefficients)):
+            for second, b in zip(offsets[j:], coefficients[j:]):
+                d = (second[0] - first[0], second[1] - first[1])
+                fields[d] = fields.get(d, 0.0) + a * b * shifted(weights, *first)
+    width = 2 * n
+    band = np.zeros((width + 1, gaps, cols, n))
+    for (drow, dcol), field in fields.items():
+        at = field[:-1].reshape(gaps, n + 1, cols)[:, 1:].transpose(0, 2, 1)  # at p: (gap, col, row)
+        offset = dcol * n + drow
+        if (drow, dcol) == (2, 0):
+            cross = at[:-1, :, n - 1]             # pairs (g, c, n-1) - (g+1, c, 0)
+        if drow > n - 1:
+            continue
+        if offset >= 0:                           # stored on the later node p + d
+            band[width - offset, :, dcol:, drow:] += at[:, :cols - dcol, :n - drow]
+        else:                                     # stored on p itself
+            band[width + offset, :, :, :n - drow] += at[:, :, :n - drow]
+    band = band.reshape(width + 1, -1)[:, keep]
+    number = np.cumsum(keep) - 1
+    padded = np.arange(keep.size).reshape(gaps, cols, n)
+    pairs = cross != 0
+    last, first = number[padded[:-1, :, n - 1][pairs]], number[padded[1:, :, 0][pairs]]
+    coupling = csr_matrix((np.tile(cross[pairs], 2), (np.r_[last, first], np.r_[first, last])),
+                          shape=(keep.sum(),) * 2)
+    return band, coupling
+
+
+def band_matrix(band):
+    """Sparse symmetric matrix from its upper band in LAPACK storage (band[w - o, j] = A[j - o, j]).
+
+    Kept in diagonal (DIA) form, all-zero diagonals dropped: its product needs no index arrays.
+    """
+    from scipy.sparse import dia_array
+
+    width, size = len(band) - 1, band.shape[1]
+    offsets = [0] + [offset for offset in range(1, width + 1) if band[width - offset].any()]
+    diagonals = [band[width]]
+    for offset in offsets[1:]:
+        diagonals.append(band[width - offset])
+        diagonals.insert(0, np.r_[band[width - offset, offset:], np.zeros(offset)])
+    lower = [-offset for offset in reversed(offsets[1:])]
+    return dia_array((np.array(diagonals), lower + offsets), shape=(size, size))
