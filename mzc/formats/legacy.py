@@ -209,5 +209,5 @@ def read_legacy(data, source, kind):
         records = [transform_record(r, text.split(), k2, kind, quality, source, number)
                    for r, (number, text) in enumerate(body)]
         decode, options = ROW_READERS[kind][1], {}
-    z = rows.decode_records([rec for rec in records if rec is not None], k1, k2, d2, decode, options)
+    z = rows.decode_records([rec for rec in records if rec is not None], k1, k2, d2, decode, options, source)
     return ZGrid(z=z, d1=d1, d2=d2)
