@@ -156,23 +156,7 @@ def surface_distance(mesh_a, mesh_b, samples=100_000, seed=0, keep_a=None, keep_
     function of the sample points and their triangle indices), e.g. to a height-field part.
     Returns RMS, mean and Hausdorff (max) distances, each way and symmetric.
     """
-    rng = np.random.default_rng(seed)
-    result = {}
-    for name, (source, target, keep) in {
-        "a_to_b": (mesh_a, mesh_b, keep_a), "b_to_a": (mesh_b, mesh_a, keep_b),
-    }.items():
-        points, triangles = source
-        drawn, triangle_index = sample_surface(points, triangles, samples, rng)
-        if keep is not None:
-            drawn = drawn[keep(drawn, triangle_index)]
-        result[name] = distance_to_mesh(drawn, *target)
-    both = np.concatenate(list(result.values()))
-    summary = {"samples": int(both.size)}
-    for name, d in [("", both), ("a_to_b_", result["a_to_b"]), ("b_to_a_", result["b_to_a"])]:
-        summary[f"{name}rms"] = float(np.sqrt(np.mean(d**2))) if d.size else float("nan")
-        summary[f"{name}mean"] = float(d.mean()) if d.size else float("nan")
-        summary[f"{name}hausdorff"] = float(d.max()) if d.size else float("nan")
-    return summary
+    return surface_distance_parts(mesh_a, mesh_b, {"all": (keep_a, keep_b)}, samples, seed)["all"]
 
 
 HEIGHTFIELD_NORMAL_Z = 0.5
@@ -249,8 +233,8 @@ def surface_distance_parts(mesh_a, mesh_b, parts, samples=100_000, seed=0):
     """``surface_distance`` under several sample filters at the cost of one call.
 
     ``parts`` maps a name to (keep_a, keep_b), None keeping every sample. The filters act
-    after the samples are drawn, so each part's result is exactly what
-    surface_distance(mesh_a, mesh_b, samples, seed, keep_a, keep_b) returns, but each
+    after the samples are drawn from one seeded generator, so each part's result is what
+    surface_distance(mesh_a, mesh_b, samples, seed, keep_a, keep_b) returns, and each
     sample's distance is computed once, for the union of the kept samples. This is what
     the benchmarks and ``mzc diff --heightfield`` use to report the whole surface and its
     height-field part together.
