@@ -109,19 +109,35 @@ class Encoder:
         self.segments = []
 
     def add(self, model, values):
-        """Append ``values`` (ints) coded with context ``model`` (ids 0, 1, 2, ... in first-use order)."""
-        self.segments.append((model, np.asarray(values, dtype=np.int64).ravel()))
+        """Append ``values`` (ints) coded with context ``model`` (ids 0, 1, 2, ... in first-use order).
+
+        ``model`` may also be an array with one model id per value: the same as adding each
+        run of equal ids as its own segment, in order.
+        """
+        values = np.asarray(values, dtype=np.int64).ravel()
+        model = np.asarray(model, dtype=np.int64)
+        if model.ndim == 0:
+            self.segments.append((int(model), values))
+            return
+        model = model.ravel()
+        if len(model) != len(values):
+            raise ValueError("one model id per value")
+        starts = np.flatnonzero(np.diff(model, prepend=-1))
+        ends = np.append(starts[1:], len(model))
+        self.segments.extend((int(model[a]), values[a:b]) for a, b in zip(starts, ends))
 
     def finish(self, merge=True):
         """Payload bytes: tables, rANS words, raw bits (layout in spec/dwt2d.md section 'payload')."""
         seg_classes = [(m, classes(v)) for m, v in self.segments]
         count = max((m for m, _ in seg_classes), default=-1) + 1
-        per_model = [np.concatenate([c for m, c in seg_classes if m == i] or [np.zeros(0, np.int64)])
-                     for i in range(count)]
+        grouped = {}
+        for m, c in seg_classes:
+            grouped.setdefault(m, []).append(c)
+        per_model = [np.concatenate(grouped.get(i, [np.zeros(0, np.int64)])) for i in range(count)]
         tables = choose_tables(per_model, merge)
         words = ans_encode([(tables[m], c) for m, c in seg_classes])
-        bits = np.concatenate([raw_bits(v, c) for (_, v), (_, c) in zip(self.segments, seg_classes)]
-                              or [np.zeros(0, np.uint8)])
+        values = np.concatenate([v for _, v in self.segments] or [np.zeros(0, np.int64)])
+        bits = raw_bits(values, classes(values))
         table_bytes = b"".join(b"\x00" if shared else encode_table(f) for f, shared in table_records(tables))
         return (varint(count) + table_bytes + varint(len(words)) + words.astype("<u4").tobytes()
                 + np.packbits(bits).tobytes())

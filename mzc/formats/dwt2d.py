@@ -19,10 +19,13 @@ KIND = "dwt2d"
 VERSION = (1, 0)
 EXTENSIONS = (".mzw2",)
 MAGIC = f"mzc-{KIND} {VERSION[0]}.{VERSION[1]}"
-CODER = "rans-classes"
-CONTEXTS = 3               # per detail band: parent/sibling activity zero, small, large
+CODER = "rans-classes-2"   # "rans-classes" (3 contexts, left/up approximation) is no longer read
+THRESHOLDS = (0.5, 1.5, 4.0, 8.0, 16.0)   # detail contexts: activity of parent, siblings, two rows above
+CONTEXTS = len(THRESHOLDS) + 1            # per detail band
+CORRECTION_THRESHOLDS = (0.25, 1.0, 2.0)   # correction layer: 4 contexts from the rows above
 DEFAULT_WAVELET = "bior4.4"
-ALPHAS = (1.6, 2.4, 3.2)   # max_error: wavelet step = alpha * E, the smallest file wins
+ALPHAS = (1.6, 2.4, 3.2)   # max_error: wavelet step = alpha * E, the smallest file wins...
+ALPHA_SLACK = 0.01         # ...but a smaller alpha within 1% of it is taken for its lower RMS error
 DEADZONE = 0.6             # encoder-only rounding offset; the decoder never sees it
 
 # model ids (the order of first use in the payload)
@@ -35,9 +38,9 @@ def detail_model(band, context):
     return FIRST_DETAIL + CONTEXTS * (band - 1) + context
 
 
-def correction_model(levels):
-    """Model id of the correction layer (after every detail model)."""
-    return FIRST_DETAIL + CONTEXTS * 3 * levels
+def correction_model(levels, context=0):
+    """Model id of the correction layer's context (after every detail model)."""
+    return FIRST_DETAIL + CONTEXTS * 3 * levels + context
 
 
 # --------------------------------------------------------------------------- mask
@@ -99,48 +102,92 @@ def decode_mask(decoder, rows, cols):
 # --------------------------------------------------------------------------- bands
 
 
-def contexts(flat, index, steps):
-    """Context (0..2) of every coefficient of detail band ``index`` from bands already coded.
+def activity(flat, index, steps):
+    """Activity of every coefficient of detail band ``index`` from the other bands already coded.
 
-    Activity = |parent| (same orientation, one level coarser, in this band's step units)
-    plus |q| of the earlier orientations of the same level at the same place.
+    |parent| (same orientation, one level coarser, in this band's step units) plus |q| of
+    the earlier orientations of the same level at the same place.
     """
     shape = flat[index].shape
-    activity = np.zeros(shape)
+    active = np.zeros(shape)
     orientation = (index - 1) % 3
     if index > 3:
         parent = flat[index - 3]
         r = np.minimum(np.arange(shape[0]) // 2, parent.shape[0] - 1)
         c = np.minimum(np.arange(shape[1]) // 2, parent.shape[1] - 1)
-        activity += np.abs(parent[np.ix_(r, c)]) * (steps[index - 3] / steps[index])
+        active += np.abs(parent[np.ix_(r, c)]) * (steps[index - 3] / steps[index])
     for sibling in range(index - orientation, index):
-        activity += np.abs(flat[sibling])
-    return np.digitize(activity, [0.5, 2.5])
+        active += np.abs(flat[sibling])
+    return active
+
+
+def neighbours(above, above2):
+    """Causal activity from the row above (up, and half of up-left and up-right) and half the row two above."""
+    n = np.abs(above).astype(np.float64)
+    out = n.copy()
+    out[..., 1:] += 0.5 * n[..., :-1]
+    out[..., :-1] += 0.5 * n[..., 1:]
+    return out + 0.5 * np.abs(above2)
+
+
+def contexts(band, active, thresholds=THRESHOLDS):
+    """Context of every coefficient of a whole band, from its activity and the rows above."""
+    zero = np.zeros((1, band.shape[1]), dtype=band.dtype)
+    above = np.concatenate([zero, band[:-1]])
+    above2 = np.concatenate([zero, zero, band[:-2]])[: band.shape[0]]
+    return np.digitize(active + neighbours(above, above2), thresholds)
+
+
+def row_order(where, context):
+    """(rows, cols, contexts) of the True cells of ``where``: row by row, by context, left to right."""
+    rows, cols = np.nonzero(where)
+    ks = context[rows, cols]
+    order = np.lexsort((cols, ks, rows))
+    return rows[order], cols[order], ks[order]
+
+
+def encode_corrections(encoder, k, valid, levels):
+    """Correction integers (a grid, 0 at invalid nodes) row by row, by context of the rows above."""
+    rows, cols, ks = row_order(valid, contexts(k, np.zeros(k.shape), CORRECTION_THRESHOLDS))
+    encoder.add(correction_model(levels, ks), k[rows, cols])
+
+
+def decode_rows(decoder, where, active, thresholds, model):
+    """Inverse of the row-by-row context coding: a grid of integers, 0 outside ``where``."""
+    out = np.zeros(where.shape, dtype=np.int64)
+    zero = np.zeros(where.shape[1], dtype=np.int64)
+    for r in range(where.shape[0]):
+        inside = where[r]
+        if not inside.any():
+            continue
+        context = np.digitize(active[r] + neighbours(out[r - 1] if r >= 1 else zero,
+                                                     out[r - 2] if r >= 2 else zero), thresholds)
+        row = out[r]
+        for k in range(len(thresholds) + 1):
+            here = inside & (context == k)
+            count = int(here.sum())
+            if count:
+                row[here] = decoder.read(model(k), count)
+    return out
 
 
 def encode_bands(encoder, qflat, relevant, steps):
-    """The approximation as left/up differences, then each detail band by context."""
-    approximation = qflat[0]
-    residual = np.diff(approximation, axis=1, prepend=0)
-    residual[:, 0] = np.diff(approximation[:, 0], prepend=0)
-    encoder.add(APPROXIMATION, residual)
+    """The approximation as planar differences, then each detail band row by row, by context."""
+    encoder.add(APPROXIMATION, np.diff(np.diff(qflat[0], axis=0, prepend=0), axis=1, prepend=0))
     for index in range(1, len(qflat)):
-        context = contexts(qflat, index, steps)
-        for k in range(CONTEXTS):
-            encoder.add(detail_model(index, k), qflat[index][relevant[index] & (context == k)])
+        band = qflat[index]
+        rows, cols, ks = row_order(relevant[index], contexts(band, activity(qflat, index, steps)))
+        encoder.add(detail_model(index, ks), band[rows, cols])
 
 
 def decode_bands(decoder, relevant, steps):
     """Inverse of encode_bands: the flat list of integer bands."""
     residual = decoder.read(APPROXIMATION, relevant[0].size).reshape(relevant[0].shape)
-    residual[:, 0] = np.cumsum(residual[:, 0])
-    qflat = [np.cumsum(residual, axis=1)]
+    qflat = [np.cumsum(np.cumsum(residual, axis=0), axis=1)]
     for index in range(1, len(relevant)):
-        band = np.zeros(relevant[index].shape, dtype=np.int64)
-        context = contexts(qflat + [band], index, steps)
-        for k in range(CONTEXTS):
-            where = relevant[index] & (context == k)
-            band[where] = decoder.read(detail_model(index, k), int(where.sum()))
+        active = activity(qflat + [np.zeros(relevant[index].shape, dtype=np.int64)], index, steps)
+        band = decode_rows(decoder, relevant[index], active, THRESHOLDS,
+                           lambda k, index=index: detail_model(index, k))
         qflat.append(band)
     return qflat
 
@@ -181,7 +228,9 @@ class Prepared:
         step = 0.0
         if max_error is not None:
             step = w2.correction_step(max_error)
-            encoder.add(correction_model(self.levels), w2.corrections(self.grid.z, decoded, self.valid, step))
+            k = np.zeros(self.valid.shape, dtype=np.int64)
+            k[self.valid] = w2.corrections(self.grid.z, decoded, self.valid, step)
+            encode_corrections(encoder, k, self.valid, self.levels)
         return self.header(steps, step, max_error) + encoder.finish()
 
     def header(self, steps, correction, max_error):
@@ -217,7 +266,10 @@ def write(grid, max_error=None, rmse=None, size=None, wavelet=DEFAULT_WAVELET, l
     prepared = Prepared(grid, wavelet, levels)
     steps_for = lambda base: w2.level_steps(base, prepared.levels)  # noqa: E731
     if max_error is not None:
-        return min((prepared.encode(steps_for(a * target), target) for a in ALPHAS), key=len)
+        # the smallest file, except that a finer step (lower RMS error) wins within ALPHA_SLACK of it
+        files = [prepared.encode(steps_for(a * target), target) for a in ALPHAS]
+        smallest = min(len(f) for f in files)
+        return next(f for f in files if len(f) <= smallest * (1 + ALPHA_SLACK))
     span = prepared.height_range()
     if rmse is not None:
         step = w2.search_step(lambda s: prepared.rms(steps_for(s)), target, 1e-9 * span, 4.0 * span)
@@ -257,7 +309,9 @@ def read(data, source="<stdin>"):
     with np.errstate(over="ignore", invalid="ignore"):
         z = w2.inverse(w2.dequantise(w2.unflatten(qflat, levels), steps), (rows, cols), wavelet, levels)
         if correction > 0:
-            z[valid] += correction * decoder.read(correction_model(levels), int(valid.sum()))
+            k = decode_rows(decoder, valid, np.zeros(valid.shape), CORRECTION_THRESHOLDS,
+                            lambda c: correction_model(levels, c))
+            z[valid] += correction * k[valid]
     if not np.isfinite(z[valid]).all():
         raise MzcError("decoded heights are not finite (corrupt steps or payload)", source=source, field="data")
     z[~valid] = np.nan
