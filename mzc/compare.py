@@ -7,29 +7,24 @@ its own nodes; otherwise the spacing defaults to a fine one, 1/1000 of A's longe
 
 import numpy as np
 
-from mzc.grid import IDENTITY_TRANSFORM, ZGrid
+from mzc.grid import IDENTITY_TRANSFORM
 
 DEFAULT_DIVISIONS = 1000
 
 
 def common_grid(a, d1=None, d2=None):
     """The comparison grid (a ZGrid of A's heights) for Surface ``a``."""
-    from mzc.slicing import rasterize
+    from mzc.meshes import Mesh
+    from mzc.slicing import slice_in_frame
 
     if a.grid is not None and d1 is None and d2 is None:
         return a.grid
     transform = a.grid.transform if a.grid is not None else IDENTITY_TRANSFORM
-    frame = ZGrid(np.zeros((1, 1)), 1, 1, transform=transform)
-    local = frame.to_grid_frame(a.points)
-    low, high = local[:, :2].min(axis=0), local[:, :2].max(axis=0)
-    fine = (high - low).max() / DEFAULT_DIVISIONS
-    d1 = d1 or d2 or fine
-    d2 = d2 or d1
-    xs = low[0] + d2 * np.arange(int(np.floor((high[0] - low[0]) / d2)) + 1)
-    ys = low[1] + d1 * np.arange(int(np.floor((high[1] - low[1]) / d1)) + 1)
-    z = rasterize(local, a.triangles, xs, ys)
-    return ZGrid(z, d1, d2, origin=(low[0], low[1]), transform=transform,
-                 units=a.grid.units if a.grid is not None else None)
+    rotation, shift = transform[:, :3], transform[:, 3]
+    extent = np.ptp((a.points - shift) @ rotation, axis=0)[:2]
+    d1 = d1 or d2 or extent.max() / DEFAULT_DIVISIONS
+    return slice_in_frame(Mesh(a.points, a.triangles), rotation, shift, d1=d1, d2=d2 or d1,
+                          units=a.grid.units if a.grid is not None else None)
 
 
 def sample_like(grid, surface):

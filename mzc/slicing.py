@@ -182,13 +182,22 @@ def slice_surface(mesh, d1=None, d2=None, rows=None, cols=None, align="none", un
     ``cols`` (across x); by default 72 rows, as the thesis's ~70 planes, and d2 = d1/10.
     """
     rotation, shift = frame_for(mesh, align)
+    grid = slice_in_frame(mesh, rotation, shift, d1=d1, d2=d2, rows=rows, cols=cols, units=units)
+    if np.isnan(grid.z).all():
+        raise MzcError("no grid node meets the surface (seen edge-on from +z? try --align pca)")
+    return grid
+
+
+def slice_in_frame(mesh, rotation, shift, d1=None, d2=None, rows=None, cols=None, units=None):
+    """The z-grid of ``mesh`` in the frame where input = rotation @ p + shift, over its xy box.
+
+    Shared by ``slice_surface`` and ``mzc diff``, which samples surfaces in a given frame.
+    """
     local = (mesh.points - shift) @ rotation
     triangles = mesh.triangles if len(mesh.triangles) else triangulate_point_cloud(local[:, :2])
     low, high = local[:, :2].min(axis=0), local[:, :2].max(axis=0)
     d1, d2, n_rows, n_cols = grid_size(high - low, d1, d2, rows, cols)
     z = rasterize(local, triangles, low[0] + d2 * np.arange(n_cols), low[1] + d1 * np.arange(n_rows))
-    if np.isnan(z).all():
-        raise MzcError("no grid node meets the surface (seen edge-on from +z? try --align pca)")
     return ZGrid(z, d1, d2, origin=tuple(low), transform=np.column_stack([rotation, shift]), units=units)
 
 
