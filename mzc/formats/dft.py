@@ -65,5 +65,4 @@ def read(data, source="<stdin>"):
 
 def write(grid, quality=100, precision=rows.DEFAULT_PRECISION):
     """Encode ``grid`` at quality Q (1..100) with coefficients rounded to ``precision`` decimals."""
-    options = {"quality": rows.check_quality(quality), "precision": rows.check_precision(precision)}
-    return rows.write_grid(grid, CODEC, options)
+    return rows.write_grid(grid, CODEC, rows.quality_options(quality, precision))

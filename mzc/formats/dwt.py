@@ -98,6 +98,5 @@ def write(grid, quality=100, wavelet=DEFAULT_WAVELET, level=DEFAULT_LEVEL, preci
     """Encode ``grid`` at quality Q with a ``level``-level ``wavelet`` decomposition."""
     if not 1 <= level <= MAX_LEVEL:
         raise MzcError(f"{level} is outside 1..{MAX_LEVEL}", field="level")
-    options = {"quality": rows.check_quality(quality), "precision": rows.check_precision(precision),
-               "wavelet": check_wavelet(wavelet), "level": level}
+    options = {**rows.quality_options(quality, precision), "wavelet": check_wavelet(wavelet), "level": level}
     return rows.write_grid(grid, CODEC, options)

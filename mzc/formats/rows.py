@@ -79,6 +79,11 @@ def check_precision(precision):
     return precision
 
 
+def quality_options(quality, precision):
+    """The checked options every quality-driven codec (DFT, DCT, DWT) starts from."""
+    return {"quality": check_quality(quality), "precision": check_precision(precision)}
+
+
 def format_values(values, precision=None):
     """Tokens for ``values``: rounded to ``precision`` decimals (None: exact), trailing zeros stripped."""
     values = np.asarray(values, dtype=float)
