@@ -234,7 +234,7 @@ def parse_xyz(data, source):
     short = [number for number, tokens in numbered if len(tokens) < 3]
     if short:
         raise MzcError("expected at least 3 numbers (x y z) on the line", source=source, line=short[0])
-    points = numbers_or_error([tokens[:3] for _, tokens in numbered],
+    points = numbers_or_error([tokens[:3] for _, tokens in numbered], 3,
                               [number for number, _ in numbered], source)
     return Mesh(points)
 
@@ -246,10 +246,11 @@ def decode_text(data, source):
     return data.decode("utf-8", "replace")
 
 
-def numbers_or_error(rows, line_numbers, source):
-    """Convert rows of number tokens to floats, naming the first bad line on failure."""
+def numbers_or_error(rows, width, line_numbers, source):
+    """Convert rows of ``width`` number tokens to a (len(rows), width) float array (also when
+    there are no rows), naming the first bad line on failure."""
     try:
-        return np.array(rows, dtype=np.float64).reshape(len(rows), -1)
+        return np.array(rows, dtype=np.float64).reshape(len(rows), width)
     except ValueError:
         for row, number in zip(rows, line_numbers):
             try:
@@ -503,7 +504,7 @@ def ascii_element(element, rows, first_line, source):
         width = len(element.properties)
         if any(len(row) < width for row in rows):
             raise MzcError(f"too few values in element '{element.name}'", source=source, line=first_line)
-        values = numbers_or_error([row[:width] for row in rows],
+        values = numbers_or_error([row[:width] for row in rows], width,
                                   np.arange(len(rows)) + first_line, source)
         return {name: values[:, i] for i, (name, _) in enumerate(element.properties)}
     return ascii_rows_with_lists(element, rows, first_line, source)

@@ -242,3 +242,11 @@ def test_real_faces_read_like_meshio():
         np.testing.assert_array_equal(mesh.points, reference.points)
         np.testing.assert_array_equal(mesh.triangles, reference.cells[0].data)
         assert mesh.points.shape == (30204, 3) and mesh.triangles.shape == (59697, 3)
+
+
+def test_ascii_ply_declaring_no_vertices_is_a_clear_error(tmp_path):
+    path = tmp_path / "empty.ply"
+    path.write_bytes(b"ply\nformat ascii 1.0\nelement vertex 0\nproperty float x\nproperty float y\n"
+                     b"property float z\nend_header\n")
+    with pytest.raises(MzcError):
+        read_mesh(str(path))
