@@ -217,7 +217,8 @@ def xyz_of(points):
 def surface_triangles(cells):
     """The triangles of meshio cell blocks: triangles, quads and polygons, fan-triangulated."""
     pieces = [fan_triangulate(block.data) for block in cells
-              if block.type in ("triangle", "quad") or block.type.startswith("polygon")]
+              if (block.type in ("triangle", "quad") or block.type.startswith("polygon"))
+              and np.asarray(block.data).ndim == 2 and np.asarray(block.data).shape[1] >= 3]
     if not pieces:
         return np.empty((0, 3), dtype=np.int64)
     return np.concatenate(pieces).astype(np.int64)
@@ -475,7 +476,7 @@ def parse_ply_header(data, source):
 def ply_property(words, source, line):
     """(name, numpy type) or (name, (count type, item type)) of a ``property`` header line."""
     try:
-        if words[1] == "list" and len(words) == 5:
+        if len(words) == 5 and words[1] == "list":
             return words[4], (PLY_TYPES[words[2]], PLY_TYPES[words[3]])
         if len(words) == 3:
             return words[2], PLY_TYPES[words[1]]
