@@ -48,7 +48,7 @@ def mutate(data, draw):
 
 @pytest.mark.parametrize("kind", sorted(ENCODED))
 @given(data=st.data())
-@settings(max_examples=150, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@settings(max_examples=150, deadline=None, derandomize=True, suppress_health_check=[HealthCheck.too_slow])
 def test_mutated_codec_files_fail_cleanly_or_decode_to_the_grid_shape(kind, data):
     mutated = mutate(ENCODED[kind], data.draw)
     try:
@@ -70,7 +70,7 @@ MESH_PREFIXES = {
 
 @pytest.mark.parametrize("extension", sorted(MESH_PREFIXES))
 @given(data=st.data())
-@settings(max_examples=100, deadline=None, suppress_health_check=[HealthCheck.too_slow,
+@settings(max_examples=100, deadline=None, derandomize=True, suppress_health_check=[HealthCheck.too_slow,
                                                                    HealthCheck.function_scoped_fixture])
 def test_mutated_mesh_files_fail_cleanly(extension, data, tmp_path):
     path = tmp_path / f"m{extension}"
