@@ -49,11 +49,10 @@ def values_from_bits(cls, bits):
     if not len(nonzero):
         return values
     k = cls[nonzero]
-    starts = np.concatenate([[0], np.cumsum(k)[:-1]])
-    word = np.zeros(len(k), dtype=np.int64)
-    for offset in range(int(k.max())):
-        active = offset < k
-        word[active] = (word[active] << 1) | bits[starts[active] + offset]
+    ends = np.cumsum(k)
+    # each bit weighs 2**(bits of its word after it); the words are sums over their bits
+    weight = np.repeat(ends, k) - 1 - np.arange(int(ends[-1]))
+    word = np.add.reduceat(bits[: ends[-1]].astype(np.int64) << weight, ends - k)
     sign = word >> (k - 1)
     magnitude = (np.int64(1) << (k - 1)) | (word & ((np.int64(1) << (k - 1)) - 1))
     values[nonzero] = np.where(sign == 1, -magnitude, magnitude)
@@ -63,10 +62,10 @@ def values_from_bits(cls, bits):
 # --------------------------------------------------------------------------- tables
 
 
-def frequency_table(cls):
-    """Frequencies (>= 1 each, sum 2**TABLE_BITS) for classes 0..max, from the class counts."""
-    size = max(2, int(cls.max()) + 1 if len(cls) else 2)
-    counts = np.bincount(cls, minlength=size).astype(np.float64)
+def frequency_table(counts):
+    """Frequencies (>= 1 each, sum 2**TABLE_BITS), one per class, from the class counts."""
+    size = len(counts)
+    counts = np.asarray(counts, dtype=np.float64)
     total = 1 << TABLE_BITS
     freq = np.maximum(1, np.round(counts * (total - size) / max(counts.sum(), 1))).astype(np.int64)
     freq[np.argmax(freq)] += total - freq.sum()
@@ -94,65 +93,76 @@ def varint(value):
             return bytes(out)
 
 
-def categorical(freq):
-    """The constriction model of a table; exact because freq/2**TABLE_BITS is representable."""
-    return constriction.stream.model.Categorical(freq / float(1 << TABLE_BITS), perfect=True)
+def family_weights(freq):
+    """A table as weights for constriction's per-symbol categorical model: F - 1 per class.
+
+    That model gives class s the probability (weight + 1) / 2**ANS_PRECISION when the
+    weights sum to 2**ANS_PRECISION minus the class count, so F - 1 (F = freq scaled to
+    ANS_PRECISION bits) reproduces the table exactly: the stream spec/dwt2d.md describes.
+    """
+    return (np.asarray(freq, dtype=np.float64) * (1 << (ANS_PRECISION - TABLE_BITS))) - 1.0
+
+
+FAMILY = constriction.stream.model.Categorical(perfect=False)
 
 
 # --------------------------------------------------------------------------- encoder
 
 
 class Encoder:
-    """Collects segments (model id, values) in decoding order, then writes one payload."""
+    """Collects integers with their model ids in decoding order, then writes one payload.
 
-    def __init__(self):
-        self.segments = []
+    ``same_size`` lists groups of model ids whose tables must have one class count, so a
+    decoder can mix them symbol by symbol (Decoder.read_mixed).
+    """
+
+    def __init__(self, same_size=()):
+        self.models, self.values = [], []
+        self.same_size = [list(group) for group in same_size]
 
     def add(self, model, values):
-        """Append ``values`` (ints) coded with context ``model`` (ids 0, 1, 2, ... in first-use order).
-
-        ``model`` may also be an array with one model id per value: the same as adding each
-        run of equal ids as its own segment, in order.
-        """
+        """Append ``values`` (ints) coded with context ``model``: one id, or one id per value."""
         values = np.asarray(values, dtype=np.int64).ravel()
-        model = np.asarray(model, dtype=np.int64)
-        if model.ndim == 0:
-            self.segments.append((int(model), values))
-            return
-        model = model.ravel()
-        if len(model) != len(values):
-            raise ValueError("one model id per value")
-        starts = np.flatnonzero(np.diff(model, prepend=-1))
-        ends = np.append(starts[1:], len(model))
-        self.segments.extend((int(model[a]), values[a:b]) for a, b in zip(starts, ends))
+        model = np.broadcast_to(np.asarray(model, dtype=np.int64), values.shape)
+        self.models.append(model)
+        self.values.append(values)
 
     def finish(self, merge=True):
         """Payload bytes: tables, rANS words, raw bits (layout in spec/dwt2d.md section 'payload')."""
-        seg_classes = [(m, classes(v)) for m, v in self.segments]
-        count = max((m for m, _ in seg_classes), default=-1) + 1
-        grouped = {}
-        for m, c in seg_classes:
-            grouped.setdefault(m, []).append(c)
-        per_model = [np.concatenate(grouped.get(i, [np.zeros(0, np.int64)])) for i in range(count)]
-        tables = choose_tables(per_model, merge)
-        words = ans_encode([(tables[m], c) for m, c in seg_classes])
-        values = np.concatenate([v for _, v in self.segments] or [np.zeros(0, np.int64)])
-        bits = raw_bits(values, classes(values))
+        models = np.concatenate(self.models or [np.zeros(0, np.int64)])
+        values = np.concatenate(self.values or [np.zeros(0, np.int64)])
+        cls = classes(values)
+        count = int(models.max()) + 1 if len(models) else 0
+        counts = np.bincount(models * MAX_CLASSES + cls, minlength=count * MAX_CLASSES).reshape(count, MAX_CLASSES)
+        tables = choose_tables(counts, self.table_sizes(counts), merge)
+        words = ans_encode(tables, models, cls)
         table_bytes = b"".join(b"\x00" if shared else encode_table(f) for f, shared in table_records(tables))
         return (varint(count) + table_bytes + varint(len(words)) + words.astype("<u4").tobytes()
-                + np.packbits(bits).tobytes())
+                + np.packbits(raw_bits(values, cls)).tobytes())
+
+    def table_sizes(self, counts):
+        """Class count of each model's table: its largest class + 1, or its group's (at least 2)."""
+        used = counts > 0
+        top = np.where(used.any(axis=1), MAX_CLASSES - 1 - np.argmax(used[:, ::-1], axis=1), 1)
+        sizes = np.maximum(2, top + 1)
+        for group in self.same_size:
+            group = [m for m in group if m < len(sizes)]
+            if group:
+                sizes[group] = sizes[group].max()
+        return sizes
 
 
-def choose_tables(per_model, merge):
-    """One frequency table per model; a model reuses the previous model's table when that is cheaper."""
+def choose_tables(counts, sizes, merge):
+    """One frequency table per model, from its class counts; a model reuses the previous
+    model's table when that has as many classes and is cheaper."""
     tables = []
-    for cls in per_model:
-        own = frequency_table(cls)
+    for model_counts, size in zip(counts, sizes):
+        model_counts = model_counts[:size]
+        own = frequency_table(model_counts)
         if merge and tables:
             previous = tables[-1]
-            counts = np.bincount(cls, minlength=len(own))
-            if len(counts) <= len(previous) and (
-                    table_cost_bits(previous, counts) - 8 <= table_cost_bits(own, counts)):
+            if len(previous) == len(own) and (
+                    table_cost_bits(previous, model_counts) - 8 <= table_cost_bits(own, model_counts)):
                 tables.append(previous)
                 continue
         tables.append(own)
@@ -164,14 +174,20 @@ def table_records(tables):
     return [(t, i > 0 and t is tables[i - 1]) for i, t in enumerate(tables)]
 
 
-def ans_encode(segments):
-    """rANS words of the class segments (encoded last-to-first so they decode first-to-last)."""
+def ans_encode(tables, models, cls):
+    """rANS words of the classes, model by model (encoded last-to-first so they decode first-to-last).
+
+    Each run of symbols whose tables have one class count goes to the coder in one call,
+    with one row of weights per symbol.
+    """
     coder = constriction.stream.stack.AnsCoder()
-    models = {}
-    for freq, cls in reversed(segments):
-        if len(cls):
-            model = models.setdefault(id(freq), categorical(freq))
-            coder.encode_reverse(cls.astype(np.int32), model)
+    sizes = np.array([len(t) for t in tables], dtype=np.int64)[models]
+    starts = np.flatnonzero(np.diff(sizes, prepend=-1))
+    ends = np.append(starts[1:], len(sizes))
+    for start, end in zip(starts[::-1], ends[::-1]):
+        size = int(sizes[start])
+        weights = np.array([family_weights(t) if len(t) == size else np.zeros(size) for t in tables])
+        coder.encode_reverse(cls[start:end].astype(np.int32), FAMILY, weights[models[start:end]])
     return coder.get_compressed()
 
 
@@ -196,7 +212,10 @@ class Decoder:
         self.coder = constriction.stream.stack.AnsCoder(words) if word_count else constriction.stream.stack.AnsCoder()
         self.bits = np.unpackbits(np.frombuffer(self.data[end:], dtype=np.uint8))
         self.bit_position = 0
-        self.models = [categorical(t) for t in self.tables]
+        self.sizes = np.array([len(t) for t in self.tables], dtype=np.int64)
+        # per class count, the weights of every table of that count (zeros for the others)
+        self.weights = {size: np.array([family_weights(t) if len(t) == size else np.zeros(size)
+                                        for t in self.tables]) for size in set(self.sizes.tolist())}
 
     def error(self, message):
         return MzcError(message, source=self.source, field="data")
@@ -238,12 +257,20 @@ class Decoder:
 
     def read(self, model, count):
         """``count`` values coded with context ``model``."""
-        if model >= len(self.models):
-            raise self.error(f"the payload has no model table {model}")
-        if not count:
+        return self.read_mixed(np.full(count, model, dtype=np.int64))
+
+    def read_mixed(self, models):
+        """One value per entry of ``models`` (model ids whose tables have one class count)."""
+        models = np.asarray(models, dtype=np.int64)
+        if not len(models):
             return np.zeros(0, dtype=np.int64)
+        if models.max() >= len(self.tables):
+            raise self.error(f"the payload has no model table {int(models.max())}")
+        sizes = self.sizes[models]
+        if (sizes != sizes[0]).any():
+            raise self.error("tables mixed in one row have different class counts")
         try:
-            cls = self.coder.decode(self.models[model], count).astype(np.int64)
+            cls = self.coder.decode(FAMILY, self.weights[int(sizes[0])][models]).astype(np.int64)
         except Exception as exc:  # constriction raises its own types on a corrupt stream
             raise self.error(f"corrupt rANS stream ({exc})") from None
         need = int(cls.sum())
