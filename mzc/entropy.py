@@ -106,6 +106,13 @@ def family_weights(freq):
 FAMILY = constriction.stream.model.Categorical(perfect=False)
 
 
+def weights_by_size(tables):
+    """{class count: one row of family weights per table}, zeros for tables of another count:
+    rows indexed by model id feed one coder call for a run of symbols of that count."""
+    return {size: np.array([family_weights(t) if len(t) == size else np.zeros(size) for t in tables])
+            for size in {len(t) for t in tables}}
+
+
 # --------------------------------------------------------------------------- encoder
 
 
@@ -181,13 +188,13 @@ def ans_encode(tables, models, cls):
     with one row of weights per symbol.
     """
     coder = constriction.stream.stack.AnsCoder()
+    weights = weights_by_size(tables)
     sizes = np.array([len(t) for t in tables], dtype=np.int64)[models]
     starts = np.flatnonzero(np.diff(sizes, prepend=-1))
     ends = np.append(starts[1:], len(sizes))
     for start, end in zip(starts[::-1], ends[::-1]):
-        size = int(sizes[start])
-        weights = np.array([family_weights(t) if len(t) == size else np.zeros(size) for t in tables])
-        coder.encode_reverse(cls[start:end].astype(np.int32), FAMILY, weights[models[start:end]])
+        rows = weights[int(sizes[start])][models[start:end]]
+        coder.encode_reverse(cls[start:end].astype(np.int32), FAMILY, rows)
     return coder.get_compressed()
 
 
@@ -213,9 +220,7 @@ class Decoder:
         self.bits = np.unpackbits(np.frombuffer(self.data[end:], dtype=np.uint8))
         self.bit_position = 0
         self.sizes = np.array([len(t) for t in self.tables], dtype=np.int64)
-        # per class count, the weights of every table of that count (zeros for the others)
-        self.weights = {size: np.array([family_weights(t) if len(t) == size else np.zeros(size)
-                                        for t in self.tables]) for size in set(self.sizes.tolist())}
+        self.weights = weights_by_size(self.tables)
 
     def error(self, message):
         return MzcError(message, source=self.source, field="data")
