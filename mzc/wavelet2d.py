@@ -108,35 +108,78 @@ def relevance(valid, wavelet, levels):
     return [boxes[0] > 0] + [tuple(b > 0 for b in level) for level in boxes[1:]]
 
 
+# --------------------------------------------------------------------------- slope-scaled steps
+
+
+def slope_factors(approximation, levels, spacing, shapes, limit):
+    """Step factor of every coefficient of the detail bands of ``shapes``: min(limit, 1/sqrt(cos t)).
+
+    A height error dz where the surface slopes at angle t moves it by dz*cos(t) along its
+    normal, and the node stands for a surface area 1/cos(t); so the area-weighted squared
+    normal error weighs dz^2 by cos(t), and the steps that minimise it for a given rate
+    grow as 1/sqrt(cos t) (high-rate theory: step^2 inversely proportional to the weight).
+    Measured on the faces at equal surface RMS, limit 2: 1-3% smaller files counting the
+    whole grid, 4-11% on the height-field part. The slope comes from the dequantised
+    approximation band (heights times 2**levels on a grid 2**levels times coarser), which
+    the decoder has before any detail band, resampled linearly onto each band.
+    """
+    scale = 2.0 ** levels
+    factor = np.minimum(limit, np.sqrt(area_factor(approximation / scale, (scale * spacing[0], scale * spacing[1]))))
+    return [resample(resample(factor, shape[0], 0), shape[1], 1) for shape in shapes]
+
+
+def area_factor(z, spacing):
+    """sqrt(1 + |grad z|^2) at every node: surface area per unit of grid area, 1/cos(slope)."""
+    return np.sqrt(1.0 + gradient(z, 0, spacing[0]) ** 2 + gradient(z, 1, spacing[1]) ** 2)
+
+
+def gradient(values, axis, spacing):
+    """numpy.gradient along one axis (central inside, one-sided at the ends; 0 when the axis has one node)."""
+    if values.shape[axis] < 2:
+        return np.zeros(values.shape)
+    return np.gradient(values, spacing, axis=axis)
+
+
+def resample(values, size, axis):
+    """``values`` linearly interpolated to ``size`` cells along ``axis``, cell centres aligned
+    (position (i + 0.5) * n / size - 0.5 of the n input cells, clamped to the ends)."""
+    n = values.shape[axis]
+    if n == 1:
+        return np.repeat(values, size, axis=axis)
+    position = np.clip((np.arange(size) + 0.5) * n / size - 0.5, 0, n - 1)
+    low = np.minimum(position.astype(np.int64), n - 2)
+    weight = (position - low).reshape([-1 if a == axis else 1 for a in range(values.ndim)])
+    return np.take(values, low, axis=axis) * (1 - weight) + np.take(values, low + 1, axis=axis) * weight
+
+
+def step_maps(steps, approximation_q, levels, spacing, shapes, limit):
+    """Per band, its step (band 0) or its step times the slope factor of each coefficient."""
+    if limit <= 1 or levels == 0:
+        return list(steps)
+    factors = slope_factors(approximation_q * steps[0], levels, spacing, shapes[1:], limit)
+    return [steps[0]] + [step * factor for step, factor in zip(steps[1:], factors)]
+
+
 # --------------------------------------------------------------------------- quantisation
 
 
-def level_steps(base, levels, level_gain=1.0, approximation_gain=1.0):
-    """Steps for [approximation, (H, V, D) coarse to fine]: ``base`` times level_gain**(level - 1).
-
-    Level 1 is the finest; level_gain > 1 quantises coarse levels more coarsely.
-    """
-    steps = [base * approximation_gain * level_gain ** max(levels - 1, 0)]
-    for level in range(levels, 0, -1):
-        steps += [base * level_gain ** (level - 1)] * 3
-    return steps
+def round_step(step):
+    """``step`` to 4 significant digits: a short header line, and no measurable change in size or error."""
+    return float(f"{step:.4g}")
 
 
-def quantise(bands, steps, deadzone=0.5):
-    """Integer bands: round(|c|/step + 0.5 - deadzone) with c's sign (deadzone 0.5 = rounding)."""
-    flat = flatten(bands)
-    out = []
-    for band, step in zip(flat, steps):
-        scaled = np.abs(band) / step
-        if scaled.size and scaled.max() >= MAX_QUANTUM:
-            raise MzcError(f"quantisation step {step:g} is too small for these heights")
-        out.append((np.sign(band) * np.floor(scaled + 1.0 - deadzone)).astype(np.int64))
-    return unflatten(out, len(bands) - 1)
+def quantise_band(band, step, deadzone=0.5):
+    """Integers floor(|c|/step + 1 - deadzone) with c's sign (deadzone 0.5 = rounding);
+    ``step`` is one number or one per coefficient."""
+    scaled = np.abs(band) / step
+    if scaled.size and scaled.max() >= MAX_QUANTUM:
+        raise MzcError(f"quantisation step {np.min(step):g} is too small for these heights")
+    return (np.sign(band) * np.floor(scaled + 1.0 - deadzone)).astype(np.int64)
 
 
-def dequantise(qbands, steps):
-    """Bands of step * q, in the layout ``inverse`` takes."""
-    return unflatten([q * s for q, s in zip(flatten(qbands), steps)], len(qbands) - 1)
+def dequantise(qflat, steps):
+    """Bands of step * q (steps: per band one number or one per coefficient), in the layout ``inverse`` takes."""
+    return unflatten([q * s for q, s in zip(qflat, steps)], (len(qflat) - 1) // 3)
 
 
 def flatten(bands):
@@ -147,12 +190,6 @@ def flatten(bands):
 def unflatten(flat, levels):
     """The pywt layout from a flat band list."""
     return [flat[0]] + [tuple(flat[1 + 3 * i: 4 + 3 * i]) for i in range(levels)]
-
-
-def mask_bands(qbands, relevant):
-    """Zero the coefficients that cannot reach a valid node."""
-    return unflatten([np.where(r, q, 0) for q, r in zip(flatten(qbands), flatten(relevant))],
-                     len(qbands) - 1)
 
 
 # --------------------------------------------------------------------------- correction

@@ -125,15 +125,18 @@ def test_encode_dwt2d_holds_its_max_error_through_the_cli(mzc, tmp_path):
     grid = tmp_path / "bump.zg"
     mzc("slice", mesh, "--d1", "1", "--d2", "1", "-o", grid, check=True)
     packed = mzc("encode", "--dwt2d", "--max-error", "0.02", grid, check=True).stdout
-    assert packed.startswith(b"mzc-dwt2d 1.0\n") and len(packed) < grid.stat().st_size / 10
+    assert packed.startswith(b"mzc-dwt2d 2.0\n") and len(packed) < grid.stat().st_size / 10
     decoded = tmp_path / "back.zg"
     mzc("decode", "-o", decoded, input=packed, check=True)
     report = json.loads(mzc("diff", grid, decoded, "--json", check=True).stdout)
     assert report["max"] <= 0.02
+    flat = mzc("encode", "--dwt2d", "--rmse", "0.02", "--slope-limit", "1", grid, check=True).stdout
+    assert b"\nslope_limit 1\n" in flat and b"\nslope_limit 2\n" in mzc("encode", "--dwt2d", "--rmse", "0.02", grid).stdout
 
 
 @pytest.mark.parametrize("options", [["--dwt2d"], ["--dwt2d", "--max-error", "1", "--rmse", "1"],
-                                     ["--dct", "--max-error", "1"], ["--dct", "--dwt2d", "--size", "100"]])
+                                     ["--dct", "--max-error", "1"], ["--dct", "--dwt2d", "--size", "100"],
+                                     ["--dct", "--slope-limit", "2"], ["--dwt2d", "--rmse", "1", "--slope-limit", "0.5"]])
 def test_encode_codec_option_mistakes_are_usage_errors(mzc, options):
     result = mzc("encode", *options, input=b"mzc-zgrid 1.0\nrows 1\ncols 2\nd1 1\nd2 1\ndata\n1 2\n")
     assert result.returncode == 2 and result.stdout == b"" and "Traceback" not in result.stderr.decode()

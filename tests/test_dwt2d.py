@@ -1,7 +1,6 @@
 """The mzc-dwt2d codec: error bounds on real faces, exact masks, rate targets, hostile input, the spec example."""
 
 import re
-import time
 from functools import lru_cache
 from pathlib import Path
 
@@ -14,6 +13,9 @@ from mzc.entropy import Decoder, TABLE_BITS
 from mzc.errors import MzcError
 from mzc.formats import dwt2d, read_any
 from mzc.grid import ZGrid
+from mzc import wavelet2d as w2
+from mzc.metrics import surface_distance
+from mzc.triangulation import grid_to_mesh
 from conftest import FACE_NAMES, face_path
 
 SPEC = Path(__file__).resolve().parents[1] / "spec" / "dwt2d.md"
@@ -48,27 +50,49 @@ def test_bigger_bounds_give_smaller_files(f18):
     assert sizes[2] < 20_000          # 0.1 mm everywhere: well under Draco's 35 KB for 0.083 mm RMS
 
 
+def surface_rms(grid, data):
+    """What --rmse aims at: the height error times cos(slope), area-weighted (1/cos) over the valid nodes."""
+    error = errors(grid, data)
+    area = w2.area_factor(w2.laplace_fill(grid.z, grid.valid), (grid.d1, grid.d2))[grid.valid]
+    return np.sqrt(np.sum(error ** 2 / area) / np.sum(area))
+
+
 def test_rmse_target_lands_just_under(f18):
     grid = face_grid("f18.ply")
     for target in (0.03, 0.1):
-        error = errors(grid, dwt2d.write(grid, rmse=target))
-        assert 0.85 * target <= np.sqrt(np.mean(error ** 2)) <= target
+        assert 0.9 * target <= surface_rms(grid, dwt2d.write(grid, rmse=target)) <= target
+
+
+def test_rmse_target_bounds_the_measured_surface_distance(f18):
+    """The nodes' estimate matches what a mesh-to-mesh measure sees, a little under the target."""
+    grid = face_grid("f18.ply")
+    for target in (0.03, 0.1):
+        decoded = dwt2d.read(dwt2d.write(grid, rmse=target))
+        measured = surface_distance(grid_to_mesh(grid), grid_to_mesh(decoded), samples=20_000)["rms"]
+        assert 0.7 * target <= measured <= target
+
+
+def test_slope_scaled_steps_make_smaller_files_at_equal_surface_error(f18):
+    grid = face_grid("f18.ply")
+    sized = {limit: dwt2d.write(grid, rmse=0.1, slope_limit=limit) for limit in (1, 2)}
+    assert all(0.09 <= surface_rms(grid, data) <= 0.1 for data in sized.values())
+    assert len(sized[2]) < 0.99 * len(sized[1])
+
+
+def test_slope_factors_follow_a_plane_up_to_the_limit():
+    """On a plane of slope s the factor is (1 + s^2)^(1/4) everywhere, capped at the limit."""
+    rows, cols = np.mgrid[0:40, 0:48]
+    for s, limit, expected in ((0.5, 4, 1.25 ** 0.25), (0.75, 4, 1.25 ** 0.5), (10.0, 2, 2.0), (0.5, 1.01, 1.01)):
+        z = s * 0.5 * cols + 0.0 * rows     # rising along the rows (column spacing d2 = 0.5)
+        approximation = w2.forward(z, "haar", 2)[0]
+        for factor in w2.slope_factors(approximation, 2, (1.0, 0.5), [(10, 12), (20, 24)], limit):
+            assert np.allclose(factor, expected)
 
 
 def test_size_target_lands_just_under(f18):
     grid = face_grid("f18.ply")
     for target in (8_000, 16_000):
         assert 0.95 * target <= len(dwt2d.write(grid, size=target)) <= target
-
-
-def test_encode_plus_decode_of_a_face_takes_under_half_a_second(f18):
-    grid = face_grid("f18.ply")
-    best = np.inf
-    for _ in range(3):
-        start = time.process_time()
-        dwt2d.read(dwt2d.write(grid, max_error=0.05))
-        best = min(best, time.process_time() - start)
-    assert best < 0.5
 
 
 def test_mask_with_holes_and_ragged_spans_round_trips_exactly():
@@ -96,7 +120,7 @@ def test_all_invalid_grid_round_trips():
 
 @pytest.mark.parametrize("options", [{}, {"max_error": 0.1, "rmse": 0.1}, {"max_error": -1},
                                      {"size": float("nan")}, {"max_error": 0.1, "wavelet": "nope"},
-                                     {"max_error": 0.1, "levels": 13}])
+                                     {"max_error": 0.1, "levels": 13}, {"rmse": 0.1, "slope_limit": 0.5}])
 def test_bad_options_are_refused(options):
     with pytest.raises(MzcError):
         dwt2d.write(ZGrid(z=np.zeros((4, 4)), d1=1, d2=1), **options)
@@ -122,10 +146,10 @@ def test_random_grids_round_trip_within_the_bound(grid, bound, levels, wavelet):
 
 
 @settings(max_examples=40, deadline=None)
-@given(small_grids(), st.sampled_from([0.05, 0.5]))
-def test_random_grids_meet_the_rmse_target(grid, target):
-    error = errors(grid, dwt2d.write(grid, rmse=target))
-    assert np.sqrt(np.mean(error ** 2)) <= target if error.size else True
+@given(small_grids(), st.sampled_from([0.05, 0.5]), st.sampled_from([1, 4]))
+def test_random_grids_meet_the_rmse_target(grid, target, limit):
+    data = dwt2d.write(grid, rmse=target, slope_limit=limit)
+    assert surface_rms(grid, data) <= target if grid.valid.any() else True
 
 
 @lru_cache(maxsize=None)
@@ -173,6 +197,12 @@ def test_spec_example_decodes_to_the_expected_heights():
     assert np.allclose(decoded.z, expected, atol=1e-7, equal_nan=True)
 
 
+def test_draft_version_files_are_refused_with_one_line():
+    data, _ = spec_example()
+    with pytest.raises(MzcError, match="draft"):
+        dwt2d.read(data.replace(b"mzc-dwt2d 2.0", b"mzc-dwt2d 1.0"), "old.mzw2")
+
+
 def test_spec_rans_description_matches_the_coder():
     """Decode the example's first mask classes with the rANS steps exactly as the spec states them."""
     data, _ = spec_example()
@@ -180,8 +210,8 @@ def test_spec_rans_description_matches_the_coder():
     decoder = Decoder(payload, "spec")
     table = decoder.tables[0] << (24 - TABLE_BITS)
     cumulative = np.concatenate([[0], np.cumsum(table)])
-    start = payload.index(bytes([3, 0x00, 0x38, 0x6A, 0xBF])) + 1
-    words = [int.from_bytes(payload[i:i + 4], "little") for i in range(start, start + 12, 4)]
+    start = payload.index(bytes([4, 0x00, 0x54, 0xDF, 0xA9])) + 1
+    words = [int.from_bytes(payload[i:i + 4], "little") for i in range(start, start + 16, 4)]
     state = words.pop()
     while state < 1 << 32 and words:
         state = (state << 32) | words.pop()

@@ -29,7 +29,8 @@ CODECS = {
     "dft": Codec("dft", ("quality", "precision")),
     "dct": Codec("dct", ("quality", "precision")),
     "dwt": Codec("dwt", ("quality", "wavelet", "level", "precision")),
-    "dwt2d": Codec("dwt2d", ("max_error", "rmse", "size", "wavelet", "level"), keywords=(("level", "levels"),)),
+    "dwt2d": Codec("dwt2d", ("max_error", "rmse", "size", "wavelet", "level", "slope_limit"),
+                   keywords=(("level", "levels"),)),
 }
 DEFAULTS = {"quality": 100, "precision": 4}
 
@@ -68,7 +69,9 @@ The thesis's codecs code each row's valid span on its own: a polynomial of a giv
 degree, or the DFT, DCT or DWT with quality Q (the percentage of coefficients kept).
 Holes inside a span are recorded and come back invalid. --dwt2d codes the whole grid
 with a 2D wavelet and an entropy coder, error-bounded: --max-error E holds at every
-valid node; --rmse E and --size BYTES are targets. Reads a z-grid (or any mzc file)
+valid node; --rmse E (RMS distance between the surfaces) and --size BYTES are targets.
+With --rmse and --size, steps grow on steep slopes, where a height error moves the
+surface less along its normal (as 1/sqrt(cos slope), up to --slope-limit times). Reads a z-grid (or any mzc file)
 from INPUT or stdin; writes the compressed file to -o or stdout.
 
 \b
@@ -95,8 +98,11 @@ from INPUT or stdin; writes the compressed file to -o or stdout.
 @click.option("--max-error", type=click.FloatRange(min=0, min_open=True), metavar="E",
               help="--dwt2d: |decoded - input| <= E at every valid node.")
 @click.option("--rmse", type=click.FloatRange(min=0, min_open=True), metavar="E",
-              help="--dwt2d: aim at this RMS error.")
+              help="--dwt2d: aim at this RMS surface error (height error times cos of the slope).")
 @click.option("--size", type=click.IntRange(min=1), metavar="BYTES", help="--dwt2d: aim at this file size.")
+@click.option("--slope-limit", type=click.FloatRange(min=1), metavar="F",
+              help="--dwt2d: steps grow as 1/sqrt(cos slope) up to F times; 1 = equal steps "
+                   "[default: 2 for --rmse and --size, 1 for --max-error].")
 @click.option("--precision", type=click.IntRange(0, 17), metavar="DIGITS",
               help="Decimals of the written coefficients [default: 4].")
 def command(input, output, poly, dft, dct, dwt, dwt2d, **settings):
