@@ -210,8 +210,8 @@ def test_spec_rans_description_matches_the_coder():
     decoder = Decoder(payload, "spec")
     table = decoder.tables[0] << (24 - TABLE_BITS)
     cumulative = np.concatenate([[0], np.cumsum(table)])
-    start = payload.index(bytes([4, 0x00, 0x54, 0xDF, 0xA9])) + 1
-    words = [int.from_bytes(payload[i:i + 4], "little") for i in range(start, start + 16, 4)]
+    start, count = decoder.position, payload[decoder.position - 1]   # the words follow their count
+    words = [int.from_bytes(payload[i:i + 4], "little") for i in range(start, start + 4 * count, 4)]
     state = words.pop()
     while state < 1 << 32 and words:
         state = (state << 32) | words.pop()

@@ -28,6 +28,7 @@ DEFAULT_WAVELET = "bior4.4"
 ALPHAS = (1.6, 2.4, 3.2)   # max_error: wavelet step = alpha * E, the smallest file wins...
 ALPHA_SLACK = 0.01         # ...but a smaller alpha within 1% of it is taken for its lower RMS error
 SLOPE_LIMIT = 2.0          # steps grow as 1/sqrt(cos(slope)) up to 2x (76 degrees); 1 = equal steps
+APPROXIMATION_GAIN = 0.7   # band 0's step over the detail step (measured: 0.5-3% smaller files at equal surface RMS)
 DEADZONE = 0.6             # encoder-only rounding offset; the decoder never sees it
 
 # model ids (the order of first use in the payload)
@@ -216,21 +217,23 @@ class Prepared:
         self.area = w2.area_factor(self.filled, (grid.d1, grid.d2))[self.valid]
 
     def decoded(self, step, deadzone=DEADZONE):
-        """(integer bands as coded, the decoder's wavelet-only reconstruction) for one band step."""
+        """(integer bands as coded, the decoder's wavelet-only reconstruction) for one detail step."""
         quantised = lambda index, step: np.where(  # noqa: E731
             self.relevant[index], w2.quantise_band(self.bands[index], step, deadzone), 0)
-        qflat = [quantised(0, step)]
-        steps = band_steps((self.grid.d1, self.grid.d2), [step], [b.shape for b in self.bands], qflat[0], self.slope_limit)
+        written = header_steps(step, self.levels)
+        qflat = [quantised(0, written[0])]
+        steps = band_steps((self.grid.d1, self.grid.d2), written, [b.shape for b in self.bands], qflat[0],
+                           self.slope_limit)
         qflat += [quantised(index, steps[index]) for index in range(1, len(self.bands))]
         z = w2.inverse(w2.dequantise(qflat, steps), self.grid.shape, self.wavelet, self.levels)
         return qflat, z
 
     def encode(self, step, max_error=None):
-        """File bytes for one band step; with ``max_error`` a correction layer bounds every valid node."""
+        """File bytes for one detail step; with ``max_error`` a correction layer bounds every valid node."""
         qflat, decoded = self.decoded(step)
         encoder = Encoder(same_size=SAME_SIZE)
         encode_mask(encoder, self.valid)
-        encode_bands(encoder, qflat, self.relevant, [step] * len(qflat))
+        encode_bands(encoder, qflat, self.relevant, expand_steps(header_steps(step, self.levels), len(qflat)))
         correction = 0.0
         if max_error is not None:
             correction = w2.correction_step(max_error)
@@ -242,7 +245,8 @@ class Prepared:
     def header(self, step, correction, max_error):
         """The text header up to and including the ``data`` line."""
         lines = [MAGIC, *grid_header_lines(self.grid), f"wavelet {self.wavelet}", f"levels {self.levels}",
-                 f"steps {format_number(step)}", f"slope_limit {format_number(self.slope_limit)}",
+                 "steps " + " ".join(map(format_number, header_steps(step, self.levels))),
+                 f"slope_limit {format_number(self.slope_limit)}",
                  f"coder {CODER}"]
         if correction > 0:
             lines.append(f"correction {format_number(correction)}")
@@ -264,12 +268,26 @@ class Prepared:
         return max(float(z.max() - z.min()), 1e-6) if z.size else 1.0
 
 
+def header_steps(step, levels):
+    """The ``steps`` line's values for a detail step: band 0's step, then every detail band's
+    (just the one step when band 0 is the grid itself)."""
+    return [w2.round_step(APPROXIMATION_GAIN * step), step] if levels else [step]
+
+
+def expand_steps(steps, count):
+    """One step per band from the ``steps`` line: one value for all, two (band 0, details), or one each."""
+    if len(steps) == 1:
+        return list(steps) * count
+    if len(steps) == 2:
+        return [steps[0]] + [steps[1]] * (count - 1)
+    return list(steps)
+
+
 def band_steps(spacing, steps, shapes, approximation_q, slope_limit):
     """Every band's step (one number, or one per coefficient for the slope-scaled detail
-    bands) from the header's steps (one for all bands, or one per band) and band shapes."""
-    steps = list(steps) * len(shapes) if len(steps) == 1 else list(steps)
+    bands) from the ``steps`` line and the band shapes."""
     levels = (len(shapes) - 1) // 3
-    return w2.step_maps(steps, approximation_q, levels, spacing, shapes, slope_limit)
+    return w2.step_maps(expand_steps(steps, len(shapes)), approximation_q, levels, spacing, shapes, slope_limit)
 
 
 def write(grid, max_error=None, rmse=None, size=None, wavelet=DEFAULT_WAVELET, levels=None, slope_limit=None):
@@ -314,8 +332,8 @@ def read_codec_fields(header):
     wavelet = header.word("wavelet", w2.WAVELETS)
     levels = header.integer("levels", 0, w2.MAX_LEVELS)
     steps = header.floats("steps", None)
-    if len(steps) not in (1, 1 + 3 * levels):
-        raise header.error("steps", f"expected 1 or {1 + 3 * levels} values, found {len(steps)}")
+    if len(steps) not in {1, 1 + 3 * levels} | ({2} if levels else set()):
+        raise header.error("steps", f"expected 1{', 2' if levels else ''} or {1 + 3 * levels} values, found {len(steps)}")
     if min(steps) <= 0:
         raise header.error("steps", "every step must be > 0")
     slope_limit = header.floats("slope_limit", 1)[0]
@@ -325,7 +343,7 @@ def read_codec_fields(header):
     if correction < 0:
         raise header.error("correction", "must be >= 0")
     header.word("coder", (CODER,))
-    return wavelet, levels, steps * (1 + 3 * levels) if len(steps) == 1 else steps, slope_limit, correction
+    return wavelet, levels, expand_steps(steps, 1 + 3 * levels), slope_limit, correction
 
 
 def read(data, source="<stdin>"):
