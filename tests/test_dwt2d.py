@@ -203,6 +203,19 @@ def test_draft_version_files_are_refused_with_one_line():
         dwt2d.read(data.replace(b"mzc-dwt2d 2.0", b"mzc-dwt2d 1.0"), "old.mzw2")
 
 
+def test_spec_table_codes_give_the_stated_frequencies():
+    """Table 0 of the example, decoded by hand as the spec's 'Tables' paragraph says."""
+    data, _ = spec_example()
+    payload = data[data.index(b"\ndata\n") + 6:]
+    size, bits = payload[1], int.from_bytes(payload[2:4], "big")
+    codes = [(bits >> (16 - 6 * (i + 1))) & 63 for i in range(size)]
+    weights = [(16, 19, 23, 27)[e % 4] << (e // 4) if e else 0 for e in codes]
+    freq = [1 + w * (16384 - size) // sum(weights) for w in weights]
+    freq[weights.index(max(weights))] += 16384 - sum(freq)
+    assert (size, codes, freq) == (2, [57, 63], [4264, 12120])
+    assert list(Decoder(payload, "spec").tables[0]) == freq
+
+
 def test_spec_rans_description_matches_the_coder():
     """Decode the example's first mask classes with the rANS steps exactly as the spec states them."""
     data, _ = spec_example()
