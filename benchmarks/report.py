@@ -257,7 +257,7 @@ def method_section(settings):
         "original mesh.",
         "- Rate: bytes of the file as stored. Grid peers (SZ3, zfp, JPEG-*) store a 136-byte binary grid header "
         "(shape, spacings, origin, 3x4 transform), the validity mask coded by mzc's own dwt2d mask coder (row "
-        "spans through rANS; about 100-200 bytes on a face) and their payload; invalid nodes are filled with "
+        "spans through rANS; about 290 bytes on a face) and their payload; invalid nodes are filled with "
         "mzc's harmonic fill first. LERC codes the mask itself inside its blob. The JPEG family codes the heights "
         "quantised to 16 bits over their range (step about 0.002 mm on a face), plus 16 bytes for offset and step. "
         "Bits per vertex divide by the original mesh's vertex count.",

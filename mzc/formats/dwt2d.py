@@ -275,8 +275,8 @@ class Prepared:
 
     def decoded(self, step, deadzone=DEADZONE):
         """(integer bands as coded, the decoder's wavelet-only reconstruction) for one detail step."""
-        quantised = lambda index, step: np.where(  # noqa: E731
-            self.relevant[index], w2.quantise_band(self.bands[index], step, deadzone), 0)
+        quantised = lambda index, band_step: np.where(  # noqa: E731
+            self.relevant[index], w2.quantise_band(self.bands[index], band_step, deadzone), 0)
         written = header_steps(step, self.levels)
         qflat = [quantised(0, written[0])]
         steps = band_steps((self.grid.d1, self.grid.d2), written, [b.shape for b in self.bands], qflat[0],
