@@ -45,6 +45,11 @@ def raw_bits(values, cls, signed):
 
 def values_from_bits(cls, bits, signed=True):
     """Inverse of raw_bits for values of classes ``cls``, all signed or all not."""
+    if cls.max(initial=0) <= 1:             # most rows: magnitudes 0 and 1, a sign bit at most
+        values = cls.copy()
+        if signed:
+            values[cls == 1] -= 2 * bits[: np.count_nonzero(cls)]
+        return values
     values = np.zeros(len(cls), dtype=np.int64)
     nonzero = np.flatnonzero(cls > 0)
     if not len(nonzero):
@@ -236,7 +241,7 @@ def ans_encode(tables, models, cls):
 class Decoder:
     """Reads a payload written by Encoder.finish; every failure is an MzcError."""
 
-    def __init__(self, payload, source):
+    def __init__(self, payload, source, same_size=()):
         self.source = source
         self.data = memoryview(payload)
         self.position = 0
@@ -252,6 +257,10 @@ class Decoder:
         self.bits = np.unpackbits(np.frombuffer(self.data[end:], dtype=np.uint8))
         self.bit_position = 0
         self.sizes = np.array([len(t) for t in self.tables], dtype=np.int64)
+        for group in same_size:
+            present = self.sizes[[m for m in group if m < len(self.sizes)]]
+            if (present != present[:1]).any():
+                raise self.error("tables mixed in one row have different class counts")
         self.weights = weights_by_size(self.tables)
 
     def error(self, message):
@@ -299,18 +308,15 @@ class Decoder:
         return self.read_mixed(np.full(count, model, dtype=np.int64))
 
     def read_mixed(self, models, signed=True):
-        """One value per entry of ``models`` (model ids whose tables have one class count);
-        unsigned values were written with ``signed=False``."""
+        """One value per entry of ``models``: ids of one ``same_size`` group (checked when the
+        tables were read); unsigned values were written with ``signed=False``."""
         models = np.asarray(models, dtype=np.int64)
         if not len(models):
             return np.zeros(0, dtype=np.int64)
         if models.max() >= len(self.tables):
             raise self.error(f"the payload has no model table {int(models.max())}")
-        sizes = self.sizes[models]
-        if (sizes != sizes[0]).any():
-            raise self.error("tables mixed in one row have different class counts")
         try:
-            cls = self.coder.decode(FAMILY, self.weights[int(sizes[0])][models]).astype(np.int64)
+            cls = self.coder.decode(FAMILY, self.weights[int(self.sizes[models[0]])][models]).astype(np.int64)
         except Exception as exc:  # constriction raises its own types on a corrupt stream
             raise self.error(f"corrupt rANS stream ({exc})") from None
         need = int(cls.sum()) - (0 if signed else int(np.count_nonzero(cls)))

@@ -19,15 +19,16 @@ KIND = "dwt2d"
 VERSION = (2, 0)
 EXTENSIONS = (".mzw2",)
 MAGIC = f"mzc-{KIND} {VERSION[0]}.{VERSION[1]}"
-CODER = "rans-signs-1"     # rans-classes-3 sent varint frequency tables and raw detail signs
+CODER = "rans-signs-2"     # rans-signs-1 coded whole rows at once; rans-classes-3 sent raw signs
 # detail contexts, shared by every detail band: activity of parent, siblings, two rows above
 THRESHOLDS = (0.5, 1.0, 1.5, 3.0, 5.0, 8.0, 14.0, 24.0, 40.0, 70.0)
 CONTEXTS = len(THRESHOLDS) + 1
-# detail signs: per orientation (H, V, D) the weights of the sign above and of the parent's
-# sign in a predicted sign (measured on the faces: the coefficient above has the opposite
-# sign 80-87% of the time in H bands, the same 65-70% in V bands, the opposite 60-75% in D)
-SIGN_WEIGHTS = ((-2, 1), (2, 1), (-1, 0))
-SIGN_CONTEXTS = 4
+# detail signs: per orientation (H, V, D) the weights of the sign above, the parent's sign and
+# (odd columns) the signs left and right in a predicted sign. Measured on the faces: the
+# coefficient above has the opposite sign 80-87% of the time in H bands, the same 65-70% in
+# V bands; the one to the left the same 68-81% in H, the opposite 80-85% in V.
+SIGN_WEIGHTS = ((-2, 1, 2), (2, 1, -2), (-1, 0, 0))
+SIGN_CONTEXTS = 4   # per column parity
 CORRECTION_THRESHOLDS = (0.25, 1.0, 2.0)   # correction layer: 4 contexts from the rows above
 DEFAULT_WAVELET = "bior4.4"
 ALPHAS = (1.6, 2.4, 3.2)   # max_error: wavelet step = alpha * E, the smallest file wins...
@@ -48,17 +49,17 @@ def detail_model(context):
 
 
 def sign_model(context):
-    """Model id of a detail sign context (after the detail models)."""
+    """Model id of a detail sign context, 0..7 (after the detail models)."""
     return FIRST_DETAIL + CONTEXTS + context
 
 
 def correction_model(context=0):
     """Model id of the correction layer's context (after the sign models)."""
-    return FIRST_DETAIL + CONTEXTS + SIGN_CONTEXTS + context
+    return FIRST_DETAIL + CONTEXTS + 2 * SIGN_CONTEXTS + context
 
 
 # the detail, sign and correction contexts are each mixed within a row: one class count each
-SAME_SIZE = (range(detail_model(0), detail_model(CONTEXTS)), range(sign_model(0), sign_model(SIGN_CONTEXTS)),
+SAME_SIZE = (range(detail_model(0), detail_model(CONTEXTS)), range(sign_model(0), sign_model(2 * SIGN_CONTEXTS)),
              range(correction_model(0), correction_model(4)))
 
 
@@ -146,12 +147,13 @@ def activity(flat, index, steps):
     return active
 
 
-def sign_prediction(above, parent, orientation):
-    """(context 0..3, predicted sign +-1, or 0 for none) of coefficients from the signs of the
-    coefficient above and of the parent: the weighted sum's size and sign."""
-    weight_above, weight_parent = SIGN_WEIGHTS[orientation]
-    score = weight_above * np.sign(above) + weight_parent * np.sign(parent)
-    return np.minimum(np.abs(score), SIGN_CONTEXTS - 1), np.sign(score)
+def sign_prediction(above, parent, side, orientation, odd):
+    """(sign context 0..7, predicted sign +-1, or 0 for none) of coefficients from the signs of
+    the coefficient above, the parent and (odd columns) the sum ``side`` of the signs left and
+    right: the weighted sum's size (contexts 4..7 in odd columns) and sign."""
+    weight_above, weight_parent, weight_side = SIGN_WEIGHTS[orientation]
+    score = weight_above * np.sign(above) + weight_parent * np.sign(parent) + weight_side * side
+    return np.minimum(np.abs(score), SIGN_CONTEXTS - 1) + SIGN_CONTEXTS * odd, np.sign(score)
 
 
 def sign_bits(values, predicted):
@@ -173,19 +175,33 @@ def neighbours(above, above2):
     return out + 0.5 * np.abs(above2)
 
 
+def beside(values):
+    """At odd columns the sum of the values left and right (even columns, coded first in a
+    row); 0 at even columns. Works on one row or on a whole band."""
+    values = np.asarray(values, dtype=np.float64)
+    out = np.zeros(values.shape)
+    cols = values.shape[-1]
+    out[..., 1::2] += values[..., 0:2 * (cols // 2):2]
+    right = (cols - 1) // 2
+    out[..., 1:2 * right:2] += values[..., 2:2 * right + 1:2]
+    return out
+
+
 def contexts(band, active, thresholds=THRESHOLDS):
-    """Context of every coefficient of a whole band, from its activity and the rows above."""
+    """Context of every coefficient of a whole band, from its activity, the rows above and (odd
+    columns) the coefficients left and right."""
     zero = np.zeros((1, band.shape[1]), dtype=band.dtype)
     above = np.concatenate([zero, band[:-1]])
     above2 = np.concatenate([zero, zero, band[:-2]])[: band.shape[0]]
-    return np.digitize(active + neighbours(above, above2), thresholds)
+    return np.digitize(active + neighbours(above, above2) + beside(np.abs(band)), thresholds)
 
 
 def row_order(where, context):
-    """(rows, cols, contexts) of the True cells of ``where``: row by row, by context, left to right."""
+    """(rows, cols, contexts) of the True cells of ``where``: row by row, even columns then odd
+    ones, by context, left to right."""
     rows, cols = np.nonzero(where)
     ks = context[rows, cols]
-    order = np.lexsort((cols, ks, rows))
+    order = np.lexsort((cols, ks, cols % 2, rows))
     return rows[order], cols[order], ks[order]
 
 
@@ -198,42 +214,54 @@ def encode_corrections(encoder, k, valid):
 def decode_rows(decoder, where, active, thresholds, model, signs=None):
     """Inverse of the row-by-row context coding: a grid of integers, 0 outside ``where``.
 
-    With ``signs`` = (parent map, orientation), as for detail bands: each row's values are
-    magnitudes followed by the signs of the nonzero ones (see encode_bands); without, each
-    value carries its sign in the raw bits.
+    Each row comes in two passes, its even columns then its odd ones. With ``signs`` =
+    (parent map, orientation), as for detail bands, a pass is magnitudes followed by the
+    signs of the nonzero ones (see encode_bands); without, each value carries its sign in
+    the raw bits.
     """
     out = np.zeros(where.shape, dtype=np.int64)
     zero = np.zeros(where.shape[1], dtype=np.int64)
-    for r in range(where.shape[0]):
-        cols = np.flatnonzero(where[r])
-        if not len(cols):
-            continue
+    odd_columns = np.arange(where.shape[1]) % 2 == 1
+    passes = (where & ~odd_columns, where & odd_columns)
+    for r in np.flatnonzero(where.any(axis=1)):
         above = out[r - 1] if r >= 1 else zero
-        context = np.digitize(active[r, cols] + neighbours(above, out[r - 2] if r >= 2 else zero)[cols], thresholds)
-        order = np.argsort(context, kind="stable")   # by context, left to right within one
-        out[r, cols[order]] = decoder.read_mixed(model(context[order]), signed=signs is None)
-        if signs is not None:
-            signed = cols[out[r, cols] != 0]
-            sign_context, predicted = sign_prediction(above[signed], signs[0][r, signed], signs[1])
-            bits = decoder.read_mixed(sign_model(sign_context), signed=False)
-            if bits.max(initial=0) > 1:
-                raise decoder.error("a sign symbol is not 0 or 1")
-            out[r, signed] = with_signs(out[r, signed], bits, predicted)
+        near = active[r] + neighbours(above, out[r - 2] if r >= 2 else zero)
+        for odd, cells in enumerate(passes):
+            part = np.flatnonzero(cells[r])
+            if not len(part):
+                continue
+            context = np.digitize(near[part] + (beside(np.abs(out[r]))[part] if odd else 0), thresholds)
+            order = np.argsort(context, kind="stable")   # by context, left to right within one
+            out[r, part[order]] = decoder.read_mixed(model(context[order]), signed=signs is None)
+            if signs is None:
+                continue
+            signed = part[out[r, part] != 0]
+            if len(signed):
+                sign_context, predicted = sign_prediction(above[signed], signs[0][r, signed],
+                                                          beside(np.sign(out[r]))[signed], signs[1], odd)
+                bits = decoder.read_mixed(sign_model(sign_context), signed=False)
+                if bits.max(initial=0) > 1:
+                    raise decoder.error("a sign symbol is not 0 or 1")
+                out[r, signed] = with_signs(out[r, signed], bits, predicted)
     return out
 
 
 def encode_bands(encoder, qflat, relevant, steps):
-    """The approximation as planar differences, then each detail band row by row: the row's
-    magnitudes by context, then the signs of its nonzero values left to right."""
+    """The approximation as planar differences, then each detail band row by row, each row in
+    two passes (even columns, odd columns): the pass's magnitudes by context, then the signs
+    of its nonzero values left to right."""
     encoder.add(APPROXIMATION, np.diff(np.diff(qflat[0], axis=0, prepend=0), axis=1, prepend=0))
     for index in range(1, len(qflat)):
         band = qflat[index]
         rows, cols, ks = row_order(relevant[index], contexts(band, activity(qflat, index, steps)))
         above = np.concatenate([np.zeros((1, band.shape[1]), dtype=band.dtype), band[:-1]])
-        sign_context, predicted = sign_prediction(above, parent_map(qflat, index), (index - 1) % 3)
+        odd = np.broadcast_to(np.arange(band.shape[1]) % 2, band.shape)
+        sign_context, predicted = sign_prediction(above, parent_map(qflat, index), beside(np.sign(band)),
+                                                  (index - 1) % 3, odd)
         signed_rows, signed_cols = np.nonzero(band)
         order = np.lexsort((np.concatenate([cols, signed_cols]), np.concatenate([ks, np.zeros_like(signed_cols)]),
-                            np.repeat([0, 1], [len(rows), len(signed_rows)]), np.concatenate([rows, signed_rows])))
+                            np.repeat([0, 1], [len(rows), len(signed_rows)]),
+                            np.concatenate([cols, signed_cols]) % 2, np.concatenate([rows, signed_rows])))
         models = np.concatenate([detail_model(ks), sign_model(sign_context[signed_rows, signed_cols])])
         values = np.concatenate([np.abs(band[rows, cols]),
                                  sign_bits(band[signed_rows, signed_cols], predicted[signed_rows, signed_cols])])
@@ -411,7 +439,7 @@ def read(data, source="<stdin>"):
     header, body, _first = read_header(data, source, KIND, VERSION[0])
     fields, rows, cols = read_grid_fields(header)
     wavelet, levels, steps, slope_limit, correction = read_codec_fields(header)
-    decoder = Decoder(body, source)
+    decoder = Decoder(body, source, SAME_SIZE)
     valid = decode_mask(decoder, rows, cols)
     relevant = w2.flatten(w2.relevance(valid, wavelet, levels))
     qflat = decode_bands(decoder, relevant, steps)
