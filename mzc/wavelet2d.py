@@ -64,7 +64,7 @@ def laplace_fill(z, valid):
 # --------------------------------------------------------------------------- transform
 
 
-def default_levels(shape, wavelet):
+def default_levels(shape):
     """Levels until the coarsest band is about 16 nodes across (measured: deeper stops paying)."""
     return int(max(0, min(MAX_LEVELS, np.floor(np.log2(max(1, min(shape) / 16))))))
 

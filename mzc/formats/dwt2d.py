@@ -293,7 +293,7 @@ class Prepared:
             raise MzcError("the grid holds infinite heights", field="z")
         self.grid, self.wavelet, self.slope_limit = grid, wavelet, slope_limit
         self.valid = grid.valid
-        self.levels = w2.default_levels(grid.shape, wavelet) if levels is None else int(levels)
+        self.levels = w2.default_levels(grid.shape) if levels is None else int(levels)
         if not 0 <= self.levels <= w2.MAX_LEVELS:
             raise MzcError(f"levels must be 0..{w2.MAX_LEVELS}", field="levels")
         self.filled = w2.laplace_fill(grid.z, self.valid)
@@ -329,8 +329,13 @@ class Prepared:
 
     def header(self, step, correction, max_error):
         """The text header up to and including the ``data`` line."""
-        lines = [MAGIC, *grid_header_lines(self.grid), f"wavelet {self.wavelet}", f"levels {self.levels}",
-                 "steps " + " ".join(map(format_number, header_steps(step, self.levels))),
+        # lines at their defaults are left out: a face's file can be 1.5 KB, and they were 36 B of it
+        lines = [MAGIC, *(line for line in grid_header_lines(self.grid) if line != "nodata nan")]
+        if self.wavelet != DEFAULT_WAVELET:
+            lines.append(f"wavelet {self.wavelet}")
+        if self.levels != w2.default_levels(self.grid.shape):
+            lines.append(f"levels {self.levels}")
+        lines += ["steps " + " ".join(map(format_number, header_steps(step, self.levels))),
                  f"slope_limit {format_number(self.slope_limit)}",
                  f"coder {CODER}"]
         if correction > 0:
@@ -412,10 +417,10 @@ def write(grid, max_error=None, rmse=None, size=None, wavelet=DEFAULT_WAVELET, l
 # --------------------------------------------------------------------------- decoder
 
 
-def read_codec_fields(header):
+def read_codec_fields(header, shape):
     """(wavelet, levels, steps of every band, slope limit, correction step) from the header, each checked."""
-    wavelet = header.word("wavelet", w2.WAVELETS)
-    levels = header.integer("levels", 0, w2.MAX_LEVELS)
+    wavelet = header.word("wavelet", w2.WAVELETS, required=False, default=DEFAULT_WAVELET)
+    levels = header.integer("levels", 0, w2.MAX_LEVELS, required=False, default=w2.default_levels(shape))
     steps = header.floats("steps", None)
     if len(steps) not in {1, 1 + 3 * levels} | ({2} if levels else set()):
         raise header.error("steps", f"expected 1{', 2' if levels else ''} or {1 + 3 * levels} values, found {len(steps)}")
@@ -438,7 +443,7 @@ def read(data, source="<stdin>"):
                        source=source, line=1)
     header, body, _first = read_header(data, source, KIND, VERSION[0])
     fields, rows, cols = read_grid_fields(header)
-    wavelet, levels, steps, slope_limit, correction = read_codec_fields(header)
+    wavelet, levels, steps, slope_limit, correction = read_codec_fields(header, (rows, cols))
     decoder = Decoder(body, source, SAME_SIZE)
     valid = decode_mask(decoder, rows, cols)
     relevant = w2.flatten(w2.relevance(valid, wavelet, levels))
