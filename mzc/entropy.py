@@ -1,15 +1,15 @@
-"""Entropy coding of signed integers: magnitude classes through rANS, the rest as raw bits.
+"""Entropy coding of integers: magnitude classes through rANS, the rest as raw bits.
 
-A value v maps to a class k (0 for v = 0, else the bit length of |v|) and, for k >= 1, k
-raw bits: the sign (1 = negative) then the k-1 bits of |v| below its leading one. Classes
-go through a static categorical model per context whose frequency table (summing to
-2**TABLE_BITS) is sent in the payload as one 6-bit log-scale weight per class; raw bits go to a separate bit buffer. The
-classes are coded with the rANS coder of ``constriction`` (AnsCoder: 32-bit words,
-64-bit state, 24-bit probabilities); spec/dwt2d.md gives the exact arithmetic, so a
-decoder needs no constriction. Everything is vectorised per segment of symbols that
-share one model, which keeps a 150 000-node grid well under a tenth of a second.
+A value v maps to a class k (0 for v = 0, else the bit length of |v|) and, for k >= 1, raw
+bits: the sign (1 = negative; none for values added as unsigned) then the k-1 bits of |v|
+below its leading one. Classes go through a static categorical model per context whose
+frequency table (summing to 2**TABLE_BITS) is sent in the payload as one 6-bit log-scale
+weight per class; raw bits go to a separate bit buffer. The classes are coded with the
+rANS coder of ``constriction`` (AnsCoder: 32-bit words, 64-bit state, 24-bit
+probabilities); spec/dwt2d.md gives the exact arithmetic, so a decoder needs no
+constriction. The encoder is vectorised per run of symbols whose tables have one class
+count; the decoder reads one such run per call.
 """
-
 import constriction
 import numpy as np
 

@@ -79,6 +79,11 @@ def test_slope_scaled_steps_make_smaller_files_at_equal_surface_error(f18):
     assert len(sized[2]) < 0.99 * len(sized[1])
 
 
+def test_odd_columns_see_their_left_and_right_neighbours():
+    assert dwt2d.beside([1, 2, 3, 4, 5]).tolist() == [0, 4, 0, 8, 0]
+    assert dwt2d.beside([[1, 2, 3, 4]]).tolist() == [[0, 4, 0, 3]]      # the last odd column has no right
+
+
 def test_slope_factors_follow_a_plane_up_to_the_limit():
     """On a plane of slope s the factor is (1 + s^2)^(1/4) everywhere, capped at the limit."""
     rows, cols = np.mgrid[0:40, 0:48]

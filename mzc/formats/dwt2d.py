@@ -1,12 +1,12 @@
-"""The wavelet z-grid codec (``mzc-dwt2d 1.0``, extension ``.mzw2``): see spec/dwt2d.md.
+"""The wavelet z-grid codec (``mzc-dwt2d 2.0``, extension ``.mzw2``): see spec/dwt2d.md.
 
-Text header (grid fields, wavelet, levels, per-band steps, correction step), a ``data``
-line, then a binary payload: the validity mask as row spans, the quantised wavelet
-bands, and an optional correction layer of residuals that makes ``max_error`` hold at
-every valid node of the decoder's own reconstruction. All integers are entropy coded
-by mzc.entropy (magnitude classes through rANS with one model per context).
+Text header (grid fields, wavelet, levels, steps, slope limit, correction step), a
+``data`` line, then a binary payload: the validity mask as row spans, the quantised
+wavelet bands (detail steps scaled up on steep slopes, magnitudes and signs each with
+their own contexts), and an optional correction layer of residuals that makes
+``max_error`` hold at every valid node of the decoder's own reconstruction. All integers
+are entropy coded by mzc.entropy (magnitude classes through rANS, one model per context).
 """
-
 import numpy as np
 
 from mzc import wavelet2d as w2
@@ -206,7 +206,8 @@ def row_order(where, context):
 
 
 def encode_corrections(encoder, k, valid):
-    """Correction integers (a grid, 0 at invalid nodes) row by row, by context of the rows above."""
+    """Correction integers (a grid, 0 at invalid nodes) row by row in two passes (even, odd
+    columns), by context of the rows above and (odd columns) the neighbours beside."""
     rows, cols, ks = row_order(valid, contexts(k, np.zeros(k.shape), CORRECTION_THRESHOLDS))
     encoder.add(correction_model(ks), k[rows, cols])
 
@@ -329,15 +330,16 @@ class Prepared:
 
     def header(self, step, correction, max_error):
         """The text header up to and including the ``data`` line."""
-        # lines at their defaults are left out: a face's file can be 1.5 KB, and they were 36 B of it
+        # lines at their defaults are left out: a face's file can be 1.5 KB, and they were 50 B of it
         lines = [MAGIC, *(line for line in grid_header_lines(self.grid) if line != "nodata nan")]
         if self.wavelet != DEFAULT_WAVELET:
             lines.append(f"wavelet {self.wavelet}")
         if self.levels != w2.default_levels(self.grid.shape):
             lines.append(f"levels {self.levels}")
-        lines += ["steps " + " ".join(map(format_number, header_steps(step, self.levels))),
-                 f"slope_limit {format_number(self.slope_limit)}",
-                 f"coder {CODER}"]
+        lines.append("steps " + " ".join(map(format_number, header_steps(step, self.levels))))
+        if self.slope_limit != SLOPE_LIMIT:
+            lines.append(f"slope_limit {format_number(self.slope_limit)}")
+        lines.append(f"coder {CODER}")
         if correction > 0:
             lines.append(f"correction {format_number(correction)}")
         if max_error is not None:
@@ -426,7 +428,7 @@ def read_codec_fields(header, shape):
         raise header.error("steps", f"expected 1{', 2' if levels else ''} or {1 + 3 * levels} values, found {len(steps)}")
     if min(steps) <= 0:
         raise header.error("steps", "every step must be > 0")
-    slope_limit = header.floats("slope_limit", 1)[0]
+    slope_limit = header.floats("slope_limit", 1, required=False, default=[SLOPE_LIMIT])[0]
     if slope_limit < 1:
         raise header.error("slope_limit", "must be >= 1")
     correction = header.floats("correction", 1, required=False, default=[0.0])[0]
