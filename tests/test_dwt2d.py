@@ -79,6 +79,14 @@ def test_slope_scaled_steps_make_smaller_files_at_equal_surface_error(f18):
     assert len(sized[2]) < 0.99 * len(sized[1])
 
 
+def test_two_value_steps_line_gives_coarser_levels_finer_steps():
+    """Band 0's step, then level 1's D and D * 0.9 per level up, as repeated products."""
+    level2 = 0.12 * 0.9
+    level3 = level2 * 0.9
+    assert dwt2d.expand_steps([0.084, 0.12], 10) == [0.084] + [level3] * 3 + [level2] * 3 + [0.12] * 3
+    assert dwt2d.expand_steps([0.5], 4) == [0.5] * 4
+
+
 def test_odd_columns_see_their_left_and_right_neighbours():
     assert dwt2d.beside([1, 2, 3, 4, 5]).tolist() == [0, 4, 0, 8, 0]
     assert dwt2d.beside([[1, 2, 3, 4]]).tolist() == [[0, 4, 0, 3]]      # the last odd column has no right
