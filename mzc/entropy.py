@@ -10,6 +10,7 @@ probabilities); spec/dwt2d.md gives the exact arithmetic, so a decoder needs no
 constriction. The encoder is vectorised per run of symbols whose tables have one class
 count; the decoder reads one such run per call.
 """
+
 import constriction
 import numpy as np
 
@@ -171,14 +172,14 @@ class Encoder:
         self.values.append(values)
         self.signed.append(np.full(values.shape, int(signed), dtype=np.int64))
 
-    def finish(self, merge=True):
+    def finish(self):
         """Payload bytes: tables, rANS words, raw bits (layout in spec/dwt2d.md section 'payload')."""
         models = np.concatenate(self.models or [np.zeros(0, np.int64)])
         values = np.concatenate(self.values or [np.zeros(0, np.int64)])
         cls = classes(values)
         count = int(models.max()) + 1 if len(models) else 0
         counts = np.bincount(models * MAX_CLASSES + cls, minlength=count * MAX_CLASSES).reshape(count, MAX_CLASSES)
-        codes = choose_tables(counts, self.table_sizes(counts), merge)
+        codes = choose_tables(counts, self.table_sizes(counts))
         words = ans_encode([frequencies(c) for c in codes], models, cls)
         table_bytes = b"".join(b"\x00" if shared else encode_table(c) for c, shared in table_records(codes))
         return (varint(count) + table_bytes + varint(len(words)) + words.astype("<u4").tobytes()
@@ -196,14 +197,14 @@ class Encoder:
         return sizes
 
 
-def choose_tables(counts, sizes, merge):
+def choose_tables(counts, sizes):
     """Weight codes of one table per model, from its class counts; a model reuses the
     previous model's table when that has as many classes and is cheaper."""
     tables = []
     for model_counts, size in zip(counts, sizes):
         model_counts = model_counts[:size]
         own = table_codes(model_counts)
-        if merge and tables:
+        if tables:
             previous = tables[-1]
             if len(previous) == len(own) and (
                     table_cost_bits(previous, model_counts) - 8 <= table_cost_bits(own, model_counts)):
@@ -299,7 +300,8 @@ class Decoder:
                 raise self.error("payload ends inside a model table")
             bits = np.unpackbits(np.frombuffer(self.data[self.position:end], dtype=np.uint8))
             self.position = end
-            codes = bits[: size * CODE_BITS].reshape(size, CODE_BITS).astype(np.int64) @ (1 << np.arange(CODE_BITS - 1, -1, -1))
+            place_values = 1 << np.arange(CODE_BITS - 1, -1, -1)
+            codes = bits[: size * CODE_BITS].reshape(size, CODE_BITS).astype(np.int64) @ place_values
             tables.append(frequencies(codes))
         return tables
 

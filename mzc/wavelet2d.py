@@ -69,14 +69,6 @@ def default_levels(shape):
     return int(max(0, min(MAX_LEVELS, np.floor(np.log2(max(1, min(shape) / 16))))))
 
 
-def band_shapes(shape, wavelet, levels):
-    """Shapes of the bands in coding order: the approximation, then per level (coarse to fine) one shape."""
-    if levels == 0:
-        return [tuple(shape)]
-    shapes = pywt.wavedecn_shapes(tuple(shape), wavelet, mode=MODE, level=levels)
-    return [tuple(shapes[0])] + [tuple(s["ad"]) for s in shapes[1:]]
-
-
 def forward(z, wavelet, levels):
     """[approximation, (H, V, D) coarse to fine, ...] of the filled heights."""
     if levels == 0:

@@ -12,7 +12,7 @@ import numpy as np
 from mzc import wavelet2d as w2
 from mzc.entropy import Decoder, Encoder
 from mzc.errors import MzcError
-from mzc.formats.header import format_number, grid_header_lines, read_grid_fields, read_header, split_magic
+from mzc.formats.header import format_number, grid_header_lines, read_grid_fields, read_header
 from mzc.grid import ZGrid
 
 KIND = "dwt2d"
@@ -188,13 +188,19 @@ def beside(values):
     return out
 
 
+def shifted_down(band, rows):
+    """``band`` moved down by ``rows`` rows, zeros coming in at the top: each node sees the
+    node that many rows above it."""
+    out = np.zeros_like(band)
+    out[rows:] = band[: max(band.shape[0] - rows, 0)]
+    return out
+
+
 def contexts(band, active, thresholds=THRESHOLDS):
     """Context of every coefficient of a whole band, from its activity, the rows above and (odd
     columns) the coefficients left and right."""
-    zero = np.zeros((1, band.shape[1]), dtype=band.dtype)
-    above = np.concatenate([zero, band[:-1]])
-    above2 = np.concatenate([zero, zero, band[:-2]])[: band.shape[0]]
-    return np.digitize(active + neighbours(above, above2) + beside(np.abs(band)), thresholds)
+    return np.digitize(active + neighbours(shifted_down(band, 1), shifted_down(band, 2)) + beside(np.abs(band)),
+                       thresholds)
 
 
 def row_order(where, context):
@@ -256,10 +262,9 @@ def encode_bands(encoder, qflat, relevant, steps):
     for index in range(1, len(qflat)):
         band = qflat[index]
         rows, cols, ks = row_order(relevant[index], contexts(band, activity(qflat, index, steps)))
-        above = np.concatenate([np.zeros((1, band.shape[1]), dtype=band.dtype), band[:-1]])
         odd = np.broadcast_to(np.arange(band.shape[1]) % 2, band.shape)
-        sign_context, predicted = sign_prediction(above, parent_map(qflat, index), beside(np.sign(band)),
-                                                  (index - 1) % 3, odd)
+        sign_context, predicted = sign_prediction(shifted_down(band, 1), parent_map(qflat, index),
+                                                  beside(np.sign(band)), (index - 1) % 3, odd)
         signed_rows, signed_cols = np.nonzero(band)
         order = np.lexsort((np.concatenate([cols, signed_cols]), np.concatenate([ks, np.zeros_like(signed_cols)]),
                             np.repeat([0, 1], [len(rows), len(signed_rows)]),
@@ -332,7 +337,7 @@ class Prepared:
     def header(self, step, correction, max_error):
         """The text header up to and including the ``data`` line."""
         # lines at their defaults are left out: a face's file can be 1.5 KB, and they were 50 B of it
-        lines = [MAGIC, *(line for line in grid_header_lines(self.grid) if line != "nodata nan")]
+        lines = [MAGIC, *grid_header_lines(self.grid, write_defaults=False)]
         if self.wavelet != DEFAULT_WAVELET:
             lines.append(f"wavelet {self.wavelet}")
         if self.levels != w2.default_levels(self.grid.shape):
@@ -431,7 +436,8 @@ def read_codec_fields(header, shape):
     levels = header.integer("levels", 0, w2.MAX_LEVELS, required=False, default=w2.default_levels(shape))
     steps = header.floats("steps", None)
     if len(steps) not in {1, 1 + 3 * levels} | ({2} if levels else set()):
-        raise header.error("steps", f"expected 1{', 2' if levels else ''} or {1 + 3 * levels} values, found {len(steps)}")
+        allowed = f"1, 2 or {1 + 3 * levels}" if levels else "1"
+        raise header.error("steps", f"expected {allowed} values, found {len(steps)}")
     if min(steps) <= 0:
         raise header.error("steps", "every step must be > 0")
     slope_limit = header.floats("slope_limit", 1, required=False, default=[SLOPE_LIMIT])[0]
@@ -446,10 +452,7 @@ def read_codec_fields(header, shape):
 
 def read(data, source="<stdin>"):
     """Decode dwt2d bytes into a ZGrid; any bad input raises MzcError."""
-    if split_magic(data, source)[1] < VERSION[0]:
-        raise MzcError(f"mzc-{KIND} 1.x was a draft of this format and is not read; encode the grid again",
-                       source=source, line=1)
-    header, body, _first = read_header(data, source, KIND, VERSION[0])
+    header, body, _first = read_header(data, source, KIND, VERSION[0], oldest_major=VERSION[0])
     fields, rows, cols = read_grid_fields(header)
     wavelet, levels, steps, slope_limit, correction = read_codec_fields(header, (rows, cols))
     decoder = Decoder(body, source, SAME_SIZE)

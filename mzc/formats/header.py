@@ -111,14 +111,21 @@ class Header:
         return values[0]
 
 
-def read_header(data, source, kind, supported_major):
-    """Parse magic and header lines of ``data``; return (Header, body bytes, first body line number)."""
+def read_header(data, source, kind, supported_major, oldest_major=0):
+    """Parse magic and header lines of ``data``; return (Header, body bytes, first body line number).
+
+    Majors above ``supported_major`` are refused (upgrade mzc), and so are majors below
+    ``oldest_major``, drafts of a format that this mzc no longer reads.
+    """
     found, major, _minor = split_magic(data, source)
     if found != kind:
         raise MzcError(f"expected an mzc-{kind} file, found mzc-{found}", source=source, line=1)
     if major > supported_major:
         raise MzcError(f"mzc-{kind} version {major}.x is newer than this mzc reads "
                        f"({supported_major}.x); upgrade mzc", source=source, line=1)
+    if major < oldest_major:
+        raise MzcError(f"mzc-{kind} {major}.x was a draft of this format and is not read; encode the grid again",
+                       source=source, line=1)
     header = Header(source)
     position = data.index(b"\n") + 1 if b"\n" in data else len(data)
     line_number = 1
@@ -178,8 +185,9 @@ def format_number(value):
     return text[:-2] if text.endswith(".0") else text
 
 
-def grid_header_lines(grid):
-    """Header lines for the grid fields of ``grid`` (rows and cols come from z's shape)."""
+def grid_header_lines(grid, write_defaults=True):
+    """Header lines for the grid fields of ``grid`` (rows and cols come from z's shape);
+    without ``write_defaults``, ``nodata`` is left out when it holds its default, nan."""
     rows, cols = grid.shape
     lines = [
         f"rows {rows}",
@@ -192,6 +200,7 @@ def grid_header_lines(grid):
         lines.append("transform " + " ".join(format_number(v) for v in grid.transform.ravel()))
     if grid.units:
         lines.append(f"units {grid.units}")
-    lines.append(f"nodata {grid.nodata}")
+    if write_defaults or grid.nodata != "nan":
+        lines.append(f"nodata {grid.nodata}")
     return lines
 
