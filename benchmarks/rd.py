@@ -60,7 +60,7 @@ def load_item(corpus, source):
         mesh = read_mesh(source)
         inputs = {"mesh": (mesh.points, mesh.triangles),
                   "grid": slice_surface(mesh, d1=GRID_STEP, d2=GRID_STEP),
-                  "thesis": slice_surface(mesh, **THESIS_GRID)}
+                  "thesis": slice_surface(mesh, projection="planar", **THESIS_GRID)}
         return inputs, 1.0, "mm"
     grid = getattr(samples, source)()
     valid_z = grid.z[grid.valid]

@@ -74,8 +74,8 @@ def dense_rmse(decoded, truth, method):
 def measure_face(path, qualities):
     """Every (codec, Q) measurement on one face, as a list of dicts."""
     mesh = read_mesh(str(path))
-    sparse = slice_surface(mesh, d1=D1, d2=D2)
-    truth = slice_surface(mesh, d1=D1 / (INSERTED + 1), d2=D2)
+    sparse = slice_surface(mesh, d1=D1, d2=D2, projection="planar")
+    truth = slice_surface(mesh, d1=D1 / (INSERTED + 1), d2=D2, projection="planar")
     original_obj, vertex_list = obj_bytes(mesh), vertex_list_bytes(mesh)
     points = []
     for codec in CODECS:

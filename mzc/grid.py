@@ -1,24 +1,32 @@
-"""The z-grid: a regular grid of heights, the one data model every mzc step shares.
+"""The z-grid: a regular grid of values on cutting surfaces, the one data model every mzc step shares.
 
-Node (r, c) lies at x = x0 + c*d2, y = y0 + r*d1 in the grid frame and holds z, or NaN
-where the node's line misses the surface. Row r is one "horizontal" cutting plane of the
-thesis; a rigid transform maps the grid frame back to the frame of the input surface.
+Node (r, c) sits at u = x0 + c*d2, v = y0 + r*d1 and holds a value, or NaN where the
+node's line misses the surface. With the thesis's planar cutting planes (u, v) are the
+grid frame's (x, y) and the value is z; central projections (``mzc.projections``) cut with
+planes and half-planes or cones through an axis, the value being the distance along the
+node's ray. Row r is one "horizontal" cutting surface of the thesis; a rigid transform maps
+the grid frame back to the frame of the input surface.
 """
 
 from dataclasses import dataclass, field, replace
 
 import numpy as np
 
+from mzc import projections
+
 IDENTITY_TRANSFORM = np.hstack([np.eye(3), np.zeros((3, 1))])
 
 
 @dataclass
 class ZGrid:
-    """Heights ``z`` (rows x cols, NaN = invalid) on a grid with row step ``d1``, column step ``d2``.
+    """Values ``z`` (rows x cols, NaN = invalid) with row step ``d1`` and column step ``d2``.
 
-    ``origin`` is (x0, y0) of node (0, 0) in the grid frame; ``transform`` is the 3x4
-    matrix [R | t] taking grid-frame points p to the input frame as R p + t; ``units``
-    names the length unit when known; ``nodata`` is the token written for invalid nodes.
+    ``origin`` is (u0, v0) of node (0, 0); ``transform`` is the 3x4 matrix [R | t] taking
+    grid-frame points p to the input frame as R p + t (for central projections t is the
+    centre and R's second column the axis); ``projection`` names the cutting surfaces and
+    ``radius`` the reference radius R0 that scales their angles into lengths (None for
+    planar grids); ``units`` names the length unit when known; ``nodata`` is the token
+    written for invalid nodes.
     """
 
     z: np.ndarray
@@ -28,6 +36,8 @@ class ZGrid:
     transform: np.ndarray = field(default_factory=lambda: IDENTITY_TRANSFORM.copy())
     units: str | None = None
     nodata: str = "nan"
+    projection: str = "planar"
+    radius: float | None = None
 
     def __post_init__(self):
         self.z = np.asarray(self.z, dtype=float)
@@ -37,6 +47,14 @@ class ZGrid:
         self.origin = (float(self.origin[0]), float(self.origin[1]))
         self.d1 = float(self.d1)
         self.d2 = float(self.d2)
+        if self.projection not in projections.PROJECTIONS:
+            raise ValueError(f"unknown projection {self.projection!r}")
+        if self.projection == "planar":
+            self.radius = None
+        elif not (self.radius is not None and np.isfinite(self.radius) and self.radius > 0):
+            raise ValueError(f"a {self.projection} grid needs a positive radius")
+        else:
+            self.radius = float(self.radius)
 
     @property
     def shape(self):
@@ -45,21 +63,30 @@ class ZGrid:
 
     @property
     def valid(self):
-        """Boolean mask of the nodes that hold a height."""
+        """Boolean mask of the nodes that hold a value."""
         return ~np.isnan(self.z)
 
+    @property
+    def periodic(self):
+        """True when the columns make a full turn about the axis: column cols-1 neighbours column 0."""
+        return projections.full_turn(self.projection, self.radius, self.z.shape[1], self.d2)
+
+    def pole_rows(self):
+        """Per row, True where the row lies on a pole of a spherical grid (all its nodes on one ray)."""
+        return projections.pole_rows(self.projection, self.radius, self.ys())
+
     def xs(self):
-        """Grid-frame x of every column."""
+        """u of every column (grid-frame x for planar grids)."""
         return self.origin[0] + self.d2 * np.arange(self.z.shape[1])
 
     def ys(self):
-        """Grid-frame y of every row."""
+        """v of every row (grid-frame y for planar grids)."""
         return self.origin[1] + self.d1 * np.arange(self.z.shape[0])
 
     def node_points(self):
-        """(rows, cols, 3) grid-frame coordinates of every node (z is NaN where invalid)."""
-        x, y = np.meshgrid(self.xs(), self.ys())
-        return np.stack([x, y, self.z], axis=-1)
+        """(rows, cols, 3) grid-frame coordinates of every node (NaN where invalid)."""
+        u, v = np.meshgrid(self.xs(), self.ys())
+        return projections.to_points(self.projection, self.radius, u, v, self.z)
 
     def to_input_frame(self, points):
         """Map (..., 3) grid-frame points to the input surface's frame."""
@@ -72,5 +99,5 @@ class ZGrid:
         return (points - shift) @ rotation
 
     def with_z(self, z, **changes):
-        """A copy with new heights (and any other fields changed)."""
+        """A copy with new values (and any other fields changed)."""
         return replace(self, z=np.asarray(z, dtype=float), **changes)

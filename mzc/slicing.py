@@ -174,31 +174,59 @@ def triangulate_point_cloud(points_xy, long_edge_factor=LONG_EDGE_FACTOR):
 # --------------------------------------------------------------------------- slicing
 
 
-def slice_surface(mesh, d1=None, d2=None, rows=None, cols=None, align="none", units=None):
+def slice_surface(mesh, d1=None, d2=None, rows=None, cols=None, align="none", units=None,
+                  projection="auto", center=None, axis=None):
     """Cut ``mesh`` (a Mesh; no triangles = point cloud) into a ZGrid.
 
-    The grid covers the bounding box of the (aligned) points with node (0, 0) at
-    (xmin, ymin). Spacings come from ``d1``/``d2`` or from counts ``rows`` (across y) and
-    ``cols`` (across x); by default 72 rows, as the thesis's ~70 planes, and d2 = d1/10.
+    ``projection`` names the cutting surfaces (``mzc.projections``); ``auto`` picks the
+    one that sees the surface best, and ``center``/``axis`` fix those of a central one
+    (``mzc.views``). The grid covers the extent of the surface in (u, v) with node (0, 0)
+    at its low corner, a full turn of a surface that goes all the way round. Spacings come
+    from ``d1``/``d2`` or from counts ``rows`` (across v) and ``cols`` (across u); by
+    default 72 rows, as the thesis's ~70 planes, and d2 = d1/10.
     """
-    rotation, shift = frame_for(mesh, align)
-    grid = slice_in_frame(mesh, rotation, shift, d1=d1, d2=d2, rows=rows, cols=cols, units=units)
+    from mzc.views import choose_view
+
+    view = choose_view(mesh, frame_for(mesh, align), projection, center, axis)
+    grid = slice_in_frame(mesh, view.rotation, view.shift, d1=d1, d2=d2, rows=rows, cols=cols, units=units,
+                          projection=view.projection, radius=view.radius, full_turn=view.full_turn)
     if np.isnan(grid.z).all():
         raise MzcError("no grid node meets the surface (seen edge-on from +z? try --align pca)")
     return grid
 
 
-def slice_in_frame(mesh, rotation, shift, d1=None, d2=None, rows=None, cols=None, units=None):
-    """The z-grid of ``mesh`` in the frame where input = rotation @ p + shift, over its xy box.
+def slice_in_frame(mesh, rotation, shift, d1=None, d2=None, rows=None, cols=None, units=None,
+                   projection="planar", radius=None, full_turn=False):
+    """The z-grid of ``mesh`` in the frame where input = rotation @ p + shift, over its (u, v) extent.
 
     Shared by ``slice_surface`` and ``mzc diff``, which samples surfaces in a given frame.
     """
+    from mzc.projections import to_nodes
+
     local = (mesh.points - shift) @ rotation
-    triangles = mesh.triangles if len(mesh.triangles) else triangulate_point_cloud(local[:, :2])
-    low, high = local[:, :2].min(axis=0), local[:, :2].max(axis=0)
-    d1, d2, n_rows, n_cols = grid_size(high - low, d1, d2, rows, cols)
-    z = rasterize(local, triangles, low[0] + d2 * np.arange(n_cols), low[1] + d1 * np.arange(n_rows))
-    return ZGrid(z, d1, d2, origin=tuple(low), transform=np.column_stack([rotation, shift]), units=units)
+    nodes = to_nodes(projection, radius, local)
+    triangles = mesh.triangles if len(mesh.triangles) else triangulate_point_cloud(nodes[:, :2])
+    low, high = nodes[:, :2].min(axis=0), nodes[:, :2].max(axis=0)
+    pole_to_pole = full_turn and projection == "spherical"
+    if full_turn:
+        low[0], high[0] = -np.pi * radius, np.pi * radius
+    if pole_to_pole:
+        low[1], high[1] = -np.pi / 2 * radius, np.pi / 2 * radius
+    d1, d2, n_rows, n_cols = grid_size(high - low, d1, d2, rows, cols, full_turn, pole_to_pole)
+    xs, ys = low[0] + d2 * np.arange(n_cols), low[1] + d1 * np.arange(n_rows)
+    z = values_along(projection, radius, local, triangles, xs, ys)
+    return ZGrid(z, d1, d2, origin=tuple(low), transform=np.column_stack([rotation, shift]), units=units,
+                 projection=projection, radius=radius)
+
+
+def values_along(projection, radius, local, triangles, xs, ys):
+    """Outermost hits of the node lines (u in xs, v in ys) on a grid-frame mesh: the front-most
+    height for planar grids, the farthest distance along each ray for central ones."""
+    if projection == "planar":
+        return rasterize(local, triangles, xs, ys)
+    from mzc.rays import cast
+
+    return cast(local, triangles, projection, radius, xs, ys)
 
 
 def frame_for(mesh, align):
@@ -212,8 +240,14 @@ def frame_for(mesh, align):
     raise MzcError(f"unknown alignment {align!r} (choose none or pca)", field="align")
 
 
-def grid_size(extent, d1, d2, rows, cols):
-    """Resolve (d1, d2, rows, cols) from the options and the xy ``extent`` (width, height)."""
+def grid_size(extent, d1, d2, rows, cols, full_turn=False, pole_to_pole=False):
+    """Resolve (d1, d2, rows, cols) from the options and the (u, v) ``extent`` (width, height).
+
+    With ``full_turn`` the width is a whole turn and the columns divide it evenly (the
+    last column neighbours the first); with ``pole_to_pole`` the rows divide the height
+    evenly with a row on each end. Either way the spacing is the nearest to the one asked
+    that a whole count allows.
+    """
     width, height = float(extent[0]), float(extent[1])
     if d1 is not None and rows is not None:
         raise MzcError("give either a row spacing (--d1) or a row count (--rows), not both")
@@ -229,6 +263,12 @@ def grid_size(extent, d1, d2, rows, cols):
     check_spacing(d2, "d2")
     n_rows = rows or nodes_across(height, d1)
     n_cols = cols or nodes_across(width, d2)
+    if full_turn:
+        n_cols = cols or max(3, even_count(width, d2))
+        d2 = width / n_cols
+    if pole_to_pole:
+        n_rows = rows or max(3, even_count(height, d1) + 1)
+        d1 = height / (n_rows - 1)
     check_grid_size(n_rows, n_cols, d1, d2)
     return float(d1), float(d2), n_rows, n_cols
 
@@ -259,6 +299,11 @@ def nodes_across(extent, step):
     if count >= MAX_DIMENSION:
         return MAX_DIMENSION + 1
     return int(np.floor(count + 1e-9)) + 1
+
+
+def even_count(extent, step):
+    """The whole number of steps nearest to extent / step (capped past the size limit)."""
+    return int(min(round(extent / step), MAX_DIMENSION + 1))
 
 
 def check_grid_size(n_rows, n_cols, d1, d2):

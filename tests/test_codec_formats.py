@@ -49,7 +49,7 @@ GOOD_DCT_ROW = "1 8 4.9497 -3.2212 0 -0.3367 0 -0.1005 0 -0.0254\n"
 
 REJECTIONS = {
     "wrong magic": ("mzc-dcx 1.0\n" + GRID_HEADER, "unknown mzc format"),
-    "newer major": (DCT.replace("1.0", "2.0", 1) + GOOD_DCT_ROW * 2, "newer"),
+    "newer major": (DCT.replace("1.0", "3.0", 1) + GOOD_DCT_ROW * 2, "newer"),
     "truncated rows": (DCT + GOOD_DCT_ROW, "row line"),
     "missing coefficient": (DCT + GOOD_DCT_ROW + "1 8 4.9497 -3.2212 0 -0.3367 0 -0.1005 0\n", "coefficients"),
     "v1 after v2": (DCT + GOOD_DCT_ROW + "5 3 1 2 3\n", "v2"),

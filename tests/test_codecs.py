@@ -36,7 +36,7 @@ def face_grid():
     from mzc.meshes import read_mesh
     from mzc.slicing import slice_surface
 
-    return slice_surface(read_mesh(face_path("f18.ply")), d1=3, d2=0.25)
+    return slice_surface(read_mesh(face_path("f18.ply")), d1=3, d2=0.25, projection="planar")
 
 
 def round_trip(module, grid, **options):

@@ -241,8 +241,8 @@ def test_face_densified_is_close_to_the_face_sliced_densely(f18):
     from mzc.slicing import slice_surface
 
     mesh = read_mesh(f18)
-    sparse_grid = slice_surface(mesh, d1=3, d2=0.25)
-    truth = slice_surface(mesh, d1=0.75, d2=0.25).z
+    sparse_grid = slice_surface(mesh, d1=3, d2=0.25, projection="planar")
+    truth = slice_surface(mesh, d1=0.75, d2=0.25, projection="planar").z
     errors = {}
     for method in METHODS:
         dense = densify_grid(sparse_grid, 3, method).z

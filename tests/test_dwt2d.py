@@ -26,7 +26,7 @@ def face_grid(name):
     """A face sliced at 0.5 mm (cached: several tests share it)."""
     from mzc.meshes import read_mesh
     from mzc.slicing import slice_surface
-    return slice_surface(read_mesh(face_path(name)), d1=0.5, d2=0.5)
+    return slice_surface(read_mesh(face_path(name)), d1=0.5, d2=0.5, projection="planar")
 
 
 def errors(grid, data):

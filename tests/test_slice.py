@@ -302,7 +302,7 @@ def test_surface_seen_edge_on_is_refused():
 
 @pytest.mark.parametrize("name", [*FACE_NAMES, "example.obj"] if FACE_NAMES else ["f18.ply"])
 def test_every_face_slices_at_the_thesis_grid(name):
-    grid = slice_surface(read_mesh(face_path(name)), d1=3, d2=0.25)
+    grid = slice_surface(read_mesh(face_path(name)), d1=3, d2=0.25, projection="planar")
     assert 60 <= grid.shape[0] <= 80 and 600 <= grid.shape[1] <= 750
     assert 0.5 < grid.valid.mean() < 0.95
     assert np.nanmax(grid.z) > 50  # the nose tip looks toward +z
@@ -310,7 +310,7 @@ def test_every_face_slices_at_the_thesis_grid(name):
 
 def test_valid_nodes_cover_the_projected_area_of_the_face():
     mesh = read_mesh(face_path("example.obj"))
-    grid = slice_surface(mesh, d1=0.5, d2=0.5)
+    grid = slice_surface(mesh, d1=0.5, d2=0.5, projection="planar")
     a, b, c = (mesh.points[mesh.triangles[:, i]] for i in range(3))
     normal_z = (b[:, 0] - a[:, 0]) * (c[:, 1] - a[:, 1]) - (b[:, 1] - a[:, 1]) * (c[:, 0] - a[:, 0])
     front_area = normal_z[normal_z > 0].sum() / 2  # xy area seen from +z, folds excluded
@@ -319,7 +319,7 @@ def test_valid_nodes_cover_the_projected_area_of_the_face():
 
 def test_f18_sliced_at_half_a_millimetre_matches_the_mesh(f18):
     mesh = read_mesh(f18)
-    grid = slice_surface(mesh, d1=0.5, d2=0.5)
+    grid = slice_surface(mesh, d1=0.5, d2=0.5, projection="planar")
     rows, cols = grid.shape
     nodes = grid.node_points().reshape(-1, 3)
     rebuilt = lattice_triangles(rows, cols, grid.valid)
@@ -376,7 +376,7 @@ def test_cli_vertex_only_ply(tmp_path, mzc):
 
 
 def test_cli_thesis_grid_on_f18(f18, mzc, tmp_path):
-    result = mzc("slice", f18, "--d1", "3", "--d2", "0.25", "-o", tmp_path / "f18.zg")
+    result = mzc("slice", f18, "--projection", "planar", "--d1", "3", "--d2", "0.25", "-o", tmp_path / "f18.zg")
     assert result.returncode == 0, result.stderr
     grid = zgrid.read((tmp_path / "f18.zg").read_bytes(), "f18.zg")
     assert grid.shape == (70, 671)

@@ -14,12 +14,22 @@ from mzc.commands import input_argument, output_option, write_grid
 @click.option("--cols", type=int, metavar="N", help="Number of columns across x instead of --d2.")
 @click.option("--align", type=click.Choice(["none", "pca"]), default="none", show_default=True,
               help="pca: rotate so the least spread is z and the most spread is y.")
+@click.option("--projection", type=click.Choice(["auto", "planar", "cylindrical", "spherical"]), default="auto",
+              show_default=True,
+              help="Cutting surfaces: the thesis's parallel planes, or planes and half-planes through an axis "
+                   "(cylindrical), or half-planes and cones about a centre (spherical); auto picks what sees "
+                   "the surface best.")
+@click.option("--center", type=float, nargs=3, metavar="X Y Z",
+              help="Centre of a central projection (a point of a cylinder's axis) [default: chosen].")
+@click.option("--axis", type=float, nargs=3, metavar="X Y Z",
+              help="Axis direction of a central projection [default: chosen].")
 @click.option("--units", metavar="TEXT", help="Length unit to record, e.g. mm.")
 @click.option("--precision", type=click.IntRange(0, 17), metavar="DIGITS",
               help="Decimal digits of the written heights.")
-def command(input, output, d1, d2, rows, cols, align, units, precision):
+def command(input, output, d1, d2, rows, cols, align, projection, center, axis, units, precision):
     """Cut a mesh (OBJ, PLY, VTK, STL, OFF) or point cloud (x y z text, vertex-only PLY)
-    into a z-grid: each node holds the front-most height of the surface."""
+    into a z-grid: each node holds the outermost hit of its line with the surface (the
+    front-most height of planar grids, the farthest distance along a central ray)."""
     from mzc.meshes import read_mesh
     from mzc.slicing import slice_surface
     from mzc.streams import check_not_input
@@ -30,5 +40,6 @@ def command(input, output, d1, d2, rows, cols, align, units, precision):
         raise click.UsageError("--d2 and --cols both set the columns: give one")
     check_not_input(output, input)
     mesh = read_mesh(input)
-    grid = slice_surface(mesh, d1=d1, d2=d2, rows=rows, cols=cols, align=align, units=units)
+    grid = slice_surface(mesh, d1=d1, d2=d2, rows=rows, cols=cols, align=align, units=units,
+                         projection=projection, center=center, axis=axis)
     write_grid(grid, output, precision=precision)

@@ -1,7 +1,7 @@
 """The mzc file formats, registered in one place.
 
 Each format is a module with ``KIND`` (the word after ``mzc-`` in its magic line),
-``VERSION``, ``EXTENSIONS``, ``read(data, source)`` and ``write(obj, ...)``. ``read_any``
+``VERSION`` (its version for planar grids), ``read(data, source)`` and ``write(obj, ...)``. ``read_any``
 recognises an mzc file by its magic line and hands it to the right module. Meshes at the
 edges (OBJ, PLY, STL, ...) are handled by ``mzc.meshes``, not here.
 """

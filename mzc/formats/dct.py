@@ -9,8 +9,6 @@ from mzc.transforms import dct_forward, dct_inverse, kept
 
 KIND = "dct"
 VERSION = (1, 0)
-EXTENSIONS = (".mzd",)
-MAGIC = f"mzc-{KIND} {VERSION[0]}.{VERSION[1]}"
 
 
 def encode(spans, firsts, d2, options):

@@ -12,8 +12,6 @@ from mzc.transforms import dft_forward, dft_inverse, dft_length, kept
 
 KIND = "dft"
 VERSION = (1, 0)
-EXTENSIONS = (".mzf",)
-MAGIC = f"mzc-{KIND} {VERSION[0]}.{VERSION[1]}"
 
 
 def encode(spans, firsts, d2, options):

@@ -14,8 +14,6 @@ from mzc.transforms import DEFAULT_LEVEL, DEFAULT_WAVELET, dwt_forward, dwt_inve
 
 KIND = "dwt"
 VERSION = (1, 0)
-EXTENSIONS = (".mzw",)
-MAGIC = f"mzc-{KIND} {VERSION[0]}.{VERSION[1]}"
 MAX_LEVEL = 32
 
 

@@ -12,13 +12,12 @@ import numpy as np
 from mzc import wavelet2d as w2
 from mzc.entropy import Decoder, Encoder
 from mzc.errors import MzcError
-from mzc.formats.header import format_number, grid_header_lines, read_grid_fields, read_header
+from mzc.formats.header import (file_version, format_number, grid_header_lines, magic_line, read_grid_fields,
+                                read_header)
 from mzc.grid import ZGrid
 
 KIND = "dwt2d"
-VERSION = (2, 0)
-EXTENSIONS = (".mzw2",)
-MAGIC = f"mzc-{KIND} {VERSION[0]}.{VERSION[1]}"
+VERSION = (2, 0)   # planar grids; 3.0 holds a central projection (mzc.formats.header)
 CODER = "rans-signs-2"     # rans-signs-1 coded whole rows at once; rans-classes-3 sent raw signs
 # detail contexts, shared by every detail band: activity of parent, siblings, two rows above
 THRESHOLDS = (0.5, 1.0, 1.5, 3.0, 5.0, 8.0, 14.0, 24.0, 40.0, 70.0)
@@ -337,7 +336,7 @@ class Prepared:
     def header(self, step, correction, max_error):
         """The text header up to and including the ``data`` line."""
         # lines at their defaults are left out: a face's file can be 1.5 KB, and they were 50 B of it
-        lines = [MAGIC, *grid_header_lines(self.grid, write_defaults=False)]
+        lines = [magic_line(KIND, file_version(VERSION, self.grid)), *grid_header_lines(self.grid, write_defaults=False)]
         if self.wavelet != DEFAULT_WAVELET:
             lines.append(f"wavelet {self.wavelet}")
         if self.levels != w2.default_levels(self.grid.shape):

@@ -4,16 +4,23 @@ Every mzc file starts with a magic line ``mzc-KIND MAJOR.MINOR``, then header li
 ``keyword value...`` (``#`` starts a comment line), then a line ``data`` after which the
 body follows. Readers ignore header keywords they do not know (files from a newer minor
 version stay readable) and refuse a newer major version. The grid fields (rows, cols,
-d1, d2, origin, transform, units, nodata) are common to the z-grid and the compressed
-formats; see spec/zgrid.md.
+d1, d2, origin, projection, radius, transform, units, nodata) are common to the z-grid and
+the compressed formats; see spec/zgrid.md.
+
+The version rule for projections: a grid on central cutting surfaces is written with the
+next major version of its format (``mzc-zgrid 2.0``, ``mzc-dct 2.0``, ``mzc-dwt2d 3.0``), a
+planar grid with the format's own version, byte for byte as before. A reader that predates
+projections would ignore the ``projection`` line and decode a wrong surface; the major
+version makes it refuse the file instead.
 """
 
 import math
 
 import numpy as np
 
+from mzc import projections
 from mzc.errors import MzcError
-from mzc.grid import IDENTITY_TRANSFORM, ZGrid
+from mzc.grid import IDENTITY_TRANSFORM
 
 MAX_DIMENSION = 1_000_000
 MAX_NODES = 100_000_000
@@ -35,12 +42,28 @@ def split_magic(data, source):
     return kind, major, minor
 
 
-class Header:
-    """The keyword lines of a header, with the line number of each for error messages."""
+def file_version(version, grid):
+    """The version of a file holding ``grid`` in a format of planar ``version``: the same for
+    planar grids, the next major for central projections (see the module docstring)."""
+    return tuple(version) if grid.projection == "planar" else (version[0] + 1, 0)
 
-    def __init__(self, source):
+
+def magic_line(kind, version):
+    """The first line of an mzc file: ``mzc-KIND MAJOR.MINOR``."""
+    return f"mzc-{kind} {version[0]}.{version[1]}"
+
+
+class Header:
+    """The keyword lines of a header, with the line number of each for error messages.
+
+    ``projected`` is True when the file's major version is the one that may hold a
+    central projection (one above the format's planar major).
+    """
+
+    def __init__(self, source, projected=False):
         self.source = source
         self.fields = {}
+        self.projected = projected
 
     def add(self, keyword, values, line):
         if keyword in self.fields:
@@ -111,22 +134,24 @@ class Header:
         return values[0]
 
 
-def read_header(data, source, kind, supported_major, oldest_major=0):
+def read_header(data, source, kind, planar_major, oldest_major=0):
     """Parse magic and header lines of ``data``; return (Header, body bytes, first body line number).
 
-    Majors above ``supported_major`` are refused (upgrade mzc), and so are majors below
-    ``oldest_major``, drafts of a format that this mzc no longer reads.
+    ``planar_major`` is the format's major version for planar grids; one above it is the
+    same format holding a central projection. Majors above that are refused (upgrade mzc),
+    and so are majors below ``oldest_major``, drafts of a format that this mzc no longer reads.
     """
     found, major, _minor = split_magic(data, source)
     if found != kind:
         raise MzcError(f"expected an mzc-{kind} file, found mzc-{found}", source=source, line=1)
+    supported_major = planar_major + 1
     if major > supported_major:
         raise MzcError(f"mzc-{kind} version {major}.x is newer than this mzc reads "
                        f"({supported_major}.x); upgrade mzc", source=source, line=1)
     if major < oldest_major:
         raise MzcError(f"mzc-{kind} {major}.x was a draft of this format and is not read; encode the grid again",
                        source=source, line=1)
-    header = Header(source)
+    header = Header(source, projected=major > planar_major)
     position = data.index(b"\n") + 1 if b"\n" in data else len(data)
     line_number = 1
     while True:
@@ -173,10 +198,36 @@ def read_grid_fields(header):
         transform=transform,
         units=header.word("units", required=False),
         nodata=header.word("nodata", required=False, default="nan"),
+        **read_projection(header, rows, cols),
     )
     if fields["nodata"].lower() in ("inf", "+inf", "-inf", "infinity"):
         raise header.error("nodata", "the no-data marker cannot be infinite")
     return fields, rows, cols
+
+
+def read_projection(header, rows, cols):
+    """``projection`` and ``radius`` of the header, checked against the version and the grid.
+
+    A central projection needs the projected major version and a radius; its columns may
+    span at most one turn, and a spherical grid's rows must lie between the poles.
+    """
+    projection = header.word("projection", projections.PROJECTIONS, required=False, default="planar")
+    if projection == "planar":
+        if header.has("radius"):
+            raise header.error("radius", "a radius needs a central projection (cylindrical or spherical)")
+        return {}
+    if not header.projected:
+        raise header.error("projection", f"a {projection} grid needs the next major version of this "
+                                         "format (older readers would read it as planar)")
+    radius = header.positive("radius")
+    d1, d2 = header.positive("d1"), header.positive("d2")
+    slack = 1 + projections.FULL_TURN_TOLERANCE
+    if cols * d2 > 2 * np.pi * radius * slack:
+        raise header.error("d2", f"{cols} columns of {d2:g} span more than a full turn at radius {radius:g}")
+    v0 = header.floats("origin", 2, required=False, default=[0.0, 0.0])[1]
+    if projection == "spherical" and max(abs(v0), abs(v0 + (rows - 1) * d1)) > 0.5 * np.pi * radius * slack:
+        raise header.error("d1", "rows reach beyond the poles (elevation v / radius outside +-90 degrees)")
+    return {"projection": projection, "radius": radius}
 
 
 def format_number(value):
@@ -196,6 +247,8 @@ def grid_header_lines(grid, write_defaults=True):
         f"d2 {format_number(grid.d2)}",
         f"origin {format_number(grid.origin[0])} {format_number(grid.origin[1])}",
     ]
+    if grid.projection != "planar":
+        lines += [f"projection {grid.projection}", f"radius {format_number(grid.radius)}"]
     if not np.array_equal(grid.transform, IDENTITY_TRANSFORM):
         lines.append("transform " + " ".join(format_number(v) for v in grid.transform.ravel()))
     if grid.units:

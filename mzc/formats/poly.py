@@ -12,8 +12,6 @@ from mzc.transforms import BASES, poly_degree, poly_forward, poly_inverse
 
 KIND = "poly"
 VERSION = (1, 0)
-EXTENSIONS = (".mzp",)
-MAGIC = f"mzc-{KIND} {VERSION[0]}.{VERSION[1]}"
 MAX_DEGREE = 10_000
 
 

@@ -19,7 +19,8 @@ from typing import Callable
 import numpy as np
 
 from mzc.errors import MzcError
-from mzc.formats.header import format_number, grid_header_lines, read_grid_fields, read_header
+from mzc.formats.header import (file_version, format_number, grid_header_lines, magic_line, read_grid_fields,
+                                read_header)
 from mzc.formats.zgrid import body_lines
 from mzc.grid import ZGrid
 from mzc.transforms import fill_holes
@@ -47,9 +48,6 @@ class RowCodec:
     unpack: Callable
     decode: Callable
 
-    @property
-    def magic(self):
-        return f"mzc-{self.kind} {self.version[0]}.{self.version[1]}"
 
 
 @dataclass
@@ -133,7 +131,7 @@ def encode_rows(grid, codec, options):
 def write_grid(grid, codec, options):
     """Encode ``grid`` into the bytes of a ``codec`` file."""
     rows, holes = encode_rows(grid, codec, options)
-    lines = [codec.magic, *codec.header_lines(options), *grid_header_lines(grid), "data", *rows, *holes]
+    lines = [magic_line(codec.kind, file_version(codec.version, grid)), *codec.header_lines(options), *grid_header_lines(grid), "data", *rows, *holes]
     return ("\n".join(lines) + "\n").encode("utf-8")
 
 

@@ -8,13 +8,12 @@ written as the no-data marker.
 import numpy as np
 
 from mzc.errors import MzcError
-from mzc.formats.header import format_number, grid_header_lines, read_grid_fields, read_header
+from mzc.formats.header import (file_version, format_number, grid_header_lines, magic_line, read_grid_fields,
+                                read_header)
 from mzc.grid import ZGrid
 
 KIND = "zgrid"
-VERSION = (1, 0)
-EXTENSIONS = (".zg",)
-MAGIC = f"mzc-{KIND} {VERSION[0]}.{VERSION[1]}"
+VERSION = (1, 0)   # planar grids; 2.0 holds a central projection (mzc.formats.header)
 
 
 def parse_values(tokens, nodata, source, line):
@@ -76,5 +75,5 @@ def format_rows(z, nodata, precision=None):
 
 def write(grid, precision=None):
     """Serialise a ZGrid to z-grid bytes; ``precision`` (decimals) rounds the heights."""
-    lines = [MAGIC, *grid_header_lines(grid), "data", *format_rows(grid.z, grid.nodata, precision)]
+    lines = [magic_line(KIND, file_version(VERSION, grid)), *grid_header_lines(grid), "data", *format_rows(grid.z, grid.nodata, precision)]
     return ("\n".join(lines) + "\n").encode("utf-8")

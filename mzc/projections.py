@@ -1,0 +1,111 @@
+"""Cutting surfaces: where the node (u, v, value) of a z-grid lies in the grid frame.
+
+The thesis cuts with two families of parallel planes, so every node's line is parallel
+to z. Its cutting planes generalise to any two families of surfaces whose intersections
+are lines; a node's value is then the distance along its line (spec/zgrid.md). In the grid
+frame (the rigid ``transform`` of the header maps it to the input frame), with the axis
+along y and azimuth 0 along +z:
+
+``planar``
+    u = x, v = y, value = z: the thesis's planes; node lines parallel to z.
+``cylindrical``
+    rows are planes across the axis, columns half-planes through it. u = R0 * azimuth,
+    v = y, value = the distance from the axis; the node's line is a ray from the axis,
+    perpendicular to it.
+``spherical``
+    columns are half-planes through the axis, rows cones of constant elevation about it.
+    u = R0 * azimuth, v = R0 * elevation, value = the distance from the centre (the grid
+    frame's origin); the node's line is a ray from the centre.
+
+Azimuth is atan2(x, z), elevation atan2(y, sqrt(x^2 + z^2)). R0 (the grid's ``radius``)
+scales the angles so that u, v and the spacings d1, d2 stay lengths in model units: at the
+distance R0 from the centre or axis, nodes are d2 apart along a row and d1 across rows.
+"""
+
+import numpy as np
+
+PROJECTIONS = ("planar", "cylindrical", "spherical")
+CENTRAL = ("cylindrical", "spherical")
+FULL_TURN_TOLERANCE = 1e-9   # relative: columns spanning 2 pi R0 this closely make a full turn
+
+
+def to_points(projection, radius, u, v, value):
+    """Grid-frame points (..., 3) of nodes at (u, v) holding ``value`` (NaN stays NaN)."""
+    u, v, value = np.broadcast_arrays(*(np.asarray(a, dtype=float) for a in (u, v, value)))
+    if projection == "planar":
+        return np.stack([u, v, value], axis=-1)
+    direction = ray_directions(projection, radius, u, v)
+    points = value[..., None] * direction
+    if projection == "cylindrical":
+        points[..., 1] = v
+    return points
+
+
+def to_nodes(projection, radius, points):
+    """(u, v, value) (..., 3) of grid-frame points: the inverse of ``to_points``."""
+    points = np.asarray(points, dtype=float)
+    x, y, z = points[..., 0], points[..., 1], points[..., 2]
+    if projection == "planar":
+        return points.copy()
+    across = np.hypot(x, z)
+    u = radius * np.arctan2(x, z)
+    if projection == "cylindrical":
+        return np.stack([u, y, across], axis=-1)
+    return np.stack([u, radius * np.arctan2(y, across), np.hypot(across, y)], axis=-1)
+
+
+def ray_directions(projection, radius, u, v):
+    """Unit directions (..., 3) of the node lines at (u, v): +z for planar grids."""
+    u, v = np.broadcast_arrays(np.asarray(u, dtype=float), np.asarray(v, dtype=float))
+    if projection == "planar":
+        return np.broadcast_to(np.array([0.0, 0.0, 1.0]), u.shape + (3,)).copy()
+    azimuth = u / radius
+    if projection == "cylindrical":
+        return np.stack([np.sin(azimuth), np.zeros_like(azimuth), np.cos(azimuth)], axis=-1)
+    elevation = v / radius
+    ring = np.cos(elevation)
+    return np.stack([ring * np.sin(azimuth), np.sin(elevation), ring * np.cos(azimuth)], axis=-1)
+
+
+def ray_origins(projection, v):
+    """Grid-frame origins (..., 3) of the rays of central projections at row coordinate v:
+    the centre for spherical grids, the point of the axis at height v for cylindrical ones."""
+    v = np.asarray(v, dtype=float)
+    origins = np.zeros(v.shape + (3,))
+    if projection == "cylindrical":
+        origins[..., 1] = v
+    return origins
+
+
+def metric(projection, radius, v, value):
+    """(h_u, h_v): surface length per unit of u and of v along a surface of constant value.
+
+    1 and 1 for planar grids; value/R0 and 1 for cylindrical ones; value cos(elevation)/R0
+    and value/R0 for spherical ones. A surface whose value changes by (du, dv) at a node
+    leans from the node's line by t with tan^2 t = (dvalue/du / h_u)^2 + (dvalue/dv / h_v)^2,
+    and the node stands for the surface area h_u h_v d1 d2 / cos t.
+    """
+    value = np.asarray(value, dtype=float)
+    if projection == "planar":
+        return np.ones(value.shape), np.ones(value.shape)
+    scale = value / radius
+    if projection == "cylindrical":
+        return scale, np.ones(value.shape)
+    return scale * np.cos(np.asarray(v, dtype=float) / radius), scale
+
+
+def full_turn(projection, radius, cols, d2):
+    """True when the columns of a central grid make a full turn (cols * d2 = 2 pi R0)."""
+    if projection == "planar":
+        return False
+    turn = 2 * np.pi * radius
+    return abs(cols * d2 - turn) <= FULL_TURN_TOLERANCE * turn
+
+
+def pole_rows(projection, radius, ys):
+    """Per row, True where a spherical grid's row lies on a pole (elevation +-90 degrees):
+    every node of such a row stands for the same ray, along the axis."""
+    ys = np.asarray(ys, dtype=float)
+    if projection != "spherical":
+        return np.zeros(ys.shape, dtype=bool)
+    return np.abs(ys) >= 0.5 * np.pi * radius * (1 - FULL_TURN_TOLERANCE)

@@ -1,0 +1,173 @@
+"""Outermost hits of the node rays of a central grid (cylindrical or spherical) on a triangle mesh.
+
+The generalisation of the planar slicer's front-most height (``mzc.slicing.rasterize``):
+every node's ray (``mzc.projections``) is intersected exactly with the triangles, and the
+node takes the largest distance along its ray at which it meets the surface, NaN where
+it meets none. Each triangle's candidate nodes come from a box in (u, v) that bounds its
+image: the azimuths of its corners (an edge not crossing the axis sweeps its azimuth
+monotonically), its heights (cylindrical) or a bound of its elevations (spherical: a
+chord can rise above both its ends towards a pole), all columns for a triangle that the
+axis passes through, and a second copy one turn over for a triangle across the seam of
+the grid's azimuth window. Each candidate gets an exact ray-triangle test.
+"""
+
+import numpy as np
+
+from mzc.slicing import BARYCENTRIC_TOLERANCE, candidate_chunks, index_range
+
+TURN = 2 * np.pi
+
+
+def cast(points, triangles, projection, radius, xs, ys):
+    """Values (len(ys), len(xs)) of the outermost hits of the rays of nodes (u in xs, v in ys).
+
+    ``points`` are grid-frame coordinates (centre at the origin, axis along y); ``xs`` and
+    ``ys`` are uniform and increasing. Triangles seen edge-on by a ray never count as hits.
+    """
+    points = np.asarray(points, dtype=np.float64)
+    corners = points[np.asarray(triangles, dtype=np.int64).reshape(-1, 3)]
+    xs, ys = np.asarray(xs, dtype=np.float64), np.asarray(ys, dtype=np.float64)
+    best = np.full(len(ys) * len(xs), -np.inf)
+    boxes, owners = candidate_boxes(corners, projection, radius, xs[0])
+    if len(owners):
+        col_range = index_range(boxes[:, 0], xs)
+        row_range = index_range(boxes[:, 1], ys)
+        planes = TrianglePlanes(corners[owners])
+        rays = RayTable(projection, radius, xs, ys)
+        for chunk in candidate_chunks(col_range, row_range):
+            cast_chunk(planes, chunk, col_range[:, chunk], row_range[:, chunk], rays, len(xs), best)
+    best[best == -np.inf] = np.nan
+    return best.reshape(len(ys), len(xs))
+
+
+def candidate_boxes(corners, projection, radius, u_start):
+    """((k, 2, 2) boxes [[u_low, u_high], [v_low, v_high]], (k,) triangle of each box).
+
+    Azimuths are taken in the window [u_start, u_start + 2 pi R0) of the grid; a triangle
+    whose corners straddle the window's seam is unwrapped past its end and gets a second
+    box one turn lower, so each side of the seam sees it. A triangle around the axis gets
+    every azimuth.
+    """
+    x, y, z = corners[..., 0], corners[..., 1], corners[..., 2]
+    turn = TURN * radius
+    u = u_start + np.mod(radius * np.arctan2(x, z) - u_start, turn)
+    around = around_axis(x, z)
+    straddles = ~around & (np.ptp(u, axis=1) > 0.5 * turn)
+    u = np.where(straddles[:, None] & (u < u_start + 0.5 * turn), u + turn, u)
+    u_box = np.stack([u.min(axis=1), u.max(axis=1)], axis=1)
+    u_box[around] = [-np.inf, np.inf]
+    v_box = v_bounds(corners, projection, radius, around)
+    boxes = np.stack([u_box, v_box], axis=1)
+    again = np.flatnonzero(straddles)
+    shifted = boxes[again].copy()
+    shifted[:, 0] -= turn
+    owners = np.concatenate([np.arange(len(corners)), again])
+    return np.concatenate([boxes, shifted]), owners
+
+
+def around_axis(x, z):
+    """True for triangles whose projection onto the xz plane contains the axis (x = z = 0)."""
+    cross = [x[:, i] * z[:, (i + 1) % 3] - z[:, i] * x[:, (i + 1) % 3] for i in range(3)]
+    return (np.all([c >= 0 for c in cross], axis=0) | np.all([c <= 0 for c in cross], axis=0)) \
+        & (np.abs(sum(cross)) > 0)
+
+
+def v_bounds(corners, projection, radius, around):
+    """(k, 2) low and high v over each triangle: its heights along a cylindrical axis, or a
+    bound of its elevations (from its heights and its distances from the axis) for spherical grids."""
+    y = corners[..., 1]
+    low, high = y.min(axis=1), y.max(axis=1)
+    if projection == "cylindrical":
+        return np.stack([low, high], axis=1)
+    near = np.where(around, 0.0, axis_distance(corners[..., [0, 2]]))
+    far = np.hypot(corners[..., 0], corners[..., 2]).max(axis=1)
+    top = np.where(high >= 0, np.arctan2(high, near), np.arctan2(high, far))
+    bottom = np.where(low <= 0, np.arctan2(low, near), np.arctan2(low, far))
+    return radius * np.stack([bottom, top], axis=1)
+
+
+def axis_distance(corners_xz):
+    """Distance from the origin to each triangle's edges in the xz plane (k, 3, 2)."""
+    start, end = corners_xz, np.roll(corners_xz, -1, axis=1)
+    edge = end - start
+    length2 = np.einsum("kij,kij->ki", edge, edge)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        t = np.where(length2 > 0, np.clip(-np.einsum("kij,kij->ki", start, edge) / length2, 0, 1), 0.0)
+    closest = start + t[..., None] * edge
+    return np.sqrt(np.einsum("kij,kij->ki", closest, closest)).min(axis=1)
+
+
+class TrianglePlanes:
+    """What the exact test needs of each triangle: its normal n, n . a, and the corner
+    products whose dot with a ray's direction are the ray's barycentric weights.
+
+    For a ray from O in direction D, the weights of corners a, b, c are D . ((b-O) x (c-O))
+    and its cyclic shifts; (b-O) x (c-O) = b x c - v (y x (c - b)) when O = v y (the
+    axis point of a cylindrical ray; v = 0 for the centre of a spherical one). The weights
+    sum to D . n, and the ray meets the triangle's plane at t = (n . a - v n_y) / (D . n).
+    """
+
+    def __init__(self, corners):
+        a, b, c = corners[:, 0], corners[:, 1], corners[:, 2]
+        self.normal = np.cross(b - a, c - a)
+        self.offset = np.einsum("ij,ij->i", self.normal, a)
+        self.products = [np.cross(b, c), np.cross(c, a), np.cross(a, b)]
+        axis = np.array([0.0, 1.0, 0.0])
+        self.shifts = [np.cross(axis, c - b), np.cross(axis, a - c), np.cross(axis, b - a)]
+
+
+class RayTable:
+    """Direction factors of every column and row, so a node's ray is two lookups away."""
+
+    def __init__(self, projection, radius, xs, ys):
+        self.projection = projection
+        self.ys = ys
+        azimuth = xs / radius
+        self.sin_u, self.cos_u = np.sin(azimuth), np.cos(azimuth)
+        if projection == "spherical":
+            elevation = ys / radius
+            self.ring, self.rise = np.cos(elevation), np.sin(elevation)
+        else:
+            self.ring, self.rise = np.ones(len(ys)), np.zeros(len(ys))
+
+    def directions(self, rows, cols):
+        """(n, 3) unit directions of the nodes (rows, cols)."""
+        ring = self.ring[rows]
+        return np.stack([ring * self.sin_u[cols], self.rise[rows], ring * self.cos_u[cols]], axis=1)
+
+
+def cast_chunk(planes, chunk, col_range, row_range, rays, cols_count, best):
+    """Test every candidate node of the triangles of ``chunk`` and raise ``best`` to their hits."""
+    width = np.maximum(col_range[1] - col_range[0] + 1, 0)
+    height = np.maximum(row_range[1] - row_range[0] + 1, 0)
+    counts = width * height
+    owner = np.repeat(np.arange(len(counts)), counts)
+    if not len(owner):
+        return
+    local = np.arange(len(owner)) - np.repeat(np.cumsum(counts) - counts, counts)
+    cols = col_range[0, owner] + local % width[owner]
+    rows = row_range[0, owner] + local // width[owner]
+    t, hit = ray_hits(planes, np.arange(chunk.start, chunk.stop)[owner], rays, rows, cols)
+    np.maximum.at(best, rows[hit] * cols_count + cols[hit], t[hit])
+
+
+def ray_hits(planes, triangle, rays, rows, cols):
+    """(distance along the ray, hit) of the rays of nodes (rows, cols) against ``triangle``s."""
+    direction = rays.directions(rows, cols)
+    facing = np.einsum("ij,ij->i", direction, planes.normal[triangle])
+    cylindrical = rays.projection == "cylindrical"
+    v = rays.ys[rows] if cylindrical else 0.0
+    weights = []
+    for product, shift in zip(planes.products, planes.shifts):
+        weight = np.einsum("ij,ij->i", direction, product[triangle])
+        if cylindrical:
+            weight -= v * np.einsum("ij,ij->i", direction, shift[triangle])
+        weights.append(weight)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        scale = 1.0 / facing
+        tolerance = -BARYCENTRIC_TOLERANCE
+        hit = np.isfinite(scale)
+        for weight in weights:
+            hit &= weight * scale >= tolerance
+        t = (planes.offset[triangle] - (v * planes.normal[triangle, 1] if cylindrical else 0.0)) * scale
+    return t, hit & (t > 0)

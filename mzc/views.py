@@ -1,0 +1,204 @@
+"""Where to cut from: the projection, centre and axis of a slice, and the ``auto`` rule.
+
+A z-grid represents the part of a surface that its node lines meet at a fair angle; a
+face sliced with parallel planes keeps only the half that faces +z (48% of the area of
+``f18`` has a normal within 60 degrees of +z), while rays from a centre behind it meet 97%
+of it that well. ``auto`` measures exactly that: the share of the surface area whose
+normal lies within 60 degrees of the node line through it (either way round), for the
+planar grid of the slicing frame and for central projections around candidate centres
+and axes, and keeps the best. Planar wins unless a central projection sees more than
+PLANAR_MARGIN more of the area, so terrain stays on the thesis's planes.
+
+Candidates, in the slicing frame (``--align``; planar grids look along its z): centres
+on the line from the centre of the bounding box backwards along -z, 0 to 2 half-diagonals
+of the box behind it, refined around the best; the axis of a spherical grid is the
+frame's y (its score does not depend on the axis: rays from one centre are the same
+rays), a cylinder's the frame's y, x or z. Azimuth 0 looks at the middle of the
+azimuths the surface covers; if no gap of FULL_TURN_GAP is left between them the grid
+makes a full turn (periodic columns), and a spherical full turn runs from pole to pole.
+"""
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from mzc.errors import MzcError
+
+FACING_COSINE = 0.5          # 60 degrees between the normal and the node line
+PLANAR_MARGIN = 0.05         # a central projection must see 5% more of the area than planar
+FULL_TURN_GAP = np.pi / 4    # azimuth gaps narrower than this do not stop a full turn
+OFFSETS = (0.0, 0.25, 0.5, 1.0, 1.5, 2.0)   # candidate centres, in half-diagonals behind the box centre
+REFINE_STEPS = 8             # golden-section steps around the best offset
+SCORE_TRIANGLES = 4096       # triangles scored (an even stride through the mesh)
+
+
+@dataclass
+class View:
+    """How to slice: ``projection``, the grid frame (input = rotation @ p + shift; for central
+    projections ``shift`` is the centre and rotation's second column the axis), the
+    reference ``radius``, whether the columns make a ``full_turn``, and the facing ``score``."""
+
+    projection: str
+    rotation: np.ndarray
+    shift: np.ndarray
+    radius: float | None = None
+    full_turn: bool = False
+    score: float = float("nan")
+
+
+def choose_view(mesh, frame, projection="auto", center=None, axis=None):
+    """The View of ``mesh`` (a Mesh) for ``projection`` (auto, planar, cylindrical, spherical).
+
+    ``frame`` = (rotation, shift) of the planar slicing frame (``--align``); ``center`` and
+    ``axis`` (input-frame 3-vectors) fix those of a central projection, auto choosing the rest.
+    """
+    rotation, shift = frame
+    if projection == "planar":
+        if center is not None or axis is not None:
+            raise MzcError("--center and --axis need a central projection (cylindrical or spherical)",
+                           field="projection")
+        return View("planar", rotation, shift)
+    if not len(mesh.triangles):   # a point cloud has no normals to score views with
+        if projection == "auto":
+            return View("planar", rotation, shift)
+        low, high = mesh.points.min(axis=0), mesh.points.max(axis=0)
+        return central_view(mesh.points, projection, (low + high) / 2 if center is None else center,
+                            rotation[:, 1] if axis is None else axis, float("nan"), rotation[:, 2])
+    surface = Facets(mesh.points, mesh.triangles)
+    planar_score = surface.share_along(rotation[:, 2])
+    kinds = ("cylindrical", "spherical") if projection == "auto" else (projection,)
+    best = max((central_candidate(surface, kind, rotation, center, axis) for kind in kinds), key=lambda c: c[0])
+    if projection == "auto" and planar_score >= best[0] - PLANAR_MARGIN:
+        return View("planar", rotation, shift, score=planar_score)
+    score, kind, centre, direction = best
+    return central_view(mesh.points, kind, centre, direction, score, rotation[:, 2])
+
+
+class Facets:
+    """The triangles that score a view: centroids, unit normals and areas of an even sample."""
+
+    def __init__(self, points, triangles):
+        points = np.asarray(points, dtype=float)
+        triangles = np.asarray(triangles, dtype=np.int64)
+        corners = points[triangles[::max(1, len(triangles) // SCORE_TRIANGLES)]]
+        normal = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
+        doubled = np.linalg.norm(normal, axis=1)
+        keep = doubled > 0
+        self.area, self.normal = doubled[keep], normal[keep] / doubled[keep, None]
+        self.centroid = corners[keep].mean(axis=1)
+        low, high = points.min(axis=0), points.max(axis=0)
+        self.box_centre, self.half_diagonal = (low + high) / 2, np.linalg.norm(high - low) / 2
+
+    def share(self, rays):
+        """Area share of the facets whose normal is within 60 degrees of their (unit) ray, either way."""
+        facing = np.abs(np.einsum("ij,ij->i", self.normal, rays)) >= FACING_COSINE
+        total = self.area.sum()
+        return float(self.area[facing].sum() / total) if total > 0 else 0.0
+
+    def share_along(self, view):
+        """The share of a planar grid looking along ``view``."""
+        return self.share(np.broadcast_to(view, self.normal.shape))
+
+    def share_from(self, kind, centre, axis):
+        """The share of a central grid of ``kind`` about ``centre`` (and ``axis``, for a cylinder)."""
+        offset = self.centroid - centre
+        if kind == "cylindrical":
+            offset = offset - np.outer(offset @ axis, axis)
+        length = np.linalg.norm(offset, axis=1, keepdims=True)
+        return self.share(np.divide(offset, length, out=np.zeros_like(offset), where=length > 0))
+
+
+def central_candidate(surface, kind, rotation, center, axis):
+    """(score, kind, centre, axis) of the best central view of ``kind`` in the slicing frame ``rotation``."""
+    view = rotation[:, 2]
+    if axis is not None:
+        axes = [unit(axis, "axis")]
+    else:
+        axes = [rotation[:, 1]] if kind == "spherical" else [rotation[:, 1], rotation[:, 0], view]
+    best = None
+    for direction in axes:
+        def score(centre):
+            return surface.share_from(kind, centre, direction)
+
+        if center is not None:
+            centre = np.asarray(center, dtype=float)
+        else:
+            along_axis = kind == "cylindrical" and abs(direction @ view) > 0.999
+            behind = lambda s: surface.box_centre - s * surface.half_diagonal * view  # noqa: E731
+            centre = behind(0.0 if along_axis else best_offset(lambda s: score(behind(s))))
+        candidate = (score(centre), kind, centre, direction)
+        if best is None or candidate[0] > best[0]:
+            best = candidate
+    return best
+
+
+def best_offset(score):
+    """The centre offset (in half-diagonals) with the highest score: the best of OFFSETS,
+    refined by golden-section search between its neighbours."""
+    scores = [score(s) for s in OFFSETS]
+    k = int(np.argmax(scores))
+    low, high = OFFSETS[max(k - 1, 0)], OFFSETS[min(k + 1, len(OFFSETS) - 1)]
+    ratio = (np.sqrt(5) - 1) / 2
+    left, right = high - ratio * (high - low), low + ratio * (high - low)
+    score_left, score_right = score(left), score(right)
+    for _ in range(REFINE_STEPS):
+        if score_left >= score_right:
+            high, right, score_right = right, left, score_left
+            left = high - ratio * (high - low)
+            score_left = score(left)
+        else:
+            low, left, score_left = left, right, score_right
+            right = low + ratio * (high - low)
+            score_right = score(right)
+    candidates = [(scores[k], OFFSETS[k]), (score_left, left), (score_right, right)]
+    return max(candidates, key=lambda c: c[0])[1]
+
+
+def unit(vector, name):
+    """``vector`` scaled to length 1, or an error naming the option."""
+    vector = np.asarray(vector, dtype=float)
+    length = np.linalg.norm(vector)
+    if vector.shape != (3,) or not np.isfinite(length) or length == 0:
+        raise MzcError("must be a non-zero 3-vector", field=name)
+    return vector / length
+
+
+def central_view(points, kind, centre, axis, score, view):
+    """The View of a central projection about ``centre`` and ``axis``, azimuth 0 towards the
+    middle of the azimuths the surface covers (towards ``view`` for a full turn)."""
+    centre = np.asarray(centre, dtype=float)
+    if centre.shape != (3,) or not np.isfinite(centre).all():
+        raise MzcError("must be three finite numbers", field="center")
+    offset = np.asarray(points, dtype=float) - centre
+    axis = unit(axis, "axis")
+    across = offset - np.outer(offset @ axis, axis)
+    reference = perpendicular(view, axis)
+    side = np.cross(axis, reference)
+    middle, full_turn = azimuth_middle(np.arctan2(across @ side, across @ reference))
+    front = np.cos(middle) * reference + np.sin(middle) * side
+    rotation = np.column_stack([np.cross(axis, front), axis, front])
+    radius = float(np.linalg.norm(across if kind == "cylindrical" else offset, axis=1).mean())
+    if not radius > 0:
+        raise MzcError("the surface has no extent around the centre", field="center")
+    return View(kind, rotation, centre, radius, full_turn, score)
+
+
+def perpendicular(view, axis):
+    """The unit component of ``view`` across ``axis`` (another axis of the frame when parallel)."""
+    for candidate in (view, np.array([0.0, 0.0, 1.0]), np.array([1.0, 0.0, 0.0])):
+        across = candidate - (candidate @ axis) * axis
+        if np.linalg.norm(across) > 1e-6:
+            return across / np.linalg.norm(across)
+    raise MzcError("cannot orient the axis", field="axis")
+
+
+def azimuth_middle(azimuth):
+    """(middle of the azimuths covered, whether they make a full turn): the middle is opposite
+    the middle of the largest gap between neighbouring azimuths."""
+    ordered = np.sort(azimuth)
+    gaps = np.diff(np.concatenate([ordered, ordered[:1] + 2 * np.pi]))
+    widest = int(np.argmax(gaps))
+    if gaps[widest] < FULL_TURN_GAP:
+        return 0.0, True
+    gap_middle = ordered[widest] + gaps[widest] / 2
+    return float(np.angle(-np.exp(1j * gap_middle))), False
