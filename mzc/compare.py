@@ -1,8 +1,10 @@
 """Sample two surfaces on one common grid, as ``mzc diff`` compares them.
 
-The common grid lies in A's frame (a z-grid's own frame, or a mesh's coordinates as
-they are) and covers A's extent. A z-grid compared without new spacings is compared at
-its own nodes; otherwise the spacing defaults to a fine one, 1/1000 of A's longest side.
+The common grid lies in A's frame (a z-grid's own frame and projection, or a mesh's
+coordinates as they are, cut with planes) and covers A's extent. A z-grid compared
+without new spacings is compared at its own nodes; otherwise the spacing defaults to a
+fine one, 1/1000 of A's longest side. B is sampled along the common grid's node lines
+(vertical lines, or the rays of a central grid), so the error is measured along them.
 """
 
 import numpy as np
@@ -13,26 +15,30 @@ DEFAULT_DIVISIONS = 1000
 
 
 def common_grid(a, d1=None, d2=None):
-    """The comparison grid (a ZGrid of A's heights) for Surface ``a``."""
+    """The comparison grid (a ZGrid of A's values) for Surface ``a``."""
     from mzc.meshes import Mesh
+    from mzc.projections import to_nodes
     from mzc.slicing import slice_in_frame
 
     if a.grid is not None and d1 is None and d2 is None:
         return a.grid
-    transform = a.grid.transform if a.grid is not None else IDENTITY_TRANSFORM
+    grid = a.grid
+    transform = grid.transform if grid is not None else IDENTITY_TRANSFORM
     rotation, shift = transform[:, :3], transform[:, 3]
-    extent = np.ptp((a.points - shift) @ rotation, axis=0)[:2]
+    projection, radius = (grid.projection, grid.radius) if grid is not None else ("planar", None)
+    extent = np.ptp(to_nodes(projection, radius, (a.points - shift) @ rotation), axis=0)[:2]
     d1 = d1 or d2 or extent.max() / DEFAULT_DIVISIONS
     return slice_in_frame(Mesh(a.points, a.triangles), rotation, shift, d1=d1, d2=d2 or d1,
-                          units=a.grid.units if a.grid is not None else None)
+                          units=grid.units if grid is not None else None, projection=projection, radius=radius,
+                          full_turn=grid is not None and grid.periodic)
 
 
 def sample_like(grid, surface):
-    """Heights of ``surface`` at the nodes of ``grid``, in grid's frame (front-most hit)."""
-    from mzc.slicing import rasterize
+    """Values of ``surface`` along the node lines of ``grid``, in grid's frame (outermost hit)."""
+    from mzc.slicing import values_along
 
     local = grid.to_grid_frame(surface.points)
-    return rasterize(local, surface.triangles, grid.xs(), grid.ys())
+    return values_along(grid.projection, grid.radius, local, surface.triangles, grid.xs(), grid.ys())
 
 
 def error_grid(a, b, d1=None, d2=None):

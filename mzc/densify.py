@@ -27,6 +27,14 @@ with interior holes splits a gap into runs of such columns; for ``thesis`` and
 ``laplace`` every run is its own rectangle with the thesis's straight-line sides at its
 two end columns (a run of one or two columns is just those lines), which is the thesis
 itself when there are no holes. ``biharmonic`` treats run ends as free edges instead.
+
+Central grids are densified in their own coordinates (rows inserted in v, values along
+the rays). A grid whose columns make a full turn is periodic: it is padded with copies of
+its own columns, wrapped round, on both sides, densified, and cut back, so every column,
+the first and last included, sees its true neighbours. The padding is wide enough that
+the result is the periodic one: one column more than the thesis's fixed Jacobi sweeps
+reach, or, for the converged solves, WRAP_DECAY gap heights (d1), over which the influence
+of the padding's far edge decays below 1e-12 (it decays as exp(-pi x / d1) along a gap).
 """
 
 import numpy as np
@@ -37,12 +45,29 @@ from mzc.formats.header import MAX_DIMENSION, MAX_NODES
 METHODS = ("thesis", "laplace", "biharmonic")
 DEFAULT_METHOD = "biharmonic"
 DEFAULT_ITERATIONS = 100   # the thesis's fixed Jacobi count (§6.2.3)
+WRAP_DECAY = 9.0           # periodic padding of the converged solves, in gap heights
 
 
 def densify_grid(grid, n, method=DEFAULT_METHOD, iterations=DEFAULT_ITERATIONS, tol=None):
-    """``grid`` (a ZGrid) with ``n`` rows inserted between each pair of rows; row step d1/(n+1)."""
-    dense = densify(grid.z, n, grid.d1, grid.d2, method=method, iterations=iterations, tol=tol)
-    return grid.with_z(dense, d1=grid.d1 / (n + 1))
+    """``grid`` (a ZGrid) with ``n`` rows inserted between each pair of rows; row step d1/(n+1).
+
+    A periodic grid (a full turn) is densified with its columns wrapped round (module docstring).
+    """
+    cols = grid.shape[1]
+    pad = wrap_width(grid, method, iterations, tol) if grid.periodic else 0
+    z = np.pad(grid.z, ((0, 0), (pad, pad)), mode="wrap") if pad else grid.z
+    dense = densify(z, n, grid.d1, grid.d2, method=method, iterations=iterations, tol=tol)
+    return grid.with_z(dense[:, pad:pad + cols], d1=grid.d1 / (n + 1))
+
+
+def wrap_width(grid, method, iterations, tol):
+    """Columns to pad a periodic grid with on each side so that densifying it is periodic."""
+    cols = grid.shape[1]
+    if method == "thesis" and tol is None:
+        return min(cols, iterations + 1)
+    if method == "thesis":
+        return cols
+    return min(cols, int(np.ceil(WRAP_DECAY * grid.d1 / grid.d2)) + 1)
 
 
 def densify(z, n, d1, d2, method=DEFAULT_METHOD, iterations=DEFAULT_ITERATIONS, tol=None):

@@ -98,7 +98,7 @@ def test_slope_factors_follow_a_plane_up_to_the_limit():
     for s, limit, expected in ((0.5, 4, 1.25 ** 0.25), (0.75, 4, 1.25 ** 0.5), (10.0, 2, 2.0), (0.5, 1.01, 1.01)):
         z = s * 0.5 * cols + 0.0 * rows     # rising along the rows (column spacing d2 = 0.5)
         approximation = w2.forward(z, "haar", 2)[0]
-        for factor in w2.slope_factors(approximation, 2, (1.0, 0.5), [(10, 12), (20, 24)], limit):
+        for factor in w2.slope_factors(approximation, 2, w2.Geometry(1.0, 0.5), [(10, 12), (20, 24)], limit):
             assert np.allclose(factor, expected)
 
 

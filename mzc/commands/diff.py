@@ -10,11 +10,13 @@ STATISTICS = ("rmse", "max", "mean", "r2", "percentiles", "count")
 @click.command(help="""Compare two surfaces (meshes or mzc files, any mix).
 
 Both are sampled on one common grid over A's extent (A's own nodes when A is a z-grid,
-else 1/1000 of A's longest side; --d1/--d2 override) and compared in z over the nodes
-valid in both: RMSE, max and mean absolute error, R^2 = 1 - SSE/SST, the 50/95/99th
-percentiles of |B - A| and the node count. All are printed unless some are chosen.
---surface adds the symmetric point-to-surface distance (RMS, mean, Hausdorff) on
-area-weighted samples, which stays honest on steep walls where z error explodes.
+else 1/1000 of A's longest side; --d1/--d2 override) and compared along its node lines
+(in z, or along the rays of a central grid) over the nodes valid in both: RMSE, max and
+mean absolute error, R^2 = 1 - SSE/SST, the 50/95/99th percentiles of |B - A| and the
+node count. All are printed unless some are chosen. --surface adds the symmetric
+point-to-surface distance (RMS, mean, Hausdorff) on area-weighted samples, which stays
+honest on steep walls where z error explodes; it is on by default when either side is
+a central (cylindrical or spherical) grid, which is compared in space.
 --heightfield adds the same distance over A's height-field part (triangles facing
 within 60 degrees of +z and seen from +z, and the samples of B nearest to them), the
 part a z-grid can represent; the benchmarks report both.""")
@@ -52,7 +54,8 @@ def command(a, b, rmse, max_, mean, r2, percentiles, count, surface, heightfield
     stats = grid_error_stats(reference.z, reference.z + errors.z)
     chosen = [name for name, on in zip(STATISTICS, (rmse, max_, mean, r2, percentiles, count)) if on]
     report = select(stats, chosen or STATISTICS)
-    if surface or heightfield:
+    if surface or heightfield or any(side.grid is not None and side.grid.projection != "planar"
+                                     for side in (first, second)):
         report.update(surface_report(first, second, heightfield, samples, seed))
     if error_grid:
         from mzc.commands import write_grid

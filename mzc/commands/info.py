@@ -27,6 +27,7 @@ def command(input):
         f"format    mzc-{kind} {major}.{minor}",
         f"bytes     {len(data)}",
         f"grid      {rows} rows x {cols} cols, d1 {grid.d1:g} d2 {grid.d2:g}{' ' + grid.units if grid.units else ''}",
+        f"cut by    {cutting_surfaces(grid)}",
         f"valid     {valid} of {grid.z.size} nodes ({100 * valid / grid.z.size:.1f}%)",
     ]
     if valid:
@@ -35,3 +36,14 @@ def command(input):
     lines.append("header")
     lines += [f"  {keyword} {' '.join(values)}" for keyword, (values, _) in header.fields.items()]
     click.echo("\n".join(lines))
+
+
+def cutting_surfaces(grid):
+    """What cut the grid: the thesis's planes, or a central projection about its centre and axis."""
+    if grid.projection == "planar":
+        return "planar (parallel planes; values along the grid's z)"
+    centre, axis = grid.transform[:, 3], grid.transform[:, 1]
+    turn = ", full turn" if grid.periodic else ""
+    poles = f", {int(grid.pole_rows().sum())} pole row(s)" if grid.pole_rows().any() else ""
+    return (f"{grid.projection} (radius {grid.radius:g}, centre {' '.join(f'{v:g}' for v in centre)}, "
+            f"axis {' '.join(f'{v:.4g}' for v in axis)}{turn}{poles})")

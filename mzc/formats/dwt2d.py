@@ -302,10 +302,13 @@ class Prepared:
         self.levels = w2.default_levels(grid.shape) if levels is None else int(levels)
         if not 0 <= self.levels <= w2.MAX_LEVELS:
             raise MzcError(f"levels must be 0..{w2.MAX_LEVELS}", field="levels")
-        self.filled = w2.laplace_fill(grid.z, self.valid)
+        self.geometry = w2.Geometry.of(grid.d1, grid.d2, grid.origin, grid.shape, grid.projection, grid.radius)
+        self.filled = w2.laplace_fill(grid.z, self.valid, self.geometry.periodic)
         self.bands = w2.flatten(w2.forward(self.filled, wavelet, self.levels))
         self.relevant = w2.flatten(w2.relevance(self.valid, wavelet, self.levels))
-        self.area = w2.area_factor(self.filled, (grid.d1, grid.d2))[self.valid]
+        lean, metric = w2.node_areas(self.filled, self.geometry)
+        self.lean = lean[self.valid]
+        self.metric = metric[self.valid] if np.ndim(metric) else metric
 
     def decoded(self, step, deadzone=DEADZONE):
         """(integer bands as coded, the decoder's wavelet-only reconstruction) for one detail step."""
@@ -313,8 +316,7 @@ class Prepared:
             self.relevant[index], w2.quantise_band(self.bands[index], band_step, deadzone), 0)
         written = header_steps(step, self.levels)
         qflat = [quantised(0, written[0])]
-        steps = band_steps((self.grid.d1, self.grid.d2), written, [b.shape for b in self.bands], qflat[0],
-                           self.slope_limit)
+        steps = band_steps(self.geometry, written, [b.shape for b in self.bands], qflat[0], self.slope_limit)
         qflat += [quantised(index, steps[index]) for index in range(1, len(self.bands))]
         z = w2.inverse(w2.dequantise(qflat, steps), self.grid.shape, self.wavelet, self.levels)
         return qflat, z
@@ -353,11 +355,14 @@ class Prepared:
 
     def surface_rms(self, step):
         """RMS surface error of the wavelet-only reconstruction, estimated at the valid nodes:
-        the height error times cos(slope) (the distance along the normal), weighted by the
-        surface area of each node, 1/cos(slope)."""
+        the value error times cos(t) (the distance along the normal, t the lean of the
+        surface from the node's line), weighted by the surface area of each node, a/cos(t)
+        (a = 1 on planar grids, the projection's metric area on central ones)."""
         _, decoded = self.decoded(step)
         error = (decoded - self.grid.z)[self.valid]
-        return float(np.sqrt(np.sum(error ** 2 / self.area) / np.sum(self.area))) if error.size else 0.0
+        if not error.size:
+            return 0.0
+        return float(np.sqrt(np.sum(error ** 2 * self.metric / self.lean) / np.sum(self.metric * self.lean)))
 
     def height_range(self):
         """Spread of the valid heights (at least 1e-6): scales the step searches."""
@@ -385,11 +390,11 @@ def expand_steps(steps, count):
     return list(steps)
 
 
-def band_steps(spacing, steps, shapes, approximation_q, slope_limit):
+def band_steps(geometry, steps, shapes, approximation_q, slope_limit):
     """Every band's step (one number, or one per coefficient for the slope-scaled detail
-    bands) from the ``steps`` line and the band shapes."""
+    bands) from the ``steps`` line, the band shapes and the grid's geometry."""
     levels = (len(shapes) - 1) // 3
-    return w2.step_maps(expand_steps(steps, len(shapes)), approximation_q, levels, spacing, shapes, slope_limit)
+    return w2.step_maps(expand_steps(steps, len(shapes)), approximation_q, levels, geometry, shapes, slope_limit)
 
 
 def write(grid, max_error=None, rmse=None, size=None, wavelet=DEFAULT_WAVELET, levels=None, slope_limit=None):
@@ -459,7 +464,9 @@ def read(data, source="<stdin>"):
     relevant = w2.flatten(w2.relevance(valid, wavelet, levels))
     qflat = decode_bands(decoder, relevant, steps)
     with np.errstate(over="ignore", invalid="ignore"):
-        steps = band_steps((fields["d1"], fields["d2"]), steps, [q.shape for q in qflat], qflat[0], slope_limit)
+        geometry = w2.Geometry.of(fields["d1"], fields["d2"], fields["origin"], (rows, cols),
+                                  fields.get("projection", "planar"), fields.get("radius"))
+        steps = band_steps(geometry, steps, [q.shape for q in qflat], qflat[0], slope_limit)
         z = w2.inverse(w2.dequantise(qflat, steps), (rows, cols), wavelet, levels)
         if correction > 0:
             k = decode_rows(decoder, valid, np.zeros(valid.shape), CORRECTION_THRESHOLDS, correction_model)
