@@ -193,21 +193,46 @@ def test_corrupt_or_truncated_payloads_raise_only_mzc_errors(data):
     assert np.isfinite(decoded.z[decoded.valid]).all()
 
 
-def spec_example():
-    """(file bytes, expected heights) from the fenced blocks of spec/dwt2d.md."""
+def spec_examples():
+    """(file bytes, expected values) of every worked example in spec/dwt2d.md (2.0, then 3.0)."""
     text = SPEC.read_text()
-    block = re.search(r"```mzc-example-hex\n(.*?)```", text, re.S).group(1)
-    header, hex_payload = block.split("data\n")
-    expected = re.search(r"```expected\n(.*?)```", text, re.S).group(1)
-    values = np.array([[float(v) for v in line.split()] for line in expected.strip().splitlines()])
-    return (header + "data\n").encode() + bytes.fromhex(hex_payload), values
+    blocks = re.findall(r"```mzc-example-hex\n(.*?)```", text, re.S)
+    expected = re.findall(r"```expected\n(.*?)```", text, re.S)
+    assert len(blocks) == len(expected) == 2
+    examples = []
+    for block, values in zip(blocks, expected):
+        header, hex_payload = block.split("data\n")
+        grid = np.array([[float(v) for v in line.split()] for line in values.strip().splitlines()])
+        examples.append(((header + "data\n").encode() + bytes.fromhex(hex_payload), grid))
+    return examples
 
 
-def test_spec_example_decodes_to_the_expected_heights():
-    data, expected = spec_example()
+def spec_example():
+    """The 2.0 worked example: (file bytes, expected heights)."""
+    return spec_examples()[0]
+
+
+@pytest.mark.parametrize("data, expected", spec_examples(), ids=["2.0", "3.0"])
+def test_spec_examples_decode_to_the_expected_values(data, expected):
     decoded = dwt2d.read(data, "spec")
     assert np.array_equal(np.isnan(decoded.z), np.isnan(expected))
     assert np.allclose(decoded.z, expected, atol=1e-7, equal_nan=True)
+
+
+def test_spec_example_of_3_0_is_the_2_0_grid_on_a_sphere_and_still_within_its_bound():
+    (planar, heights), (central, distances) = spec_examples()
+    grid = dwt2d.read(central, "spec")
+    assert (grid.projection, grid.radius, grid.origin) == ("spherical", 10.0, (-1.25, -0.75))
+    input_values = np.array([[10, 10.5, 11, 11.2, 11.1, 10.8], [10.2, 10.9, 11.6, 11.9, 11.7, 11],
+                             [10.1, 10.8, np.nan, 12.1, 11.8, 11.1], [9.8, 10.3, 10.9, 11.3, 11.2, 10.7]])
+    assert np.nanmax(np.abs(distances - input_values)) <= 0.05
+    assert not np.allclose(distances, heights, equal_nan=True)   # the metric changed the steps
+
+
+def test_a_central_grid_in_a_2_0_file_is_refused():
+    data, _ = spec_examples()[1]
+    with pytest.raises(MzcError, match="next major version"):
+        dwt2d.read(data.replace(b"mzc-dwt2d 3.0", b"mzc-dwt2d 2.0"), "old.mzw2")
 
 
 def test_draft_version_files_are_refused_with_one_line():

@@ -32,6 +32,23 @@ def test_spec_examples_decode_to_their_expected_values(example, expected):
     np.testing.assert_array_equal(grid.z, expected)
 
 
+def spec_points(path):
+    """(example bytes, rows of 'row col x y z') of the examples followed by an expected-points block."""
+    blocks = re.findall(r"```mzc-example\n([^`]*)```\s*```expected\n[^`]*```\s*```expected-points\n([^`]*)```",
+                        path.read_text())
+    assert len(blocks) == 3
+    return [(e.encode(), np.array([[float(v) for v in line.split()] for line in p.strip().splitlines()]))
+            for e, p in blocks]
+
+
+@pytest.mark.parametrize("example, points", spec_points(SPEC))
+def test_spec_projection_examples_place_their_nodes(example, points):
+    grid = read_any(example, "spec")
+    placed = grid.to_input_frame(grid.node_points())
+    for row, col, *xyz in points:
+        np.testing.assert_allclose(placed[int(row), int(col)], xyz, atol=1e-9)
+
+
 def test_spec_transform_example_maps_grid_x_to_input_y():
     example, _ = spec_examples(SPEC)[1]
     grid = zgrid.read(example, "spec")
