@@ -1,0 +1,194 @@
+"""Central cutting surfaces: node geometry, exact ray casting, and the ``auto`` rule on real and generated surfaces."""
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from conftest import FACE_NAMES, face_path
+from mzc import projections, samples
+from mzc.errors import MzcError
+from mzc.meshes import Mesh, read_mesh
+from mzc.metrics import surface_distance, triangle_areas
+from mzc.rays import cast
+from mzc.slicing import slice_surface
+from mzc.triangulation import grid_to_mesh
+from shapes import STAR_CENTRE, star, tube
+
+CENTRAL = ["cylindrical", "spherical"]
+
+
+# --------------------------------------------------------------------------- geometry
+
+
+@settings(max_examples=100, deadline=None)
+@given(st.sampled_from(CENTRAL), st.floats(0.5, 500), st.floats(-3.1, 3.1), st.floats(-1.5, 1.5),
+       st.floats(0.01, 1000))
+def test_nodes_and_points_are_inverse(projection, radius, azimuth, elevation, value):
+    u, v = radius * azimuth, (radius * elevation if projection == "spherical" else 40 * elevation)
+    point = projections.to_points(projection, radius, u, v, value)
+    np.testing.assert_allclose(projections.to_nodes(projection, radius, point), [u, v, value],
+                               rtol=1e-9, atol=1e-9 * max(radius, value))
+
+
+@pytest.mark.parametrize("projection", CENTRAL)
+def test_a_node_lies_on_its_ray_at_its_value(projection):
+    u, v = np.meshgrid(np.linspace(-150, 150, 7), np.linspace(-70, 70, 5))
+    value = 80 + u ** 2 / 100
+    origins = projections.ray_origins(projection, v)
+    directions = projections.ray_directions(projection, 100.0, u, v)
+    np.testing.assert_allclose(np.linalg.norm(directions, axis=-1), 1)
+    np.testing.assert_allclose(origins + value[..., None] * directions,
+                               projections.to_points(projection, 100.0, u, v, value), atol=1e-12)
+
+
+@pytest.mark.parametrize("projection", CENTRAL)
+def test_the_metric_is_the_length_of_a_step_on_a_surface_of_constant_value(projection):
+    radius, value, u, v, step = 100.0, 130.0, 20.0, 35.0, 1e-6
+    at = projections.to_points(projection, radius, u, v, value)
+    along_u = np.linalg.norm(projections.to_points(projection, radius, u + step, v, value) - at) / step
+    along_v = np.linalg.norm(projections.to_points(projection, radius, u, v + step, value) - at) / step
+    np.testing.assert_allclose(projections.metric(projection, radius, v, value), (along_u, along_v), rtol=1e-6)
+
+
+# --------------------------------------------------------------------------- casting
+
+
+def brute_force_rays(points, triangles, projection, radius, xs, ys):
+    """Reference: every node's ray against every triangle (Moller-Trumbore), the farthest hit kept."""
+    a, b, c = (points[triangles[:, i]] for i in range(3))
+    out = np.full((len(ys), len(xs)), np.nan)
+    for r, v in enumerate(ys):
+        for k, u in enumerate(xs):
+            origin = projections.ray_origins(projection, np.array(v))
+            direction = projections.ray_directions(projection, radius, u, v)
+            e1, e2 = b - a, c - a
+            p = np.cross(direction, e2)
+            det = np.einsum("ij,ij->i", e1, p)
+            with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+                s = origin - a
+                bu = np.einsum("ij,ij->i", s, p) / det
+                q = np.cross(s, e1)
+                bv = q @ direction / det
+                t = np.einsum("ij,ij->i", e2, q) / det
+                hit = (np.abs(det) > 1e-12) & (bu >= -1e-9) & (bv >= -1e-9) & (bu + bv <= 1 + 1e-9) & (t > 0)
+            if hit.any():
+                out[r, k] = t[hit].max()
+    return out
+
+
+@settings(max_examples=25, deadline=None)
+@given(st.integers(0, 2**32 - 1), st.sampled_from(CENTRAL))
+def test_cast_matches_brute_force_on_random_triangles(seed, projection):
+    """Random triangles all round the centre (across the seam, around the axis, near the poles)."""
+    rng = np.random.default_rng(seed)
+    centres = rng.normal(size=(30, 3)) * [40, 25, 40]
+    points = (centres[:, None, :] + rng.normal(size=(30, 3, 3)) * 12).reshape(-1, 3)
+    triangles = np.arange(90).reshape(30, 3)
+    radius = 40.0
+    xs = -np.pi * radius + 2 * np.pi * radius / 24 * np.arange(24)
+    top = np.pi / 2 * radius if projection == "spherical" else 60.0
+    ys = np.linspace(-top, top, 13)
+    got = cast(points, triangles, projection, radius, xs, ys)
+    expected = brute_force_rays(points, triangles, projection, radius, xs, ys)
+    np.testing.assert_array_equal(np.isnan(got), np.isnan(expected))
+    np.testing.assert_allclose(got, expected, rtol=1e-9, equal_nan=True)
+
+
+def test_a_triangle_around_the_pole_covers_the_pole_row_and_the_rows_below_it():
+    radius = 10.0
+    points = np.array([[-5.0, 20, -3], [5.0, 20, -3], [0.0, 20, 6]])
+    ys = np.linspace(0, np.pi / 2 * radius, 21)
+    xs = -np.pi * radius + 2 * np.pi * radius / 16 * np.arange(16)
+    got = cast(points, np.array([[0, 1, 2]]), "spherical", radius, xs, ys)
+    expected = brute_force_rays(points, np.array([[0, 1, 2]]), "spherical", radius, xs, ys)
+    assert np.isfinite(got[-1]).all() and np.isfinite(got[-2]).sum() >= 8   # the pole row, most of the next
+    np.testing.assert_allclose(got, expected, rtol=1e-9, equal_nan=True)
+
+
+# --------------------------------------------------------------------------- slicing and auto
+
+
+def test_a_sphere_is_sliced_at_its_radius_from_its_centre():
+    mesh = star(4)
+    mesh = Mesh(STAR_CENTRE + 40 * (mesh.points - STAR_CENTRE) / np.linalg.norm(mesh.points - STAR_CENTRE,
+                                                                                axis=1, keepdims=True),
+                mesh.triangles)
+    grid = slice_surface(mesh, d1=2, d2=2, projection="spherical", center=STAR_CENTRE)
+    a, b, c = (mesh.points[mesh.triangles[:, i]] - STAR_CENTRE for i in range(3))
+    normal = np.cross(b - a, c - a)
+    nearest_plane = np.min(np.abs(np.einsum("ij,ij->i", normal, a)) / np.linalg.norm(normal, axis=1))
+    assert grid.valid.all() and np.nanmax(grid.z) <= 40 + 1e-9 and np.nanmin(grid.z) >= nearest_plane - 1e-9
+
+
+def test_auto_chooses_a_spherical_grid_for_a_closed_star_and_a_cylinder_for_a_tube():
+    blob, pipe = slice_surface(star(), d1=2, d2=2), slice_surface(tube(), d1=2, d2=2)
+    assert blob.projection == "spherical" and blob.periodic and blob.pole_rows()[[0, -1]].all()
+    assert pipe.projection == "cylindrical" and pipe.periodic and not pipe.pole_rows().any()
+    np.testing.assert_allclose(np.abs(pipe.transform[:, 1]), [0, 1, 0], atol=1e-9)   # the tube's axis
+
+
+@pytest.mark.parametrize("name", ["jacksboro", "topobathy", "bump"])
+def test_auto_keeps_the_terrains_on_the_thesis_planes_node_for_node(name):
+    mesh = Mesh(*grid_to_mesh(getattr(samples, name)()))
+    auto, planar = slice_surface(mesh, d1=None, rows=60), slice_surface(mesh, rows=60, projection="planar")
+    assert auto.projection == "planar"
+    np.testing.assert_array_equal(auto.z, planar.z)
+    np.testing.assert_array_equal(auto.transform, planar.transform)
+
+
+@pytest.mark.parametrize("name", [*FACE_NAMES, "example.obj"] if FACE_NAMES else ["f18.ply"])
+def test_auto_chooses_a_central_projection_for_every_face(name):
+    mesh = read_mesh(face_path(name))
+    grid = slice_surface(mesh, d1=2, d2=2)
+    assert grid.projection == "spherical" and not grid.periodic
+    centre = grid.transform[:, 3]
+    assert centre[2] < mesh.points[:, 2].min()   # behind the face, which looks towards +z
+    np.testing.assert_allclose(grid.transform[:, 1], [0, 1, 0], atol=1e-12)   # the axis is the face's up
+
+
+def test_f18_default_slice_at_half_a_millimetre_is_within_0_03_mm_over_the_whole_surface(f18):
+    mesh = read_mesh(f18)
+    points, triangles = grid_to_mesh(slice_surface(mesh, d1=0.5, d2=0.5))
+    distance = surface_distance((mesh.points, mesh.triangles), (points, triangles[triangle_areas(points, triangles) > 0]),
+                                samples=30_000)
+    assert distance["rms"] <= 0.03
+    planar = grid_to_mesh(slice_surface(mesh, d1=0.5, d2=0.5, projection="planar"))
+    assert surface_distance((mesh.points, mesh.triangles), planar, samples=30_000)["rms"] > 20 * distance["rms"]
+
+
+def test_given_centre_and_axis_are_kept_and_a_cylinder_axis_is_a_line_through_the_centre():
+    mesh = tube()
+    grid = slice_surface(mesh, d1=2, d2=2, projection="cylindrical", center=(0, 50, 0), axis=(0, 2, 0))
+    np.testing.assert_allclose(grid.transform[:, 3], [0, 50, 0])
+    np.testing.assert_allclose(grid.transform[:, 1], [0, 1, 0])
+    azimuth, height = np.meshgrid(grid.xs() / grid.radius, grid.ys() + 50)
+    inside = (np.abs(height) < 99) & grid.valid
+    # chords of a 240-gon of 30 mm radius lie up to 30 (1 - cos(pi / 240)) = 0.0026 mm inside it
+    assert np.abs(grid.z - tube_distance(grid, azimuth, height))[inside].max() < 0.05
+
+
+def tube_distance(grid, azimuth, height):
+    """The tube's own radius at the grid's azimuths (the grid's azimuth 0 may be turned about y)."""
+    from shapes import tube_radius
+
+    front = grid.transform[:, 2]
+    turn = np.arctan2(front[0], front[2])
+    return tube_radius(azimuth + turn, height)
+
+
+@pytest.mark.parametrize("options, message", [
+    (dict(projection="planar", center=(0, 0, 0)), "central projection"),
+    (dict(projection="spherical", axis=(0, 0, 0)), "non-zero"),
+    (dict(projection="spherical", center=(0, np.inf, 0)), "finite"),
+])
+def test_bad_projection_options_are_refused(options, message):
+    with pytest.raises(MzcError, match=message):
+        slice_surface(tube(), d1=5, **options)
+
+
+def test_a_point_cloud_can_be_cut_by_a_named_central_projection():
+    mesh = tube(around=120, along=60)
+    grid = slice_surface(Mesh(mesh.points), d1=4, d2=4, projection="cylindrical", center=(0, 0, 0))
+    assert grid.projection == "cylindrical" and grid.valid.mean() > 0.9
+    assert slice_surface(Mesh(mesh.points), d1=4).projection == "planar"   # auto needs triangles to score
