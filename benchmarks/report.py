@@ -22,6 +22,10 @@ README_PIPELINE = [["slice", "{face}"], ["encode", "--dwt", "-q", "10"], ["decod
                    ["triangulate", "-o", "{out}"]]
 PACKAGES = ("numpy", "scipy", "PyWavelets", "DracoPy", "imagecodecs", "lerc", "zfpy", "pysz", "constriction")
 DWT2D_SECONDS = 0.5     # issue 6: encode + decode of a face sliced at 0.5 mm, compute time
+PARTS = {"whole": "whole-surface", "heightfield": "height-field"}
+STATISTICS = {"rms": "RMS", "hausdorff": "Hausdorff"}
+NODE_VALUES = {"planar": "node values are heights", "cylindrical": "node values are distances from an axis",
+               "spherical": "node values are distances along rays from a centre behind the face"}
 
 
 # --------------------------------------------------------------------------- CLI timings
@@ -72,12 +76,25 @@ def timed(stages, repeats):
 # --------------------------------------------------------------------------- rate-distortion
 
 
-def pareto(points, error_key):
+def error_of(point, measure):
+    """The error of a point (or of a ``measure`` dict of parts) by ``measure``, "part statistic"
+    such as "whole rms", "whole hausdorff" or "heightfield rms"."""
+    part, statistic = measure.split()
+    return point[part][statistic]
+
+
+def measure_label(measure):
+    """"whole rms" -> "whole-surface RMS"."""
+    part, statistic = measure.split()
+    return f"{PARTS[part]} {STATISTICS[statistic]}"
+
+
+def pareto(points, measure):
     """(errors, bytes) of the points no other point beats in both, by increasing bytes."""
-    ordered = sorted(points, key=lambda p: (p["bytes"], p[error_key]["rms"]))
+    ordered = sorted(points, key=lambda p: (p["bytes"], error_of(p, measure)))
     front, best = [], np.inf
     for p in ordered:
-        error = p[error_key]["rms"]
+        error = error_of(p, measure)
         if np.isfinite(error) and error < best:
             front.append((error, p["bytes"]))
             best = error
@@ -101,8 +118,8 @@ def bytes_at(front, error, below_cheapest=False):
     return float(np.exp(np.interp(np.log(error), errors, sizes)))
 
 
-def item_ratios(result, targets, error_key="heightfield"):
-    """{peer: [ratio or None per target]}: peer bytes / best mzc bytes at equal error.
+def item_ratios(result, targets, measure):
+    """{peer: [ratio or None per target]}: peer bytes / best mzc bytes at equal error by ``measure``.
 
     Peers are interpolated strictly; mzc contenders whose cheapest setting is already more
     accurate than the target count at that setting's bytes, which can only overstate mzc.
@@ -110,7 +127,7 @@ def item_ratios(result, targets, error_key="heightfield"):
     curves = defaultdict(list)
     for p in result["points"]:
         curves[(p["family"], p["contender"])].append(p)
-    fronts = {key: pareto(points, error_key) for key, points in curves.items()}
+    fronts = {key: pareto(points, measure) for key, points in curves.items()}
     errors = [t * result["unit"] for t in targets]
     best = []
     for error in errors:
@@ -124,10 +141,16 @@ def item_ratios(result, targets, error_key="heightfield"):
 
 
 def summary_ratios(results, targets):
-    """{corpus: {peer: [(geometric mean ratio, items counted) per target]}}."""
+    """{measure: {corpus: {peer: [(geometric mean ratio, items counted) per target]}}} for the
+    ``targets`` {measure: target errors in units} of the run."""
+    return {measure: measure_ratios(results, errors, measure) for measure, errors in targets.items()}
+
+
+def measure_ratios(results, targets, measure):
+    """{corpus: {peer: [(geometric mean ratio, items counted) per target]}} by one measure."""
     collected = defaultdict(lambda: defaultdict(lambda: [[] for _ in targets]))
     for result in results:
-        for peer, ratios in item_ratios(result, targets).items():
+        for peer, ratios in item_ratios(result, targets, measure).items():
             for k, ratio in enumerate(ratios):
                 if ratio is not None:
                     collected[result["corpus"]][peer][k].append(ratio)
@@ -151,13 +174,13 @@ def speed_table(results):
 # --------------------------------------------------------------------------- plots
 
 
-def curves_of(results, corpus, error_key):
+def curves_of(results, corpus, measure):
     """{contender: [(error, bytes)] per setting}: geometric means over the corpus's items."""
     grouped = defaultdict(lambda: defaultdict(list))
     for result in results:
         if result["corpus"] == corpus:
             for p in result["points"]:
-                grouped[p["contender"]][str(p["setting"])].append((p[error_key]["rms"], p["bytes"]))
+                grouped[p["contender"]][str(p["setting"])].append((error_of(p, measure), p["bytes"]))
     curves = {}
     for name, settings in grouped.items():
         points = [np.exp(np.mean(np.log(np.array(v)), axis=0)) for v in settings.values()
@@ -166,28 +189,40 @@ def curves_of(results, corpus, error_key):
     return curves
 
 
-def plot_corpus(path, results, corpus, units):
-    """Bytes against RMS error (log-log), whole surface and height-field part, one curve per contender."""
+def plot_corpus(path, results, corpus, units, measures):
+    """Bytes against error (log-log), one panel per measure (the primary, whole-surface RMS,
+    first), one curve per contender."""
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    colours = plt.get_cmap("tab20")
-    figure, axes = plt.subplots(1, 2, figsize=(15, 6.5))
-    for axis, key, title in zip(axes, ("whole", "heightfield"), ("whole surface", "height-field part")):
-        for k, (name, points) in enumerate(sorted(curves_of(results, corpus, key).items())):
-            if points:
-                errors, sizes = zip(*points)
+    figure, axes = plt.subplots(1, len(measures), figsize=(7.5 * len(measures), 6.5), squeeze=False)
+    for axis, measure in zip(axes[0], measures):
+        curves = curves_of(results, corpus, measure)
+        for name, colour in curve_colours(curves, plt).items():
+            if curves[name]:
+                errors, sizes = zip(*curves[name])
                 style = "-" if name.startswith("mzc") else "--"
-                axis.plot(errors, sizes, style, marker="o", markersize=3, label=name, color=colours(k))
-        axis.set(xscale="log", yscale="log", xlabel=f"RMS point-to-surface distance ({units})",
-                 ylabel="bytes", title=f"{corpus}: {title}")
+                axis.plot(errors, sizes, style, marker="o", markersize=3, label=name, color=colour)
+        axis.set(xscale="log", yscale="log", xlabel=f"{measure_label(measure)} point-to-surface distance ({units})",
+                 ylabel="bytes", title=f"{corpus}: {measure_label(measure)}")
         axis.grid(True, which="both", alpha=0.3)
-    axes[1].legend(fontsize=7, ncol=2)
-    figure.tight_layout()
+    figure.legend(*axes[0][0].get_legend_handles_labels(), loc="center right", fontsize=8)
+    figure.tight_layout(rect=(0, 0, 0.86, 1))
     figure.savefig(path, dpi=110)
     plt.close(figure)
+
+
+def curve_colours(curves, plt):
+    """{contender: colour}, sorted by name: mzc's from tab20b, the peers' from tab20, so
+    neither family runs out of the 20 distinct colours of one map."""
+    names = sorted(curves)
+    colours = {}
+    for family, cmap in (("mzc", "tab20b"), ("peer", "tab20")):
+        members = [n for n in names if n.startswith("mzc") == (family == "mzc")]
+        colours.update({name: plt.get_cmap(cmap)(k % 20) for k, name in enumerate(members)})
+    return {name: colours[name] for name in names}
 
 
 # --------------------------------------------------------------------------- markdown
@@ -229,7 +264,7 @@ def markdown(results, missing, checks, pipeline, settings, ratios, speeds):
         "",
         "Package versions: " + ", ".join(f"{k} {v}" for k, v in versions().items()) + ".",
         "",
-        *method_section(settings),
+        *method_section(settings, results),
         *ratio_section(ratios, settings, results),
         *speed_section(speeds, settings),
         *pipeline_section(pipeline),
@@ -244,56 +279,92 @@ def markdown(results, missing, checks, pipeline, settings, ratios, speeds):
     return "\n".join(lines) + "\n"
 
 
-def method_section(settings):
+def method_section(settings, results):
+    from contenders import GRID_HEADER, QUANTISER
+
     return [
         "## Method",
         "",
         f"- Corpus: the faces of `shared/data/faces` (mm) and matplotlib's two DEMs (`mzc.samples.jacksboro`, "
         "`topobathy`; m), each as a grid and as its mesh (`grid_to_mesh`).",
-        f"- Grid contenders code mzc's z-grid of the face sliced at {settings['grid_step']} mm "
-        "(`slice_surface(mesh, d1=0.5, d2=0.5)`, about 420 x 340 nodes) or, for the DEMs, the DEM grid itself. "
-        f"The thesis codecs also run on the thesis grid (d1 = {settings['thesis_grid']['d1']}, "
+        f"- Grid contenders code mzc's z-grid of the face sliced at {settings['grid_step']} mm in the default "
+        f"projection (`slice_surface(mesh, d1={settings['grid_step']}, d2={settings['grid_step']})`: "
+        f"{face_grids(results)}) or, for the DEMs, the DEM grid itself (planar). "
+        f"The thesis codecs also run on the planar thesis grid (d1 = {settings['thesis_grid']['d1']}, "
         f"d2 = {settings['thesis_grid']['d2']} mm), decoded then densified with n = 3. Draco and xz code the "
         "original mesh.",
-        "- Rate: bytes of the file as stored. Grid peers (SZ3, zfp, JPEG-*) store a 136-byte binary grid header "
-        "(shape, spacings, origin, 3x4 transform), the validity mask coded by mzc's own dwt2d mask coder (row "
-        "spans through rANS; about 290 bytes on a face) and their payload; invalid nodes are filled with "
-        "mzc's harmonic fill first. LERC codes the mask itself inside its blob. The JPEG family codes the heights "
-        "quantised to 16 bits over their range (step about 0.002 mm on a face), plus 16 bytes for offset and step. "
-        "Bits per vertex divide by the original mesh's vertex count.",
+        f"- Rate: bytes of the file as stored. Grid peers (SZ3, zfp, SPERR, LERC, JPEG-*, HTJ2K) store a "
+        f"{GRID_HEADER.size}-byte binary grid header (shape, spacings, origin, 3x4 transform, one byte for the "
+        "projection and a float64 radius, 0 for planar: what `grid_to_mesh` needs to rebuild the same grid), "
+        "the validity mask coded by mzc's own dwt2d mask coder (row spans through rANS; "
+        f"{mask_sizes(results)}) and their payload; invalid nodes are filled with mzc's harmonic fill first. "
+        "LERC codes the mask itself inside its blob. SZ3, zfp and SPERR code the float64 values (SPERR "
+        "without its own 10-byte shape header, which the container holds). The JPEG family and HTJ2K code "
+        "the values quantised to 16 bits over their range (step about 0.0013 mm on a face), plus "
+        f"{QUANTISER.size} bytes for offset and step. Bits per vertex divide by the original mesh's vertex count.",
+        "- Settings: SZ3, LERC, SPERR and mzc dwt2d at the same absolute error bounds; SPERR also at PSNR "
+        "targets (its mode for an RMS target; it has none for RMS itself); JPEG 2000 (OpenJPEG) at PSNR "
+        "targets; HTJ2K (OpenJPH, irreversible 9/7; OpenJPEG only decodes the HT block coder) at base "
+        "quantisation steps in units, OpenJPH having no rate control.",
         f"- Error, identical for every contender: decode, turn into a mesh (grids through `grid_to_mesh`, "
         "zero-area triangles dropped), and measure the symmetric point-to-surface distance to the original mesh "
         f"with `mzc.metrics.surface_distance_parts` ({settings['samples']:,} area-weighted samples per surface "
         f"and direction, seed {settings['seed']}): the code of `mzc diff A B --surface --heightfield`. "
-        "The height-field part keeps original triangles whose normal has z above 0.5 and that are seen from +z "
-        "(no other triangle above their centroid), and decoded samples whose nearest original triangle is one "
-        "of those (`mzc.metrics.heightfield_filters`).",
-        "- Summary ratio: on each item, each contender's Pareto front of (height-field RMS, bytes) is "
-        "interpolated log-log at the target error; mzc's best is the smallest over all mzc contenders there. "
+        "The primary figure is the distance over the whole surface, every triangle of both meshes; its "
+        "Hausdorff is the largest sampled distance, an estimate from below that grows with the sample count "
+        "(see the sample-count check of a full run). "
+        "The secondary one, the height-field part, keeps original triangles whose normal has z above 0.5 and "
+        "that are seen from +z (no other triangle above their centroid), and decoded samples whose nearest "
+        "original triangle is one of those (`mzc.metrics.heightfield_filters`).",
+        "- Summary ratios: on each item, each contender's Pareto front of (error, bytes) by the table's measure "
+        "is interpolated log-log at the target error; mzc's best is the smallest over all mzc contenders there. "
         "An mzc contender whose cheapest setting is already below the target counts at that setting's bytes "
         "(which can only overstate mzc); peers are never extrapolated. "
         "Ratio = peer bytes / mzc's best bytes (above 1: mzc is smaller), geometric mean over the items where "
-        "the peer reaches the target (the count is given). Faces use "
-        f"{', '.join(map(str, settings['targets']))} mm; the DEMs use the same multiples of their unit "
-        "(the power of ten nearest 1/100 of their height range).",
+        "the peer reaches the target (the count is given). Targets for the faces: "
+        + "; ".join(f"{measure_label(m)} {', '.join(map(str, t))} mm" for m, t in settings["targets"].items())
+        + "; the DEMs use the same multiples of their unit (the power of ten nearest 1/100 of their height range).",
         f"- Speed: encode (input grid or mesh to bytes) and decode (bytes to mesh, including densify and "
-        f"`grid_to_mesh`) in process, median of {settings['repeats']} runs at the middle setting of each ladder, "
-        "then the median over faces. Slicing (about 0.1 s per face) is common to all grid contenders and left out.",
+        f"`grid_to_mesh`) in process, median of {settings['repeats']} runs at the middle setting of each ladder "
+        "(the first being that setting's rate-distortion point), then the median over faces. Slicing (about 0.4 s per face) is common to all grid contenders and left out.",
         "",
     ]
 
 
+def face_grids(results):
+    """The faces' grids in words, from the run itself: projection(s), what the values are, median shape."""
+    faces = [r for r in results if r["corpus"] == "faces"]
+    if not faces:
+        return "no face in this run"
+    projections = sorted({r["grid_projection"] for r in faces})
+    rows, cols = np.median([r["grid_shape"] for r in faces], axis=0)
+    return "; ".join(f"{name}, {NODE_VALUES[name]}" for name in projections) + \
+        f"; median {rows:.0f} x {cols:.0f} nodes"
+
+
+def mask_sizes(results):
+    """The coded validity masks' sizes in words, from the run itself: medians over faces and DEMs."""
+    sizes = {"a face": [r["mask_bytes"] for r in results if r["corpus"] == "faces"],
+             "a DEM": [r["mask_bytes"] for r in results if r["corpus"] != "faces"]}
+    return ", ".join(f"median {np.median(v):.0f} bytes on {label}" for label, v in sizes.items() if v)
+
+
 def ratio_section(ratios, settings, results):
-    lines = ["## Summary ratio: peer bytes / mzc's best bytes at equal height-field RMS error", "",
-             "Geometric mean over items; in brackets the number of items where the peer reaches the error.", ""]
-    for corpus, peers in ratios.items():
-        unit, units = next((r["unit"], r["units"]) for r in results if r["corpus"] == corpus)
-        header = [f"{t * unit:g} {units}" for t in settings["targets"]]
-        lines += [f"**{corpus}**", "", "| peer | " + " | ".join(header) + " |",
-                  "|---|" + "---|" * len(header)]
-        for peer, values in sorted(peers.items()):
-            lines.append(f"| {peer} | " + " | ".join(f"{fmt(r)} ({n})" for r, n in values) + " |")
-        lines.append("")
+    """One table per measure and corpus: the whole-surface ones first (primary), then the height-field one."""
+    lines = []
+    for measure, by_corpus in ratios.items():
+        role = "primary" if measure.startswith("whole") else "secondary"
+        lines += [f"## Summary ratio ({role}): peer bytes / mzc's best bytes at equal {measure_label(measure)}",
+                  "", "Geometric mean over items; in brackets the number of items where the peer reaches the error.",
+                  ""]
+        for corpus, peers in by_corpus.items():
+            unit, units = next((r["unit"], r["units"]) for r in results if r["corpus"] == corpus)
+            header = [f"{t * unit:g} {units}" for t in settings["targets"][measure]]
+            lines += [f"**{corpus}**", "", "| peer | " + " | ".join(header) + " |",
+                      "|---|" + "---|" * len(header)]
+            for peer, values in sorted(peers.items()):
+                lines.append(f"| {peer} | " + " | ".join(f"{fmt(r)} ({n})" for r, n in values) + " |")
+            lines.append("")
     return lines
 
 
@@ -338,28 +409,29 @@ def clock_section(results, settings):
 
 
 def check_section(checks):
+    """Each summary measure of the sample-count check at n and 5n samples."""
     if not checks:
         return []
-    lines = ["## Sample-count check (height-field RMS at the chosen count and 5 times as many)", "",
-             "| item | contender | setting | RMS at n | RMS at 5n | change |", "|---|---|---|---|---|---|"]
+    lines = ["## Sample-count check (each summary measure at the chosen count n and 5 times as many)", "",
+             "| item | contender | setting | measure | at n | at 5n | change |", "|---|---|---|---|---|---|---|"]
     for c in checks:
-        a, b = c["heightfield_rms"]
-        lines.append(f"| {c['item']} | {c['contender']} | {c['setting']} | {a:.4f} | {b:.4f} | "
-                     f"{100 * (a - b) / b:+.1f}% |")
+        for measure, (a, b) in c["errors"].items():
+            lines.append(f"| {c['item']} | {c['contender']} | {c['setting']} | {measure_label(measure)} | "
+                         f"{a:.4f} | {b:.4f} | {100 * (a - b) / b:+.1f}% |")
     return lines + [""]
 
 
 def floor_section(results):
     lines = ["## Floors: error of the uncompressed z-grid (what no grid codec can beat)", "",
-             "| item | grid | height-field RMS | height-field Hausdorff | whole RMS | whole Hausdorff |",
+             "| item | grid | whole RMS | whole Hausdorff | height-field RMS | height-field Hausdorff |",
              "|---|---|---|---|---|---|"]
     for result in results:
         for p in result["points"]:
             if p["contender"] == "mzc zgrid (lossless)":
                 hf, whole = p["heightfield"], p["whole"]
-                lines.append(f"| {result['item']} | {result['grid_shape'][0]} x {result['grid_shape'][1]} | "
-                             f"{hf['rms']:.4f} | {hf['hausdorff']:.3f} | {whole['rms']:.4f} | "
-                             f"{whole['hausdorff']:.3f} |")
+                lines.append(f"| {result['item']} | {result['grid_projection']} "
+                             f"{result['grid_shape'][0]} x {result['grid_shape'][1]} | {whole['rms']:.4f} | "
+                             f"{whole['hausdorff']:.3f} | {hf['rms']:.4f} | {hf['hausdorff']:.3f} |")
     return lines + [""]
 
 
@@ -389,4 +461,4 @@ def write_outputs(out, results, missing, checks, pipeline, settings):
     (out / "rd-results.md").write_text(markdown(results, missing, checks, pipeline, settings, ratios, speeds))
     for corpus in dict.fromkeys(r["corpus"] for r in results):
         units = next(r["units"] for r in results if r["corpus"] == corpus)
-        plot_corpus(out / f"rd-{corpus}.png", results, corpus, units)
+        plot_corpus(out / f"rd-{corpus}.png", results, corpus, units, list(settings["targets"]))

@@ -207,6 +207,8 @@ def slice_in_frame(mesh, rotation, shift, d1=None, d2=None, rows=None, cols=None
     nodes = to_nodes(projection, radius, local)
     triangles = mesh.triangles if len(mesh.triangles) else triangulate_point_cloud(nodes[:, :2])
     low, high = nodes[:, :2].min(axis=0), nodes[:, :2].max(axis=0)
+    if projection != "planar":   # central grids start on a round (u, v): shorter headers, the same cover
+        low = round_down(low, high - low)
     pole_to_pole = full_turn and projection == "spherical"
     if full_turn:
         low[0], high[0] = -np.pi * radius, np.pi * radius
@@ -217,6 +219,14 @@ def slice_in_frame(mesh, rotation, shift, d1=None, d2=None, rows=None, cols=None
     z = values_along(projection, radius, local, triangles, xs, ys)
     return ZGrid(z, d1, d2, origin=tuple(low), transform=np.column_stack([rotation, shift]), units=units,
                  projection=projection, radius=radius)
+
+
+def round_down(low, extent, digits=4):
+    """``low`` rounded down to ``digits`` significant digits of the grid's ``extent`` (each the
+    float nearest its decimal, so that it is written short)."""
+    decimals = max(0, digits - 1 - int(np.floor(np.log10(max(float(np.max(extent)), 1e-300)))))
+    quantum = 10.0 ** -decimals
+    return np.array([float(f"{np.floor(value / quantum) * quantum:.{decimals}f}") for value in low])
 
 
 def values_along(projection, radius, local, triangles, xs, ys):

@@ -78,6 +78,8 @@ def choose_view(mesh, frame, projection="auto", center=None, axis=None):
     if projection == "auto" and planar_score >= best[0] - PLANAR_MARGIN:
         return View("planar", rotation, shift, score=planar_score)
     score, kind, centre, direction = best
+    if center is None:   # any centre near the best will do: one with short numbers keeps headers short
+        centre = rounded(centre, surface.half_diagonal)
     return central_view(mesh.points, kind, centre, direction, score, rotation[:, 2])
 
 
@@ -220,12 +222,21 @@ def central_view(points, kind, centre, axis, score, view):
     reference = perpendicular(view, axis)
     side = np.cross(axis, reference)
     middle, full_turn = azimuth_middle(np.arctan2(across @ side, across @ reference))
-    front = np.cos(middle) * reference + np.sin(middle) * side
+    middle = np.radians(np.round(np.degrees(middle)))   # whole degrees: no turn at all when near the view
+    front = reference if middle == 0 else np.cos(middle) * reference + np.sin(middle) * side
     rotation = np.column_stack([np.cross(axis, front), axis, front])
-    radius = float(np.linalg.norm(across if kind == "cylindrical" else offset, axis=1).mean())
+    distance = np.linalg.norm(across if kind == "cylindrical" else offset, axis=1).mean()
+    radius = float(rounded(distance, distance)) if distance > 0 else 0.0
     if not radius > 0:
         raise MzcError("the surface has no extent around the centre", field="center")
     return View(kind, rotation, centre, radius, full_turn, score)
+
+
+def rounded(values, scale, digits=4):
+    """``values`` rounded to ``digits`` significant digits of ``scale`` (a length of the surface),
+    each the float nearest its decimal, so that it is written short."""
+    decimals = max(0, digits - 1 - int(np.floor(np.log10(scale))))
+    return np.array([round(float(v), decimals) for v in np.ravel(values)]).reshape(np.shape(values))
 
 
 def perpendicular(view, axis):

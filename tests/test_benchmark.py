@@ -1,4 +1,5 @@
-"""The rate-distortion benchmark (benchmarks/rd.py): its metric on known cases, and a --quick run."""
+"""The rate-distortion benchmark (benchmarks/rd.py): its metric on known cases, the grid peers'
+container and codecs on a small central grid, the summary ratios, and a --quick run."""
 
 import json
 import subprocess
@@ -13,6 +14,11 @@ from mzc.metrics import heightfield_filters, surface_distance, surface_distance_
 from mzc.triangulation import grid_to_mesh
 
 BENCHMARK = REPO / "benchmarks" / "rd.py"
+sys.path.insert(0, str(BENCHMARK.parent))
+
+import contenders  # noqa: E402
+import rd  # noqa: E402
+import report  # noqa: E402
 
 
 def flat_mesh(shift=0.0):
@@ -80,6 +86,137 @@ def test_diff_heightfield_reports_both_parts(tmp_path):
     assert report["surface_heightfield_rms"] == pytest.approx(0.1, rel=1e-6)
 
 
+# --------------------------------------------------------------------------- grid peers
+
+
+def central_grid():
+    """A small spherical grid of a bumpy patch about 100 mm from its centre, with a hole and a
+    turned, shifted frame: everything the peers' container must carry."""
+    rows, cols = np.mgrid[0:48, 0:64]
+    z = 100.0 + 3.0 * np.sin(cols / 7.0) * np.cos(rows / 5.0) + 0.02 * rows
+    z[20:26, 30:37] = np.nan
+    turn = np.array([[np.cos(0.3), 0.0, np.sin(0.3)], [0.0, 1.0, 0.0], [-np.sin(0.3), 0.0, np.cos(0.3)]])
+    return ZGrid(z, 0.5, 0.5, origin=(-16.0, -12.0), transform=np.hstack([turn, [[1.0], [-17.0], [-97.0]]]),
+                 projection="spherical", radius=104.5)
+
+
+def node_errors(grid, mesh):
+    """Distances between the nodes of ``grid``'s mesh and those of a decoded ``mesh`` (same
+    connectivity): for a central grid, the error of each node's value along its ray."""
+    points, triangles = grid_to_mesh(grid)
+    np.testing.assert_array_equal(mesh[1], triangles)
+    return np.linalg.norm(mesh[0] - points, axis=1)
+
+
+def peer(name):
+    """The grid peer ``name`` of the benchmark table, skipping when its codec is not installed."""
+    table, missing = contenders.all_contenders()
+    found = [c for c in table if c.name == name]
+    if not found:
+        pytest.skip(f"{name} not available: {missing}")
+    return found[0]
+
+
+@pytest.mark.parametrize("projection", ["spherical", "planar"])
+def test_the_grid_container_rebuilds_the_grid_it_was_given(projection):
+    grid = central_grid()
+    if projection == "planar":
+        grid = grid.with_z(grid.z, projection="planar", radius=None)
+    data = contenders.grid_file(grid, b"payload", extra=b"xy")
+    mask = contenders.mask_bytes(grid.valid)
+    assert len(data) == contenders.GRID_HEADER.size + 2 + 4 + len(mask) + len(b"payload")
+    decoded, extra, valid, payload = contenders.read_grid_file(data, extra_size=2)
+    assert (extra, payload) == (b"xy", b"payload")
+    np.testing.assert_array_equal(valid, grid.valid)
+    assert (decoded.shape, decoded.d1, decoded.d2, decoded.origin) == (grid.shape, grid.d1, grid.d2, grid.origin)
+    assert (decoded.projection, decoded.radius) == (grid.projection, grid.radius)
+    np.testing.assert_array_equal(decoded.transform, grid.transform)
+    assert node_errors(grid, contenders.masked_mesh(decoded, grid.z, valid)).max() == 0.0
+
+
+def test_the_container_header_holds_projection_and_radius_in_nine_bytes():
+    assert contenders.GRID_HEADER.size == 2 * 4 + 16 * 8 + 1 + 8
+
+
+@pytest.mark.parametrize("bound", [0.01, 0.05, 0.5])
+def test_sperr_keeps_its_point_wise_bound_on_a_central_grid(bound):
+    sperr, grid = peer("SPERR"), central_grid()
+    data = sperr.encode(grid, bound, 1.0)
+    assert node_errors(grid, sperr.decode(data)).max() <= bound * (1 + 1e-9)
+
+
+def test_sperr_psnr_gets_smaller_errors_for_more_bytes_at_higher_targets():
+    sperr, grid = peer("SPERR psnr"), central_grid()
+    runs = [(len(data), node_errors(grid, sperr.decode(data))) for data in
+            (sperr.encode(grid, psnr, 1.0) for psnr in (40, 60, 80))]
+    sizes = [size for size, _ in runs]
+    rms = [np.sqrt(np.mean(errors**2)) for _, errors in runs]
+    assert sizes == sorted(sizes) and rms == sorted(rms, reverse=True)
+    assert rms[-1] < 1e-3
+
+
+@pytest.mark.parametrize("step", [0.05, 0.5])
+def test_htj2k_errors_stay_below_half_its_step_on_a_central_grid(step):
+    htj2k, grid = peer("HTJ2K"), central_grid()
+    errors = node_errors(grid, htj2k.decode(htj2k.encode(grid, step, 1.0)))
+    assert 0 < np.sqrt(np.mean(errors**2)) < step / 2
+
+
+def test_htj2k_refuses_steps_its_encoder_would_not_honour():
+    htj2k, grid = peer("HTJ2K"), central_grid()
+    with pytest.raises(contenders.NotApplicable):
+        htj2k.encode(grid, 1e-6, 1.0)   # imagecodecs would turn this into lossless coding
+
+
+# --------------------------------------------------------------------------- summary ratios
+
+
+def power_law_result():
+    """An item where a peer costs exactly twice mzc's bytes at equal whole-surface RMS and
+    Hausdorff, and half at equal height-field RMS (bytes = k / error on every curve)."""
+    def point(family, name, bytes_, whole, hausdorff, heightfield):
+        return {"family": family, "contender": name, "setting": bytes_, "bytes": bytes_,
+                "whole": {"rms": whole, "hausdorff": hausdorff}, "heightfield": {"rms": heightfield}}
+
+    errors = (0.05, 0.1, 0.2, 0.4)
+    points = [point("mzc", "mzc a", 1000 / e, e, 10 * e, e) for e in errors]
+    points += [point("mzc", "mzc b", 5000 / e, e, 10 * e, e) for e in errors]   # never mzc's best
+    points += [point("peer", "p", 2000 / e, e, 10 * e, e / 4) for e in errors]
+    points.append(point("peer", "p", 1e6, 0.3, 3.0, 0.3))   # dominated: off the Pareto front
+    return {"corpus": "c", "unit": 1.0, "points": points}
+
+
+def test_item_ratios_interpolate_the_chosen_measure():
+    result = power_law_result()
+    assert report.item_ratios(result, (0.1, 0.2), "whole rms")["p"] == pytest.approx([2.0, 2.0])
+    assert report.item_ratios(result, (1.0, 2.0), "whole hausdorff")["p"] == pytest.approx([2.0, 2.0])
+    hf = report.item_ratios(result, (0.05, 0.2), "heightfield rms")["p"]
+    assert hf[0] == pytest.approx(0.5) and hf[1] is None   # the peer's height-field errors stop at 0.1
+
+
+def test_summary_ratios_keep_the_measures_in_the_given_order():
+    targets = {"whole rms": (0.1,), "whole hausdorff": (1.0,), "heightfield rms": (0.1,)}
+    ratios = report.summary_ratios([power_law_result()] * 2, targets)
+    assert list(ratios) == list(targets)
+    assert ratios["whole rms"]["c"]["p"][0] == (pytest.approx(2.0), 2)
+    assert ratios["heightfield rms"]["c"]["p"][0] == (pytest.approx(0.5), 2)
+
+
+def test_parts_of_one_item_join_in_order_with_summed_clocks():
+    fields = {"corpus": "c", "item": "i"}
+    parts = [{"fields": fields, "points": [{"contender": name}], "timing": {name: {}}, "failures": [],
+              "skipped": [], "clock": {"load": 1.0, "metric": 2.0}} for name in ("a", "b")]
+    results = {}
+    for part in parts:
+        rd.add_part(results, part)
+    assert [p["contender"] for p in results["i"]["points"]] == ["a", "b"]
+    assert set(results["i"]["timing"]) == {"a", "b"}
+    assert results["i"]["clock"] == {"load": 2.0, "metric": 4.0}
+
+
+# --------------------------------------------------------------------------- the quick run
+
+
 @pytest.fixture(scope="module")
 def quick_run(tmp_path_factory):
     """benchmarks/rd.py --quick on one face, run once for the tests below."""
@@ -97,8 +234,36 @@ def test_quick_run_writes_report_plot_and_json(quick_run):
     assert (quick_run / "rd-faces.png").stat().st_size > 10_000
     document = json.loads((quick_run / "rd-results.json").read_text())
     points = [p for item in document["items"] for p in item["points"]]
-    assert {"mzc dwt2d", "Draco", "SZ3", "zfp", "LERC", "xz OBJ"} <= {p["contender"] for p in points}
-    assert all(p["bytes"] > 0 and np.isfinite(p["heightfield"]["rms"]) for p in points)
+    names = {c.name for c in contenders.all_contenders()[0]}
+    assert {"mzc dwt2d", "Draco", "SZ3", "zfp", "LERC", "xz OBJ", "JPEG 2000"} <= names
+    assert {p["contender"] for p in points} == names   # every contender of the table ran
+    assert all(p["bytes"] > 0 and np.isfinite(p["whole"]["rms"]) and np.isfinite(p["heightfield"]["rms"])
+               for p in points)
+
+
+def test_quick_run_puts_the_whole_surface_first(quick_run):
+    document = json.loads((quick_run / "rd-results.json").read_text())
+    assert list(document["summary_ratios"]) == ["whole rms", "whole hausdorff", "heightfield rms"]
+    text = (quick_run / "rd-results.md").read_text()
+    assert text.index("at equal whole-surface RMS") < text.index("at equal whole-surface Hausdorff") \
+        < text.index("at equal height-field RMS")
+    assert "| SZ3 |" in text and "| Draco |" in text
+
+
+def test_grid_peers_decode_the_central_face_grid_to_its_floor(quick_run):
+    """The peers' finest settings come within 10% of the lossless z-grid over the whole face:
+    their files rebuild the same central grid."""
+    document = json.loads((quick_run / "rd-results.json").read_text())
+    face = document["items"][0]
+    assert face["grid_projection"] == "spherical"
+    best = {}
+    for p in face["points"]:
+        best[p["contender"]] = min(best.get(p["contender"], np.inf), p["whole"]["rms"])
+    floor = best["mzc zgrid (lossless)"]
+    grid_peers = [c.name for c in contenders.all_contenders()[0] if c.family == "peer" and c.source == "grid"]
+    assert {"SZ3", "LERC", "zfp", "JPEG 2000"} <= set(grid_peers)
+    for name in grid_peers:
+        assert best[name] < 1.1 * floor, name
 
 
 def test_draco_at_14_bits_beats_draco_at_8_bits(quick_run):

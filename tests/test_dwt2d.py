@@ -152,7 +152,7 @@ def small_grids(draw):
 
 @settings(max_examples=150, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(small_grids(), st.sampled_from([0.001, 0.05, 0.5]), st.sampled_from([None, 0, 1, 2, 3]),
-       st.sampled_from(["bior4.4", "bior2.2", "haar"]))
+       st.sampled_from(["bior4.4", "bior2.2"]))
 def test_random_grids_round_trip_within_the_bound(grid, bound, levels, wavelet):
     data = dwt2d.write(grid, max_error=bound, levels=levels, wavelet=wavelet)
     assert errors(grid, data).max(initial=0) <= bound
@@ -231,7 +231,7 @@ def test_spec_example_of_3_0_is_the_2_0_grid_on_a_sphere_and_still_within_its_bo
 
 def test_a_central_grid_in_a_2_0_file_is_refused():
     data, _ = spec_examples()[1]
-    with pytest.raises(MzcError, match="next major version"):
+    with pytest.raises(MzcError, match="newer major version"):
         dwt2d.read(data.replace(b"mzc-dwt2d 3.0", b"mzc-dwt2d 2.0"), "old.mzw2")
 
 

@@ -8,7 +8,7 @@ from mzc.formats import rows
 from mzc.transforms import dct_forward, dct_inverse, kept
 
 KIND = "dct"
-VERSION = (1, 0)
+VERSION, PROJECTED_VERSION, OLDEST_MAJOR = rows.VERSION, rows.PROJECTED_VERSION, rows.OLDEST_MAJOR
 
 
 def encode(spans, firsts, d2, options):
@@ -30,7 +30,7 @@ def decode(vectors, length, firsts, d2, options):
     return dct_inverse(vectors, length)
 
 
-CODEC = rows.RowCodec(KIND, VERSION, rows.common_options, rows.common_header_lines, encode, unpack, decode)
+CODEC = rows.RowCodec(KIND, rows.common_options, rows.common_header_lines, encode, unpack, decode)
 
 
 def read(data, source="<stdin>"):

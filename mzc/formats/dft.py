@@ -11,7 +11,7 @@ from mzc.formats import rows
 from mzc.transforms import dft_forward, dft_inverse, dft_length, kept
 
 KIND = "dft"
-VERSION = (1, 0)
+VERSION, PROJECTED_VERSION, OLDEST_MAJOR = rows.VERSION, rows.PROJECTED_VERSION, rows.OLDEST_MAJOR
 
 
 def encode(spans, firsts, d2, options):
@@ -53,7 +53,7 @@ def decode(vectors, length, firsts, d2, options):
     return dft_inverse(vectors[:, 0], vectors[:, 1], vectors[:, 2:2 + big_l], vectors[:, 2 + big_l:], length)
 
 
-CODEC = rows.RowCodec(KIND, VERSION, rows.common_options, rows.common_header_lines, encode, unpack, decode)
+CODEC = rows.RowCodec(KIND, rows.common_options, rows.common_header_lines, encode, unpack, decode)
 
 
 def read(data, source="<stdin>"):

@@ -13,7 +13,7 @@ from mzc.formats import rows
 from mzc.transforms import DEFAULT_LEVEL, DEFAULT_WAVELET, dwt_forward, dwt_inverse, dwt_lengths, kept
 
 KIND = "dwt"
-VERSION = (1, 0)
+VERSION, PROJECTED_VERSION, OLDEST_MAJOR = rows.VERSION, rows.PROJECTED_VERSION, rows.OLDEST_MAJOR
 MAX_LEVEL = 32
 
 
@@ -84,7 +84,7 @@ def decode(vectors, length, firsts, d2, options):
     return dwt_inverse(vectors, dwt_lengths(length, options["wavelet"], options["level"]), options["wavelet"])
 
 
-CODEC = rows.RowCodec(KIND, VERSION, read_options, header_lines, encode, unpack, decode)
+CODEC = rows.RowCodec(KIND, read_options, header_lines, encode, unpack, decode)
 
 
 def read(data, source="<stdin>"):

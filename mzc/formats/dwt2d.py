@@ -17,8 +17,10 @@ from mzc.formats.header import (file_version, format_number, grid_header_lines, 
 from mzc.grid import ZGrid
 
 KIND = "dwt2d"
-VERSION = (2, 0)   # planar grids; 3.0 holds a central projection (mzc.formats.header)
-CODER = "rans-signs-2"     # rans-signs-1 coded whole rows at once; rans-classes-3 sent raw signs
+VERSION = (3, 0)             # every grid; 2.0 (planar, periodised transform) is still read
+PROJECTED_VERSION = (3, 0)
+OLDEST_MAJOR = 2             # 1.x were drafts
+CODER = "rans-signs-2"     # 2.0 names it on a required line; in 3.0 the version implies it
 # detail contexts, shared by every detail band: activity of parent, siblings, two rows above
 THRESHOLDS = (0.5, 1.0, 1.5, 3.0, 5.0, 8.0, 14.0, 24.0, 40.0, 70.0)
 CONTEXTS = len(THRESHOLDS) + 1
@@ -124,11 +126,12 @@ def decode_mask(decoder, rows, cols):
 
 def parent_map(flat, index):
     """The parent of every coefficient of detail band ``index`` (same orientation, one level
-    coarser, at (r div 2, c div 2) clipped to its shape); zeros at the coarsest level."""
+    coarser, at (r div 2, c div 2) clipped to its shape); zeros at the coarsest level and
+    under an empty parent band."""
     shape = flat[index].shape
-    if index <= 3:
+    parent = flat[index - 3] if index > 3 else None
+    if parent is None or parent.size == 0:   # the coarsest level, or a parent band with no rows or columns
         return np.zeros(shape, dtype=np.int64)
-    parent = flat[index - 3]
     r = np.minimum(np.arange(shape[0]) // 2, parent.shape[0] - 1)
     c = np.minimum(np.arange(shape[1]) // 2, parent.shape[1] - 1)
     return parent[np.ix_(r, c)]
@@ -138,13 +141,22 @@ def activity(flat, index, steps):
     """Activity of every coefficient of detail band ``index`` from the other bands already coded.
 
     |parent| (in this band's step units) plus |q| of the earlier orientations of the same
-    level at the same place.
+    level at the same place (0 where the place lies outside them: in dwt2d 3.0 the bands of
+    one level may differ by a row or a column).
     """
     active = np.abs(parent_map(flat, index)) * (steps[index - 3] / steps[index] if index > 3 else 0.0)
     orientation = (index - 1) % 3
     for sibling in range(index - orientation, index):
-        active += np.abs(flat[sibling])
+        active += np.abs(cropped(flat[sibling], active.shape))
     return active
+
+
+def cropped(values, shape):
+    """``values`` cut or zero-padded at the bottom and right to ``shape``."""
+    out = np.zeros(shape, dtype=values.dtype)
+    rows, cols = min(shape[0], values.shape[0]), min(shape[1], values.shape[1])
+    out[:rows, :cols] = values[:rows, :cols]
+    return out
 
 
 def sign_prediction(above, parent, side, orientation, odd):
@@ -293,19 +305,22 @@ class Prepared:
     """Everything about one grid that does not depend on the steps: mask, fill, transform."""
 
     def __init__(self, grid, wavelet, levels, slope_limit):
-        if wavelet not in w2.WAVELETS:
-            raise MzcError(f"unknown wavelet {wavelet!r} (known: {', '.join(w2.WAVELETS)})", field="wavelet")
+        self.transform = w2.TRANSFORMS[VERSION[0]]
+        if wavelet not in self.transform.wavelets:
+            raise MzcError(f"unknown wavelet {wavelet!r} (known: {', '.join(self.transform.wavelets)})",
+                           field="wavelet")
         if np.isinf(grid.z).any():
             raise MzcError("the grid holds infinite heights", field="z")
         self.grid, self.wavelet, self.slope_limit = grid, wavelet, slope_limit
         self.valid = grid.valid
-        self.levels = w2.default_levels(grid.shape) if levels is None else int(levels)
+        self.levels = w2.default_levels(grid.shape, self.transform.coarsest) if levels is None else int(levels)
         if not 0 <= self.levels <= w2.MAX_LEVELS:
             raise MzcError(f"levels must be 0..{w2.MAX_LEVELS}", field="levels")
         self.geometry = w2.Geometry.of(grid.d1, grid.d2, grid.origin, grid.shape, grid.projection, grid.radius)
         self.filled = w2.laplace_fill(grid.z, self.valid, self.geometry.periodic)
-        self.bands = w2.flatten(w2.forward(self.filled, wavelet, self.levels))
-        self.relevant = w2.flatten(w2.relevance(self.valid, wavelet, self.levels))
+        periodic = self.geometry.periodic
+        self.bands = w2.flatten(self.transform.forward(self.filled, wavelet, self.levels, periodic))
+        self.relevant = w2.flatten(self.transform.relevance(self.valid, wavelet, self.levels, periodic))
         lean, metric = w2.node_areas(self.filled, self.geometry)
         self.lean = lean[self.valid]
         self.metric = metric[self.valid] if np.ndim(metric) else metric
@@ -318,7 +333,8 @@ class Prepared:
         qflat = [quantised(0, written[0])]
         steps = band_steps(self.geometry, written, [b.shape for b in self.bands], qflat[0], self.slope_limit)
         qflat += [quantised(index, steps[index]) for index in range(1, len(self.bands))]
-        z = w2.inverse(w2.dequantise(qflat, steps), self.grid.shape, self.wavelet, self.levels)
+        z = self.transform.inverse(w2.dequantise(qflat, steps), self.grid.shape, self.wavelet, self.levels,
+                                   self.geometry.periodic)
         return qflat, z
 
     def encode(self, step, max_error=None):
@@ -338,15 +354,14 @@ class Prepared:
     def header(self, step, correction, max_error):
         """The text header up to and including the ``data`` line."""
         # lines at their defaults are left out: a face's file can be 1.5 KB, and they were 50 B of it
-        lines = [magic_line(KIND, file_version(VERSION, self.grid)), *grid_header_lines(self.grid, write_defaults=False)]
+        lines = [magic_line(KIND, file_version(self.grid, VERSION, PROJECTED_VERSION)), *grid_header_lines(self.grid, write_defaults=False)]
         if self.wavelet != DEFAULT_WAVELET:
             lines.append(f"wavelet {self.wavelet}")
-        if self.levels != w2.default_levels(self.grid.shape):
+        if self.levels != w2.default_levels(self.grid.shape, self.transform.coarsest):
             lines.append(f"levels {self.levels}")
         lines.append("steps " + " ".join(map(format_number, header_steps(step, self.levels))))
         if self.slope_limit != SLOPE_LIMIT:
             lines.append(f"slope_limit {format_number(self.slope_limit)}")
-        lines.append(f"coder {CODER}")
         if correction > 0:
             lines.append(f"correction {format_number(correction)}")
         if max_error is not None:
@@ -434,10 +449,11 @@ def write(grid, max_error=None, rmse=None, size=None, wavelet=DEFAULT_WAVELET, l
 # --------------------------------------------------------------------------- decoder
 
 
-def read_codec_fields(header, shape):
+def read_codec_fields(header, shape, transform):
     """(wavelet, levels, steps of every band, slope limit, correction step) from the header, each checked."""
-    wavelet = header.word("wavelet", w2.WAVELETS, required=False, default=DEFAULT_WAVELET)
-    levels = header.integer("levels", 0, w2.MAX_LEVELS, required=False, default=w2.default_levels(shape))
+    wavelet = header.word("wavelet", transform.wavelets, required=False, default=DEFAULT_WAVELET)
+    levels = header.integer("levels", 0, w2.MAX_LEVELS, required=False,
+                            default=w2.default_levels(shape, transform.coarsest))
     steps = header.floats("steps", None)
     if len(steps) not in {1, 1 + 3 * levels} | ({2} if levels else set()):
         allowed = f"1, 2 or {1 + 3 * levels}" if levels else "1"
@@ -450,24 +466,27 @@ def read_codec_fields(header, shape):
     correction = header.floats("correction", 1, required=False, default=[0.0])[0]
     if correction < 0:
         raise header.error("correction", "must be >= 0")
-    header.word("coder", (CODER,))
+    header.word("coder", (CODER,), required=header.major == 2)
     return wavelet, levels, expand_steps(steps, 1 + 3 * levels), slope_limit, correction
 
 
 def read(data, source="<stdin>"):
-    """Decode dwt2d bytes into a ZGrid; any bad input raises MzcError."""
-    header, body, _first = read_header(data, source, KIND, VERSION[0], oldest_major=VERSION[0])
+    """Decode dwt2d bytes (3.0, or 2.0 with its periodised transform) into a ZGrid; any bad input
+    raises MzcError."""
+    header, body, _first = read_header(data, source, KIND, VERSION[0], oldest_major=OLDEST_MAJOR,
+                                       projected_major=PROJECTED_VERSION[0])
     fields, rows, cols = read_grid_fields(header)
-    wavelet, levels, steps, slope_limit, correction = read_codec_fields(header, (rows, cols))
+    transform = w2.TRANSFORMS[header.major]
+    wavelet, levels, steps, slope_limit, correction = read_codec_fields(header, (rows, cols), transform)
+    geometry = w2.Geometry.of(fields["d1"], fields["d2"], fields["origin"], (rows, cols),
+                              fields.get("projection", "planar"), fields.get("radius"))
     decoder = Decoder(body, source, SAME_SIZE)
     valid = decode_mask(decoder, rows, cols)
-    relevant = w2.flatten(w2.relevance(valid, wavelet, levels))
+    relevant = w2.flatten(transform.relevance(valid, wavelet, levels, geometry.periodic))
     qflat = decode_bands(decoder, relevant, steps)
     with np.errstate(over="ignore", invalid="ignore"):
-        geometry = w2.Geometry.of(fields["d1"], fields["d2"], fields["origin"], (rows, cols),
-                                  fields.get("projection", "planar"), fields.get("radius"))
         steps = band_steps(geometry, steps, [q.shape for q in qflat], qflat[0], slope_limit)
-        z = w2.inverse(w2.dequantise(qflat, steps), (rows, cols), wavelet, levels)
+        z = transform.inverse(w2.dequantise(qflat, steps), (rows, cols), wavelet, levels, geometry.periodic)
         if correction > 0:
             k = decode_rows(decoder, valid, np.zeros(valid.shape), CORRECTION_THRESHOLDS, correction_model)
             z[valid] += correction * k[valid]

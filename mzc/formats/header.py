@@ -7,11 +7,13 @@ version stay readable) and refuse a newer major version. The grid fields (rows, 
 d1, d2, origin, projection, radius, transform, units, nodata) are common to the z-grid and
 the compressed formats; see spec/zgrid.md.
 
-The version rule for projections: a grid on central cutting surfaces is written with the
-next major version of its format (``mzc-zgrid 2.0``, ``mzc-dct 2.0``, ``mzc-dwt2d 3.0``), a
-planar grid with the format's own version, byte for byte as before. A reader that predates
-projections would ignore the ``projection`` line and decode a wrong surface; the major
-version makes it refuse the file instead.
+The version rule for projections: a grid on central cutting surfaces needs a major version
+of its format that knows them (``mzc-zgrid 2.0``, ``mzc-dct 2.0``, ``mzc-dwt2d 3.0``); a
+reader that predates projections would ignore the ``projection`` line and decode a wrong
+surface, and the major version makes it refuse the file instead. Each format module names
+the version its writer gives planar grids (``VERSION``: the older one where the bytes did
+not change, so older readers keep reading them), the one it gives projected grids
+(``PROJECTED_VERSION``) and the oldest major it reads (``OLDEST_MAJOR``).
 """
 
 import math
@@ -42,10 +44,9 @@ def split_magic(data, source):
     return kind, major, minor
 
 
-def file_version(version, grid):
-    """The version of a file holding ``grid`` in a format of planar ``version``: the same for
-    planar grids, the next major for central projections (see the module docstring)."""
-    return tuple(version) if grid.projection == "planar" else (version[0] + 1, 0)
+def file_version(grid, planar, projected):
+    """The version a format writes ``grid`` with: its ``planar`` one or its ``projected`` one."""
+    return tuple(planar) if grid.projection == "planar" else tuple(projected)
 
 
 def magic_line(kind, version):
@@ -56,13 +57,14 @@ def magic_line(kind, version):
 class Header:
     """The keyword lines of a header, with the line number of each for error messages.
 
-    ``projected`` is True when the file's major version is the one that may hold a
-    central projection (one above the format's planar major).
+    ``major`` is the file's major version; ``projected`` is True when it may hold a central
+    projection.
     """
 
-    def __init__(self, source, projected=False):
+    def __init__(self, source, major=1, projected=False):
         self.source = source
         self.fields = {}
+        self.major = major
         self.projected = projected
 
     def add(self, keyword, values, line):
@@ -134,24 +136,23 @@ class Header:
         return values[0]
 
 
-def read_header(data, source, kind, planar_major, oldest_major=0):
+def read_header(data, source, kind, supported_major, oldest_major=1, projected_major=None):
     """Parse magic and header lines of ``data``; return (Header, body bytes, first body line number).
 
-    ``planar_major`` is the format's major version for planar grids; one above it is the
-    same format holding a central projection. Majors above that are refused (upgrade mzc),
-    and so are majors below ``oldest_major``, drafts of a format that this mzc no longer reads.
+    Majors above ``supported_major`` are refused (upgrade mzc), and so are majors below
+    ``oldest_major``, drafts of a format that this mzc no longer reads. From
+    ``projected_major`` on, the grid header may hold a central projection.
     """
     found, major, _minor = split_magic(data, source)
     if found != kind:
         raise MzcError(f"expected an mzc-{kind} file, found mzc-{found}", source=source, line=1)
-    supported_major = planar_major + 1
     if major > supported_major:
         raise MzcError(f"mzc-{kind} version {major}.x is newer than this mzc reads "
                        f"({supported_major}.x); upgrade mzc", source=source, line=1)
     if major < oldest_major:
         raise MzcError(f"mzc-{kind} {major}.x was a draft of this format and is not read; encode the grid again",
                        source=source, line=1)
-    header = Header(source, projected=major > planar_major)
+    header = Header(source, major, projected=projected_major is not None and major >= projected_major)
     position = data.index(b"\n") + 1 if b"\n" in data else len(data)
     line_number = 1
     while True:
@@ -217,7 +218,7 @@ def read_projection(header, rows, cols):
             raise header.error("radius", "a radius needs a central projection (cylindrical or spherical)")
         return {}
     if not header.projected:
-        raise header.error("projection", f"a {projection} grid needs the next major version of this "
+        raise header.error("projection", f"a {projection} grid needs a newer major version of this "
                                          "format (older readers would read it as planar)")
     radius = header.positive("radius")
     d1, d2 = header.positive("d1"), header.positive("d2")

@@ -11,7 +11,7 @@ from mzc.formats import rows
 from mzc.transforms import BASES, poly_degree, poly_forward, poly_inverse
 
 KIND = "poly"
-VERSION = (1, 0)
+VERSION, PROJECTED_VERSION, OLDEST_MAJOR = rows.VERSION, rows.PROJECTED_VERSION, rows.OLDEST_MAJOR
 MAX_DEGREE = 10_000
 
 
@@ -49,7 +49,7 @@ def decode(vectors, length, firsts, d2, options):
     return poly_inverse(vectors, length, options["basis"], firsts, d2)
 
 
-CODEC = rows.RowCodec(KIND, VERSION, read_options, header_lines, encode, unpack, decode)
+CODEC = rows.RowCodec(KIND, read_options, header_lines, encode, unpack, decode)
 
 
 def read(data, source="<stdin>"):

@@ -27,6 +27,9 @@ from mzc.transforms import fill_holes
 
 DEFAULT_PRECISION = 4
 MAX_PRECISION = 17
+VERSION = (1, 0)             # every row codec: planar grids, byte for byte as before projections
+PROJECTED_VERSION = (2, 0)   # 1.0 with the projection lines (mzc.formats.header)
+OLDEST_MAJOR = 1
 
 
 @dataclass(frozen=True)
@@ -41,7 +44,6 @@ class RowCodec:
     """
 
     kind: str
-    version: tuple
     read_options: Callable
     header_lines: Callable
     encode: Callable
@@ -131,7 +133,8 @@ def encode_rows(grid, codec, options):
 def write_grid(grid, codec, options):
     """Encode ``grid`` into the bytes of a ``codec`` file."""
     rows, holes = encode_rows(grid, codec, options)
-    lines = [magic_line(codec.kind, file_version(codec.version, grid)), *codec.header_lines(options), *grid_header_lines(grid), "data", *rows, *holes]
+    lines = [magic_line(codec.kind, file_version(grid, VERSION, PROJECTED_VERSION)), *codec.header_lines(options),
+             *grid_header_lines(grid), "data", *rows, *holes]
     return ("\n".join(lines) + "\n").encode("utf-8")
 
 
@@ -260,7 +263,8 @@ def _apply_hole_line(z, tokens, source, line):
 
 def read_grid(data, source, codec):
     """Decode the bytes of a ``codec`` file into a ZGrid."""
-    header, body, first_line = read_header(data, source, codec.kind, codec.version[0])
+    header, body, first_line = read_header(data, source, codec.kind, PROJECTED_VERSION[0],
+                                           projected_major=PROJECTED_VERSION[0])
     fields, rows, cols = read_grid_fields(header)
     options = codec.read_options(header)
     lines = body_lines(body, first_line, source)

@@ -13,7 +13,9 @@ from mzc.formats.header import (file_version, format_number, grid_header_lines, 
 from mzc.grid import ZGrid
 
 KIND = "zgrid"
-VERSION = (1, 0)   # planar grids; 2.0 holds a central projection (mzc.formats.header)
+VERSION = (1, 0)             # planar grids, byte for byte as before projections
+PROJECTED_VERSION = (2, 0)   # 1.0 with the projection lines (mzc.formats.header)
+OLDEST_MAJOR = 1
 
 
 def parse_values(tokens, nodata, source, line):
@@ -50,7 +52,8 @@ def body_lines(body, first_line, source):
 
 def read(data, source="<stdin>"):
     """Parse z-grid bytes into a ZGrid; raise MzcError naming the line and field on bad input."""
-    header, body, first_line = read_header(data, source, KIND, VERSION[0])
+    header, body, first_line = read_header(data, source, KIND, PROJECTED_VERSION[0],
+                                           projected_major=PROJECTED_VERSION[0])
     fields, rows, cols = read_grid_fields(header)
     lines = body_lines(body, first_line, source)
     if len(lines) != rows:
@@ -75,5 +78,6 @@ def format_rows(z, nodata, precision=None):
 
 def write(grid, precision=None):
     """Serialise a ZGrid to z-grid bytes; ``precision`` (decimals) rounds the heights."""
-    lines = [magic_line(KIND, file_version(VERSION, grid)), *grid_header_lines(grid), "data", *format_rows(grid.z, grid.nodata, precision)]
+    lines = [magic_line(KIND, file_version(grid, VERSION, PROJECTED_VERSION)), *grid_header_lines(grid), "data",
+             *format_rows(grid.z, grid.nodata, precision)]
     return ("\n".join(lines) + "\n").encode("utf-8")
