@@ -254,9 +254,11 @@ def grid_size(extent, d1, d2, rows, cols, full_turn=False, pole_to_pole=False):
     """Resolve (d1, d2, rows, cols) from the options and the (u, v) ``extent`` (width, height).
 
     With ``full_turn`` the width is a whole turn and the columns divide it evenly (the
-    last column neighbours the first); with ``pole_to_pole`` the rows divide the height
-    evenly with a row on each end. Either way the spacing is the nearest to the one asked
-    that a whole count allows.
+    last column neighbours the first), their count a multiple of 2^k, k = min(5, floor(log2
+    n) - 3) for about n columns, so that the wavelet of dwt2d wraps round at every level
+    down to about 8 columns (spec/dwt2d.md); with ``pole_to_pole`` the rows divide the
+    height evenly with a row on each end. Either way the spacing is the nearest to the one
+    asked that such a count allows.
     """
     width, height = float(extent[0]), float(extent[1])
     if d1 is not None and rows is not None:
@@ -274,7 +276,7 @@ def grid_size(extent, d1, d2, rows, cols, full_turn=False, pole_to_pole=False):
     n_rows = rows or nodes_across(height, d1)
     n_cols = cols or nodes_across(width, d2)
     if full_turn:
-        n_cols = cols or max(3, even_count(width, d2))
+        n_cols = cols or wrapping_count(even_count(width, d2))
         d2 = width / n_cols
     if pole_to_pole:
         n_rows = rows or max(3, even_count(height, d1) + 1)
@@ -309,6 +311,14 @@ def nodes_across(extent, step):
     if count >= MAX_DIMENSION:
         return MAX_DIMENSION + 1
     return int(np.floor(count + 1e-9)) + 1
+
+
+def wrapping_count(count):
+    """``count`` rounded to a multiple of 2^k, k = min(5, floor(log2 count) - 3): at least 3."""
+    if count < 16:
+        return max(3, count)
+    multiple = 2 ** min(5, int(np.log2(count)) - 3)
+    return int(round(count / multiple)) * multiple
 
 
 def even_count(extent, step):

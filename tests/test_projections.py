@@ -192,3 +192,60 @@ def test_a_point_cloud_can_be_cut_by_a_named_central_projection():
     grid = slice_surface(Mesh(mesh.points), d1=4, d2=4, projection="cylindrical", center=(0, 0, 0))
     assert grid.projection == "cylindrical" and grid.valid.mean() > 0.9
     assert slice_surface(Mesh(mesh.points), d1=4).projection == "planar"   # auto needs triangles to score
+
+
+# --------------------------------------------------------------------------- command line
+
+
+def write_obj(path, mesh):
+    lines = [f"v {x!r} {y!r} {z!r}" for x, y, z in mesh.points.tolist()]
+    path.write_text("\n".join(lines + [f"f {a + 1} {b + 1} {c + 1}" for a, b, c in mesh.triangles]) + "\n")
+    return path
+
+
+def test_cli_slice_takes_the_projection_centre_and_axis(mzc, tmp_path):
+    obj = write_obj(tmp_path / "tube.obj", tube(around=96, along=40))
+    text = mzc("slice", obj, "--projection", "cylindrical", "--center", "0", "0", "0", "--axis", "0", "1", "0",
+               "--d1", "5", "--d2", "4", check=True).stdout
+    grid = read_any_grid(text)
+    assert grid.projection == "cylindrical" and grid.periodic
+    np.testing.assert_allclose(grid.transform[:, 1], [0, 1, 0])
+    planar = read_any_grid(mzc("slice", obj, "--projection", "planar", "--d1", "5", check=True).stdout)
+    assert planar.projection == "planar"
+
+
+def read_any_grid(data):
+    from mzc.formats import read_any
+
+    return read_any(data, "test")
+
+
+@pytest.mark.parametrize("args, message", [
+    (("--projection", "planar", "--center", "0", "0", "0"), "central projection"),
+    (("--projection", "spherical", "--axis", "0", "0", "0"), "axis: must be a non-zero 3-vector"),
+    (("--projection", "conical"), "Invalid value for '--projection'"),
+    (("--center", "0", "nan-ish", "0"), "Invalid value for '--center'"),
+])
+def test_cli_bad_projection_options_are_one_line_errors(mzc, tmp_path, args, message):
+    obj = write_obj(tmp_path / "tube.obj", tube(around=48, along=20))
+    out = tmp_path / "out.zg"
+    result = mzc("slice", obj, *args, "--d1", "5", "-o", out)
+    errors = result.stderr.decode().strip().splitlines()
+    assert message in errors[-1] and b"Traceback" not in result.stderr and not out.exists()
+    # bad values are one line and exit 1; options click cannot parse are usage errors (exit 2)
+    assert (result.returncode, len(errors)) == (1, 1) or (result.returncode == 2 and errors[0].startswith("Usage:"))
+
+
+def test_diff_of_central_grids_measures_in_space(mzc, tmp_path):
+    obj = write_obj(tmp_path / "tube.obj", tube(around=96, along=40))
+    grid = tmp_path / "tube.zg"
+    mzc("slice", obj, "--d1", "5", "--d2", "4", "-o", grid, check=True)
+    packed = tmp_path / "tube.mzw2"
+    mzc("encode", "--dwt2d", "--max-error", "0.1", grid, "-o", packed, check=True)
+    import json
+
+    report = json.loads(mzc("diff", grid, packed, "--json", "--samples", "2000", check=True).stdout)
+    assert report["max"] <= 0.1 + 1e-9                  # along the rays, the bound of --max-error
+    assert 0 < report["surface_rms"] <= 0.1            # in space, without asking for --surface
+    text = mzc("info", grid, check=True).stdout.decode()
+    assert "cut by    cylindrical" in text and "full turn" in text
