@@ -134,6 +134,7 @@ def prepared_item(corpus, name, source):
     Kept for the worker's next job: jobs go out item by item, so each worker loads each
     item at most once.
     """
+    from mzc.meshes import Mesh
     from mzc.metrics import heightfield_filters
 
     inputs, unit, units = load_item(corpus, source)
@@ -141,7 +142,25 @@ def prepared_item(corpus, name, source):
     fields = {"corpus": corpus, "item": name, "unit": unit, "units": units, "vertices": len(inputs["mesh"][0]),
               "grid_shape": list(grid.shape), "grid_projection": grid.projection,
               "mask_bytes": len(mask_bytes(grid.valid))}
+    if corpus == "faces":
+        fields["slice_cpu_s"] = slice_seconds(Mesh(*inputs["mesh"]))
     return inputs, unit, heightfield_filters(*inputs["mesh"]), fields
+
+
+def slice_seconds(mesh, repeats=3):
+    """CPU seconds (the fastest of ``repeats``: this process's own time, whatever the other
+    workers do) of slicing ``mesh`` at the grid step in the default projection and in planes."""
+    from mzc.slicing import slice_surface
+
+    def fastest(projection):
+        runs = []
+        for _ in range(repeats):
+            start = time.process_time()
+            slice_surface(mesh, d1=GRID_STEP, d2=GRID_STEP, projection=projection)
+            runs.append(time.process_time() - start)
+        return min(runs)
+
+    return {"default": fastest("auto"), "planar": fastest("planar")}
 
 
 @functools.lru_cache(maxsize=2)

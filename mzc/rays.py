@@ -55,8 +55,8 @@ def candidate_boxes(corners, projection, radius, u_start):
     straddles = ~around & (np.ptp(u, axis=1) > 0.5 * turn)
     u = np.where(straddles[:, None] & (u < u_start + 0.5 * turn), u + turn, u)
     u_box = np.stack([u.min(axis=1), u.max(axis=1)], axis=1)
+    v_box = v_bounds(corners, projection, radius, around, u_box)
     u_box[around] = [-np.inf, np.inf]
-    v_box = v_bounds(corners, projection, radius, around)
     boxes = np.stack([u_box, v_box], axis=1)
     again = np.flatnonzero(straddles)
     shifted = boxes[again].copy()
@@ -72,29 +72,26 @@ def around_axis(x, z):
         & (np.abs(sum(cross)) > 0)
 
 
-def v_bounds(corners, projection, radius, around):
+def v_bounds(corners, projection, radius, around, u_box):
     """(k, 2) low and high v over each triangle: its heights along a cylindrical axis, or a
-    bound of its elevations (from its heights and its distances from the axis) for spherical grids."""
+    bound of its elevations (from its heights and its distances from the axis) for spherical grids.
+
+    A triangle's nearest point to the axis may lie inside an edge, nearer than its corners
+    are: for corners at distances r and azimuths within an angle A < pi of each other it is no
+    nearer than min r cos(A / 2) (the chord of two points r apart at angle A passes r cos(A/2)
+    from the axis, and moving a corner outwards moves the chord out).
+    """
     y = corners[..., 1]
     low, high = y.min(axis=1), y.max(axis=1)
     if projection == "cylindrical":
         return np.stack([low, high], axis=1)
-    near = np.where(around, 0.0, axis_distance(corners[..., [0, 2]]))
-    far = np.hypot(corners[..., 0], corners[..., 2]).max(axis=1)
+    distance = np.hypot(corners[..., 0], corners[..., 2])
+    spread = np.minimum((u_box[:, 1] - u_box[:, 0]) / radius, np.pi)
+    near = np.where(around, 0.0, distance.min(axis=1) * np.cos(spread / 2))
+    far = distance.max(axis=1)
     top = np.where(high >= 0, np.arctan2(high, near), np.arctan2(high, far))
     bottom = np.where(low <= 0, np.arctan2(low, near), np.arctan2(low, far))
     return radius * np.stack([bottom, top], axis=1)
-
-
-def axis_distance(corners_xz):
-    """Distance from the origin to each triangle's edges in the xz plane (k, 3, 2)."""
-    start, end = corners_xz, np.roll(corners_xz, -1, axis=1)
-    edge = end - start
-    length2 = np.einsum("kij,kij->ki", edge, edge)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        t = np.where(length2 > 0, np.clip(-np.einsum("kij,kij->ki", start, edge) / length2, 0, 1), 0.0)
-    closest = start + t[..., None] * edge
-    return np.sqrt(np.einsum("kij,kij->ki", closest, closest)).min(axis=1)
 
 
 class TrianglePlanes:
