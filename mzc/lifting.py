@@ -99,12 +99,19 @@ def synthesise(low, high, wavelet, periodic=False):
 def forward(z, wavelet, levels, periodic=False):
     """Bands [LL, (H, V, D) coarse to fine ...]: H is high down the columns and low along the
     rows, V the reverse, D high both ways (PyWavelets' cH, cV, cD). ``periodic``: the rows wrap."""
+    return pyramid(np.asarray(z, dtype=np.float64), lambda x, wrap: analyse(x, wavelet, wrap), levels, periodic)
+
+
+def pyramid(values, split, levels, periodic):
+    """The band layout of ``forward`` for a one-level ``split(x, periodic) -> (low, high)`` along
+    axis 0: each level splits every row (wrapping when ``periodic``), then every column of both
+    halves, and goes on with the part that is low both ways."""
     details = []
-    low = np.asarray(z, dtype=np.float64)
+    low = values
     for _ in range(levels):
-        row_low, row_high = (part.T for part in analyse(low.T, wavelet, periodic))
-        low, h = analyse(row_low, wavelet)
-        v, d = analyse(row_high, wavelet)
+        row_low, row_high = (part.T for part in split(low.T, periodic))
+        low, h = split(row_low, False)
+        v, d = split(row_high, False)
         details.append((h, v, d))
     return [low] + details[::-1]
 
@@ -143,11 +150,5 @@ def split_relevance(mask, wavelet, periodic=False):
 
 def relevance(valid, wavelet, levels, periodic=False):
     """Per band of ``forward``, True where the coefficient's synthesis touches a valid node."""
-    details = []
-    low = np.asarray(valid, dtype=bool)
-    for _ in range(levels):
-        row_low, row_high = (part.T for part in split_relevance(low.T, wavelet, periodic))
-        low, h = split_relevance(row_low, wavelet)
-        v, d = split_relevance(row_high, wavelet)
-        details.append((h, v, d))
-    return [low] + details[::-1]
+    return pyramid(np.asarray(valid, dtype=bool), lambda mask, wrap: split_relevance(mask, wavelet, wrap),
+                   levels, periodic)

@@ -13,7 +13,7 @@ the grid's azimuth window. Each candidate gets an exact ray-triangle test.
 
 import numpy as np
 
-from mzc.slicing import BARYCENTRIC_TOLERANCE, candidate_chunks, index_range
+from mzc.slicing import BARYCENTRIC_TOLERANCE, candidate_chunks, candidate_nodes, index_range
 
 TURN = 2 * np.pi
 
@@ -135,15 +135,7 @@ class RayTable:
 
 def cast_chunk(planes, chunk, col_range, row_range, rays, cols_count, best):
     """Test every candidate node of the triangles of ``chunk`` and raise ``best`` to their hits."""
-    width = np.maximum(col_range[1] - col_range[0] + 1, 0)
-    height = np.maximum(row_range[1] - row_range[0] + 1, 0)
-    counts = width * height
-    owner = np.repeat(np.arange(len(counts)), counts)
-    if not len(owner):
-        return
-    local = np.arange(len(owner)) - np.repeat(np.cumsum(counts) - counts, counts)
-    cols = col_range[0, owner] + local % width[owner]
-    rows = row_range[0, owner] + local // width[owner]
+    owner, rows, cols = candidate_nodes(col_range, row_range)
     t, hit = ray_hits(planes, np.arange(chunk.start, chunk.stop)[owner], rays, rows, cols)
     np.maximum.at(best, rows[hit] * cols_count + cols[hit], t[hit])
 

@@ -84,16 +84,18 @@ def block_sizes(index_range_):
 
 def rasterize_chunk(corners, col_range, row_range, xs, ys, best):
     """Test every candidate node of these triangles and raise ``best`` to the heights that hit."""
-    width, height = block_sizes(col_range), block_sizes(row_range)
-    counts = width * height
-    owner = np.repeat(np.arange(len(corners)), counts)
-    if not len(owner):
-        return
-    local = np.arange(len(owner)) - np.repeat(np.cumsum(counts) - counts, counts)
-    cols = col_range[0, owner] + local % width[owner]
-    rows = row_range[0, owner] + local // width[owner]
+    owner, rows, cols = candidate_nodes(col_range, row_range)
     z, hit = heights_on_triangles(corners, owner, xs[cols], ys[rows])
     np.maximum.at(best, rows[hit] * len(xs) + cols[hit], z[hit])
+
+
+def candidate_nodes(col_range, row_range):
+    """(triangle, row, column) of every node in the triangles' blocks of candidate nodes."""
+    width, height = block_sizes(col_range), block_sizes(row_range)
+    counts = width * height
+    owner = np.repeat(np.arange(len(counts)), counts)
+    local = np.arange(len(owner)) - np.repeat(np.cumsum(counts) - counts, counts)
+    return owner, row_range[0, owner] + local // width[owner], col_range[0, owner] + local % width[owner]
 
 
 def heights_on_triangles(corners, owner, x, y):

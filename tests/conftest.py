@@ -5,6 +5,7 @@ import subprocess
 import sys
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 REPO = Path(__file__).resolve().parents[1]
@@ -39,3 +40,10 @@ def run_mzc(*args, input=None, check=False, cwd=None):
 def mzc():
     """The run_mzc helper as a fixture."""
     return run_mzc
+
+
+def edge_counts(triangles):
+    """(edges used by one triangle, edges used by more than two): 0 and 0 for a closed manifold."""
+    edges = np.sort(np.concatenate([triangles[:, [0, 1]], triangles[:, [1, 2]], triangles[:, [2, 0]]]), axis=1)
+    _, counts = np.unique(edges, axis=0, return_counts=True)
+    return int((counts == 1).sum()), int((counts > 2).sum())

@@ -10,7 +10,8 @@ from mzc.metrics import surface_distance
 from mzc.slicing import slice_surface
 from mzc.triangulation import grid_to_mesh
 from mzc.wavelet2d import laplace_fill
-from shapes import STAR_CENTRE, edge_counts, star, tube
+from conftest import edge_counts
+from mzc.samples import BLOB_CENTRE, blob, tube
 
 CODECS = {
     "dwt2d": (dwt2d, {"max_error": 0.02}),
@@ -19,8 +20,8 @@ CODECS = {
 
 
 @pytest.fixture(scope="module")
-def blob():
-    mesh = star()
+def closed():
+    mesh = blob()
     return mesh, slice_surface(mesh, d1=2, d2=2)
 
 
@@ -39,8 +40,8 @@ def rebuilt(grid, codec, method):
 
 @pytest.mark.parametrize("codec", sorted(CODECS))
 @pytest.mark.parametrize("method", ["biharmonic", "laplace", "thesis"])
-def test_a_closed_star_comes_back_closed_and_within_the_sampling_error(blob, codec, method):
-    mesh, grid = blob
+def test_a_closed_blob_comes_back_closed_and_within_the_sampling_error(closed, codec, method):
+    mesh, grid = closed
     assert grid.periodic and grid.pole_rows()[[0, -1]].all()
     points, triangles = rebuilt(grid, codec, method)
     assert edge_counts(triangles) == (0, 0)   # no seam, no hole at either pole, no fold
@@ -60,11 +61,11 @@ def test_an_open_tube_comes_back_with_only_its_two_ends_open(pipe, codec):
     assert distance["rms"] < 0.05
 
 
-def test_the_rebuilt_star_faces_outwards_and_has_one_vertex_on_each_pole(blob):
-    _mesh, grid = blob
+def test_the_rebuilt_blob_faces_outwards_and_has_one_vertex_on_each_pole(closed):
+    _mesh, grid = closed
     points, triangles = grid_to_mesh(read_any(dwt2d.write(grid, rmse=0.05), "blob"))
     a, b, c = (points[triangles[:, i]] for i in range(3))
-    outward = np.einsum("ij,ij->i", np.cross(b - a, c - a), (a + b + c) / 3 - STAR_CENTRE)
+    outward = np.einsum("ij,ij->i", np.cross(b - a, c - a), (a + b + c) / 3 - BLOB_CENTRE)
     assert (outward > 0).all()
     axis, centre = grid.transform[:, 1], grid.transform[:, 3]
     offset = points - centre
@@ -97,9 +98,9 @@ def test_a_full_turn_has_a_column_count_that_wraps_at_every_level(pipe):
     assert cols % 32 == 0 and grid.d2 * cols == pytest.approx(2 * np.pi * grid.radius, rel=1e-12)
 
 
-def test_the_command_line_rebuilds_a_closed_star(mzc, tmp_path):
-    mesh = star(4)
-    obj = tmp_path / "star.obj"
+def test_the_command_line_rebuilds_a_closed_blob(mzc, tmp_path):
+    mesh = blob(4)
+    obj = tmp_path / "blob.obj"
     lines = [f"v {x!r} {y!r} {z!r}" for x, y, z in mesh.points.tolist()]
     obj.write_text("\n".join(lines + [f"f {a + 1} {b + 1} {c + 1}" for a, b, c in mesh.triangles]) + "\n")
     grid = mzc("slice", obj, "--d1", "2", "--d2", "2", check=True).stdout

@@ -13,7 +13,7 @@ from mzc.metrics import surface_distance, triangle_areas
 from mzc.rays import cast
 from mzc.slicing import slice_surface
 from mzc.triangulation import grid_to_mesh
-from shapes import STAR_CENTRE, star, tube
+from mzc.samples import BLOB_CENTRE, blob, tube
 
 CENTRAL = ["cylindrical", "spherical"]
 
@@ -110,20 +110,20 @@ def test_a_triangle_around_the_pole_covers_the_pole_row_and_the_rows_below_it():
 
 
 def test_a_sphere_is_sliced_at_its_radius_from_its_centre():
-    mesh = star(4)
-    mesh = Mesh(STAR_CENTRE + 40 * (mesh.points - STAR_CENTRE) / np.linalg.norm(mesh.points - STAR_CENTRE,
+    mesh = blob(4)
+    mesh = Mesh(BLOB_CENTRE + 40 * (mesh.points - BLOB_CENTRE) / np.linalg.norm(mesh.points - BLOB_CENTRE,
                                                                                 axis=1, keepdims=True),
                 mesh.triangles)
-    grid = slice_surface(mesh, d1=2, d2=2, projection="spherical", center=STAR_CENTRE)
-    a, b, c = (mesh.points[mesh.triangles[:, i]] - STAR_CENTRE for i in range(3))
+    grid = slice_surface(mesh, d1=2, d2=2, projection="spherical", center=BLOB_CENTRE)
+    a, b, c = (mesh.points[mesh.triangles[:, i]] - BLOB_CENTRE for i in range(3))
     normal = np.cross(b - a, c - a)
     nearest_plane = np.min(np.abs(np.einsum("ij,ij->i", normal, a)) / np.linalg.norm(normal, axis=1))
     assert grid.valid.all() and np.nanmax(grid.z) <= 40 + 1e-9 and np.nanmin(grid.z) >= nearest_plane - 1e-9
 
 
-def test_auto_chooses_a_spherical_grid_for_a_closed_star_and_a_cylinder_for_a_tube():
-    blob, pipe = slice_surface(star(), d1=2, d2=2), slice_surface(tube(), d1=2, d2=2)
-    assert blob.projection == "spherical" and blob.periodic and blob.pole_rows()[[0, -1]].all()
+def test_auto_chooses_a_spherical_grid_for_a_closed_blob_and_a_cylinder_for_a_tube():
+    ball, pipe = slice_surface(blob(), d1=2, d2=2), slice_surface(tube(), d1=2, d2=2)
+    assert ball.projection == "spherical" and ball.periodic and ball.pole_rows()[[0, -1]].all()
     assert pipe.projection == "cylindrical" and pipe.periodic and not pipe.pole_rows().any()
     np.testing.assert_allclose(np.abs(pipe.transform[:, 1]), [0, 1, 0], atol=1e-9)   # the tube's axis
 
@@ -170,7 +170,7 @@ def test_given_centre_and_axis_are_kept_and_a_cylinder_axis_is_a_line_through_th
 
 def tube_distance(grid, azimuth, height):
     """The tube's own radius at the grid's azimuths (the grid's azimuth 0 may be turned about y)."""
-    from shapes import tube_radius
+    from mzc.samples import tube_radius
 
     front = grid.transform[:, 2]
     turn = np.arctan2(front[0], front[2])

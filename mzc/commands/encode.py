@@ -70,8 +70,10 @@ degree, or the DFT, DCT or DWT with quality Q (the percentage of coefficients ke
 Holes inside a span are recorded and come back invalid. --dwt2d codes the whole grid
 with a 2D wavelet and an entropy coder, error-bounded: --max-error E holds at every
 valid node; --rmse E (RMS distance between the surfaces) and --size BYTES are targets.
-With --rmse and --size, steps grow on steep slopes, where a height error moves the
-surface less along its normal (as 1/sqrt(cos slope), up to --slope-limit times). Reads a z-grid (or any mzc file)
+With --rmse and --size, steps grow where the surface leans from the node lines, where a
+value error moves it less along its normal (as 1/sqrt(cos t), up to --slope-limit times).
+Errors are along the node lines: heights on planar grids, distances along the rays of
+central ones. Reads a z-grid (or any mzc file)
 from INPUT or stdin; writes the compressed file to -o or stdout.
 
 \b
@@ -98,10 +100,10 @@ from INPUT or stdin; writes the compressed file to -o or stdout.
 @click.option("--max-error", type=click.FloatRange(min=0, min_open=True), metavar="E",
               help="--dwt2d: |decoded - input| <= E at every valid node.")
 @click.option("--rmse", type=click.FloatRange(min=0, min_open=True), metavar="E",
-              help="--dwt2d: aim at this RMS surface error (height error times cos of the slope).")
+              help="--dwt2d: aim at this RMS surface error (value error times cos of the lean).")
 @click.option("--size", type=click.IntRange(min=1), metavar="BYTES", help="--dwt2d: aim at this file size.")
 @click.option("--slope-limit", type=click.FloatRange(min=1), metavar="F",
-              help="--dwt2d: steps grow as 1/sqrt(cos slope) up to F times; 1 = equal steps "
+              help="--dwt2d: steps grow as 1/sqrt(cos lean) up to F times; 1 = equal steps "
                    "[default: 2 for --rmse and --size, 1 for --max-error].")
 @click.option("--precision", type=click.IntRange(0, 17), metavar="DIGITS",
               help="Decimals of the written coefficients [default: 4].")
