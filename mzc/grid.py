@@ -55,6 +55,10 @@ class ZGrid:
             raise ValueError(f"a {self.projection} grid needs a positive radius")
         else:
             self.radius = float(self.radius)
+            problem = projections.extent_problem(self.projection, self.radius, *self.z.shape, self.d1, self.d2,
+                                                 self.origin[1])
+            if problem:
+                raise ValueError(f"{problem[0]}: {problem[1]}")
 
     @property
     def shape(self):

@@ -109,3 +109,16 @@ def pole_rows(projection, radius, ys):
     if projection != "spherical":
         return np.zeros(ys.shape, dtype=bool)
     return np.abs(ys) >= 0.5 * np.pi * radius * (1 - FULL_TURN_TOLERANCE)
+
+
+def extent_problem(projection, radius, rows, cols, d1, d2, v0):
+    """Why a central grid of this extent cannot exist (its columns span more than a turn, or
+    a spherical grid's rows pass a pole), as (field, message); None when it can."""
+    if projection == "planar":
+        return None
+    slack = 1 + FULL_TURN_TOLERANCE
+    if cols * d2 > 2 * np.pi * radius * slack:
+        return "d2", f"{cols} columns of {d2:g} span more than a full turn at radius {radius:g}"
+    if projection == "spherical" and max(abs(v0), abs(v0 + (rows - 1) * d1)) > 0.5 * np.pi * radius * slack:
+        return "d1", "rows reach beyond the poles (elevation v / radius outside +-90 degrees)"
+    return None

@@ -118,6 +118,8 @@ def slice_in_frame(mesh, rotation, shift, d1=None, d2=None, rows=None, cols=None
     low, high = nodes[:, :2].min(axis=0), nodes[:, :2].max(axis=0)
     if projection != "planar":   # central grids start on a round (u, v): shorter headers, the same cover
         low = round_down(low, high - low)
+        if projection == "spherical":
+            low[1] = max(low[1], -np.pi / 2 * radius)   # never below the south pole
     pole_to_pole = full_turn and projection == "spherical"
     if full_turn:
         low[0], high[0] = -np.pi * radius, np.pi * radius

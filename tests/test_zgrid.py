@@ -158,3 +158,17 @@ def test_crlf_line_ends_are_read():
 def test_writer_numbers_are_compact():
     text = zgrid.write(ZGrid(np.array([[1.0, 2.5, np.nan]]), 3.0, 0.25)).decode()
     assert "d1 3\n" in text and text.endswith("data\n1 2.5 nan\n")
+
+
+@pytest.mark.parametrize("version", [b"+1.0", b"0_1.0", b"1", b"1.0.0", b"1.x"])
+def test_a_version_that_is_not_major_dot_minor_is_refused(version):
+    with pytest.raises(MzcError, match="bad version") as error:
+        zgrid.read(b"mzc-zgrid " + version + b"\nrows 1\ncols 1\nd1 1\nd2 1\ndata\n1\n", "v.zg")
+    assert error.value.line == 1
+
+
+def test_a_central_grid_that_cannot_exist_is_refused_when_built():
+    with pytest.raises(ValueError, match="full turn"):
+        ZGrid(np.zeros((2, 10)), 1.0, 1.0, projection="cylindrical", radius=1.0)
+    with pytest.raises(ValueError, match="poles"):
+        ZGrid(np.zeros((3, 2)), 1.0, 0.1, origin=(0, 1.0), projection="spherical", radius=1.0)

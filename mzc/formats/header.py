@@ -17,6 +17,7 @@ not change, so older readers keep reading them), the one it gives projected grid
 """
 
 import math
+import re
 
 import numpy as np
 
@@ -36,12 +37,11 @@ def split_magic(data, source):
     if len(parts) != 2 or not parts[0].startswith(b"mzc-"):
         raise MzcError("not an mzc file: missing magic line 'mzc-KIND VERSION'", source=source, line=1)
     kind = parts[0][4:].decode("ascii", "replace")
-    try:
-        major, minor = (int(p) for p in parts[1].split(b"."))
-    except ValueError:
-        raise MzcError(f"bad version {parts[1].decode('ascii', 'replace')!r} in magic line",
-                       source=source, line=1) from None
-    return kind, major, minor
+    version = re.fullmatch(rb"(\d{1,6})\.(\d{1,6})", parts[1])
+    if not version:
+        raise MzcError(f"bad version {parts[1].decode('ascii', 'replace')!r} in magic line (expected MAJOR.MINOR)",
+                       source=source, line=1)
+    return kind, int(version[1]), int(version[2])
 
 
 def file_version(grid, planar, projected):
@@ -221,13 +221,11 @@ def read_projection(header, rows, cols):
         raise header.error("projection", f"a {projection} grid needs a newer major version of this "
                                          "format (older readers would read it as planar)")
     radius = header.positive("radius")
-    d1, d2 = header.positive("d1"), header.positive("d2")
-    slack = 1 + projections.FULL_TURN_TOLERANCE
-    if cols * d2 > 2 * np.pi * radius * slack:
-        raise header.error("d2", f"{cols} columns of {d2:g} span more than a full turn at radius {radius:g}")
     v0 = header.floats("origin", 2, required=False, default=[0.0, 0.0])[1]
-    if projection == "spherical" and max(abs(v0), abs(v0 + (rows - 1) * d1)) > 0.5 * np.pi * radius * slack:
-        raise header.error("d1", "rows reach beyond the poles (elevation v / radius outside +-90 degrees)")
+    problem = projections.extent_problem(projection, radius, rows, cols, header.positive("d1"),
+                                         header.positive("d2"), v0)
+    if problem:
+        raise header.error(*problem)
     return {"projection": projection, "radius": radius}
 
 
