@@ -18,7 +18,7 @@ from pathlib import Path
 
 import numpy as np
 
-README_PIPELINE = [["slice", "{face}"], ["encode", "--dwt", "-q", "10"], ["decode"], ["densify", "-n", "3"],
+README_PIPELINE = [["slice", "{face}"], ["encode", "--dwt2d", "--rmse", "0.05"], ["decode"], ["densify", "-n", "3"],
                    ["triangulate", "-o", "{out}"]]
 PACKAGES = ("numpy", "scipy", "PyWavelets", "DracoPy", "imagecodecs", "lerc", "zfpy", "pysz", "constriction")
 DWT2D_SECONDS = 0.5     # issue 6: encode + decode of a face sliced at 0.5 mm, compute time
