@@ -25,7 +25,6 @@ distance R0 from the centre or axis, nodes are d2 apart along a row and d1 acros
 import numpy as np
 
 PROJECTIONS = ("planar", "cylindrical", "spherical")
-CENTRAL = ("cylindrical", "spherical")
 FULL_TURN_TOLERANCE = 1e-9   # relative: columns spanning 2 pi R0 this closely make a full turn
 
 

@@ -4,9 +4,11 @@ A z-grid represents the part of a surface that its node lines meet at a fair ang
 face sliced with parallel planes keeps only the half that faces +z (48% of the area of
 ``f18`` has a normal within 60 degrees of +z), while rays from a centre behind it meet 97%
 of it that well. ``auto`` measures exactly that: the share of the surface area whose
-normal lies within 60 degrees of the node line through it (either way round), for the
-planar grid of the slicing frame and for central projections around candidate centres
-and axes, and keeps the best. Planar wins unless a central projection sees more than
+normal lies within 60 degrees of the node line through it, for the planar grid of the
+slicing frame and for central projections around candidate centres and axes, and keeps
+the best. The normals count with the orientation most of the area has along the lines,
+so the inside of a fold, or the near side of a closed surface seen from outside, which
+the outermost hit cannot see, does not count. Planar wins unless a central projection sees more than
 PLANAR_MARGIN more of the area, so terrain stays on the thesis's planes.
 
 Candidates, in the slicing frame (``--align``; planar grids look along its z): centres
@@ -17,11 +19,11 @@ x or z. Of the centre with the best share along the line and the farthest whose 
 within SHARE_SLACK of it, the one whose distances to the surface spread least is taken:
 node spacing on the surface grows with the distance, so that grid samples the surface
 most evenly (for a face, the farther centre: its rays are closer to parallel and hide
-fewer folds; measured on the 13 faces at 0.5 mm, the same mean floor, 0.0234 mm against
-0.0236 over the whole surface, on 9% fewer nodes; for a closed surface, the one inside). Azimuth 0 looks at
-the middle of the azimuths the surface covers; if no gap of FULL_TURN_GAP is left between
-them the grid makes a full turn (periodic columns), and a spherical full turn runs from
-pole to pole.
+fewer folds; measured on the 13 faces at 0.5 mm, the same mean whole-surface floor on 9%
+fewer nodes than the best share's centre; for a closed surface, the one inside). Azimuth
+0 looks at the middle of the azimuths the surface covers; if no gap of FULL_TURN_GAP is
+left between them the grid makes a full turn (periodic columns), and a spherical full
+turn runs from pole to pole.
 """
 
 from dataclasses import dataclass
@@ -43,14 +45,13 @@ SCORE_TRIANGLES = 4096       # triangles scored (a seeded random sample of the m
 class View:
     """How to slice: ``projection``, the grid frame (input = rotation @ p + shift; for central
     projections ``shift`` is the centre and rotation's second column the axis), the
-    reference ``radius``, whether the columns make a ``full_turn``, and the facing ``score``."""
+    reference ``radius`` and whether the columns make a ``full_turn``."""
 
     projection: str
     rotation: np.ndarray
     shift: np.ndarray
     radius: float | None = None
     full_turn: bool = False
-    score: float = float("nan")
 
 
 def choose_view(mesh, frame, projection="auto", center=None, axis=None):
@@ -70,17 +71,17 @@ def choose_view(mesh, frame, projection="auto", center=None, axis=None):
             return View("planar", rotation, shift)
         low, high = mesh.points.min(axis=0), mesh.points.max(axis=0)
         return central_view(mesh.points, projection, (low + high) / 2 if center is None else center,
-                            rotation[:, 1] if axis is None else axis, float("nan"), rotation[:, 2])
+                            rotation[:, 1] if axis is None else axis, rotation[:, 2])
     surface = Facets(mesh.points, mesh.triangles)
     planar_score = surface.share_along(rotation[:, 2])
     kinds = ("cylindrical", "spherical") if projection == "auto" else (projection,)
     best = max((central_candidate(surface, kind, rotation, center, axis) for kind in kinds), key=lambda c: c[0])
     if projection == "auto" and planar_score >= best[0] - PLANAR_MARGIN:
-        return View("planar", rotation, shift, score=planar_score)
-    score, kind, centre, direction = best
+        return View("planar", rotation, shift)
+    _score, kind, centre, direction = best
     if center is None:   # any centre near the best will do: one with short numbers keeps headers short
         centre = rounded(centre, surface.half_diagonal)
-    return central_view(mesh.points, kind, centre, direction, score, rotation[:, 2])
+    return central_view(mesh.points, kind, centre, direction, rotation[:, 2])
 
 
 class Facets:
@@ -210,7 +211,7 @@ def unit(vector, name):
     return vector / length
 
 
-def central_view(points, kind, centre, axis, score, view):
+def central_view(points, kind, centre, axis, view):
     """The View of a central projection about ``centre`` and ``axis``, azimuth 0 towards the
     middle of the azimuths the surface covers (towards ``view`` for a full turn)."""
     centre = np.asarray(centre, dtype=float)
@@ -229,7 +230,7 @@ def central_view(points, kind, centre, axis, score, view):
     radius = float(rounded(distance, distance)) if distance > 0 else 0.0
     if not radius > 0:
         raise MzcError("the surface has no extent around the centre", field="center")
-    return View(kind, rotation, centre, radius, full_turn, score)
+    return View(kind, rotation, centre, radius, full_turn)
 
 
 def rounded(values, scale, digits=4):

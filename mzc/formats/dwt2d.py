@@ -1,9 +1,10 @@
-"""The wavelet z-grid codec (``mzc-dwt2d 2.0``, extension ``.mzw2``): see spec/dwt2d.md.
+"""The wavelet z-grid codec (``mzc-dwt2d 3.0``; 2.0 is read; extension ``.mzw2``): see spec/dwt2d.md.
 
-Text header (grid fields, wavelet, levels, steps, slope limit, correction step), a
-``data`` line, then a binary payload: the validity mask as row spans, the quantised
-wavelet bands (detail steps scaled up on steep slopes, magnitudes and signs each with
-their own contexts), and an optional correction layer of residuals that makes
+Text header (grid fields with the projection, wavelet, levels, steps, slope limit,
+correction step), a ``data`` line, then a binary payload: the validity mask as row spans,
+the quantised wavelet bands (the transform of the version, ``wavelet2d.TRANSFORMS``;
+detail steps scaled up where the surface leans from the node lines, magnitudes and signs
+each with their own contexts), and an optional correction layer of residuals that makes
 ``max_error`` hold at every valid node of the decoder's own reconstruction. All integers
 are entropy coded by mzc.entropy (magnitude classes through rANS, one model per context).
 """
@@ -35,7 +36,7 @@ DEFAULT_WAVELET = "bior4.4"
 ALPHAS = (3.2, 4.8, 7.2)   # max_error: wavelet step = alpha * E (the best alpha grows from 3 to 8 as E
                            # goes from 0.05 to 2 mm on the faces), the smallest file wins...
 ALPHA_SLACK = 0.01         # ...but a smaller alpha within 1% of it is taken for its lower RMS error
-SLOPE_LIMIT = 2.0          # steps grow as 1/sqrt(cos(slope)) up to 2x (76 degrees); 1 = equal steps
+SLOPE_LIMIT = 2.0          # steps grow as 1/sqrt(cos(lean)) up to 2x (76 degrees); 1 = equal steps
 APPROXIMATION_GAIN = 0.7   # band 0's step over the finest detail step (measured: 0.5-3% smaller files)
 LEVEL_RATIO = 0.9          # each coarser detail level's step over the next finer one's (measured: 0.4-3.6%)
 DEADZONE = 0.6             # encoder-only rounding offset; the decoder never sees it
