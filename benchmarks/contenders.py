@@ -4,8 +4,9 @@ A contender turns one input (the original mesh, mzc's 0.5 mm z-grid in its defau
 projection, or the planar thesis grid) into the bytes of a file, and those bytes back into
 a triangle mesh in the input frame. Every setting of its ladder is one rate-distortion
 point. Entries whose module or package is missing are left out and listed in ``missing``
-with the reason, so the benchmark runs with whatever is installed. Ladders of error bounds are in ``unit``s of the corpus item
-(1 mm for faces; a round fraction of the height range for the DEMs).
+with the reason, so the benchmark runs with whatever is installed. Ladders of error bounds
+are in ``unit``s of the corpus item (1 mm for faces; a round fraction of the height range
+for the DEMs).
 """
 
 import importlib

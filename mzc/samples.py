@@ -90,15 +90,13 @@ def tube_radius(azimuth, height):
 
 
 def tube(around=240, along=200):
-    """An open tube 200 mm long about the y axis, mm, its quads split into triangles facing outwards."""
+    """An open tube 200 mm long about the y axis, mm: a full turn's lattice, triangulated as a grid."""
     azimuth, height = np.meshgrid(np.linspace(0, 2 * np.pi, around, endpoint=False), np.linspace(-100, 100, along))
     radius = tube_radius(azimuth, height)
+    from mzc.triangulation import grid_triangles
+
     points = np.stack([radius * np.sin(azimuth), height, radius * np.cos(azimuth)], axis=-1).reshape(-1, 3)
-    index = np.arange(along * around).reshape(along, around)
-    right = np.roll(index, -1, axis=1)
-    a, b, c, d = index[:-1], right[:-1], index[1:], right[1:]
-    faces = np.concatenate([np.stack([a, b, c], axis=-1).reshape(-1, 3), np.stack([b, d, c], axis=-1).reshape(-1, 3)])
-    return Mesh(points, faces)
+    return Mesh(points, grid_triangles(np.ones(azimuth.shape, dtype=bool), periodic=True))
 
 
 SAMPLES = {"jacksboro": jacksboro, "topobathy": topobathy, "bump": bump, "blob": blob, "tube": tube}

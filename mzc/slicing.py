@@ -117,7 +117,9 @@ def slice_in_frame(mesh, rotation, shift, d1=None, d2=None, rows=None, cols=None
     triangles = mesh.triangles if len(mesh.triangles) else triangulate_point_cloud(nodes[:, :2])
     low, high = nodes[:, :2].min(axis=0), nodes[:, :2].max(axis=0)
     if projection != "planar":   # central grids start on a round (u, v): shorter headers, the same cover
-        low = round_down(low, high - low)
+        from mzc.views import rounded
+
+        low = rounded(low, np.max(high - low), down=True)
         if projection == "spherical":
             low[1] = max(low[1], -np.pi / 2 * radius)   # never below the south pole
     pole_to_pole = full_turn and projection == "spherical"
@@ -130,14 +132,6 @@ def slice_in_frame(mesh, rotation, shift, d1=None, d2=None, rows=None, cols=None
     z = values_along(projection, radius, local, triangles, xs, ys)
     return ZGrid(z, d1, d2, origin=tuple(low), transform=np.column_stack([rotation, shift]), units=units,
                  projection=projection, radius=radius)
-
-
-def round_down(low, extent, digits=4):
-    """``low`` rounded down to ``digits`` significant digits of the grid's ``extent`` (each the
-    float nearest its decimal, so that it is written short)."""
-    decimals = max(0, digits - 1 - int(np.floor(np.log10(max(float(np.max(extent)), 1e-300)))))
-    quantum = 10.0 ** -decimals
-    return np.array([float(f"{np.floor(value / quantum) * quantum:.{decimals}f}") for value in low])
 
 
 def values_along(projection, radius, local, triangles, xs, ys):

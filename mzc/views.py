@@ -233,10 +233,12 @@ def central_view(points, kind, centre, axis, view):
     return View(kind, rotation, centre, radius, full_turn)
 
 
-def rounded(values, scale, digits=4):
-    """``values`` rounded to ``digits`` significant digits of ``scale`` (a length of the surface),
-    each the float nearest its decimal, so that it is written short."""
-    decimals = max(0, digits - 1 - int(np.floor(np.log10(scale))))
+def rounded(values, scale, digits=4, down=False):
+    """``values`` rounded (``down``: floored) to ``digits`` significant digits of ``scale`` (a
+    length of the surface), each the float nearest its decimal, so that it is written short."""
+    decimals = max(0, digits - 1 - int(np.floor(np.log10(max(float(scale), 1e-300)))))
+    if down:
+        values = np.floor(np.asarray(values, dtype=float) * 10.0 ** decimals) / 10.0 ** decimals
     return np.array([round(float(v), decimals) for v in np.ravel(values)]).reshape(np.shape(values))
 
 

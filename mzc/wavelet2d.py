@@ -176,7 +176,7 @@ def slope_factors(approximation, levels, geometry, shapes, limit):
     scale = 2.0 ** levels
     values = approximation / scale
     h_u, h_v = coarse_metric(values, scale, geometry)
-    lean = area_factor(values, (scale * geometry.d1, scale * geometry.d2), (h_v, h_u), geometry.periodic)
+    lean = area_factor(values, (scale * geometry.d1, scale * geometry.d2), (h_u, h_v), geometry.periodic)
     with np.errstate(divide="ignore", invalid="ignore"):
         factor = np.fmin(limit, np.sqrt(lean / (h_u * h_v)))
     return [resample(resample(factor, shape[0], 0), shape[1], 1) for shape in shapes]
@@ -194,11 +194,12 @@ def coarse_metric(values, scale, geometry):
 
 def area_factor(z, spacing, metric=(1.0, 1.0), periodic=False):
     """1/cos(t) at every node, t the lean of the surface from the node's line:
-    sqrt(1 + (dz/dv / h_v)^2 + (dz/du / h_u)^2) with ``metric`` = (h_v, h_u); on planar
+    sqrt(1 + (dz/dv / h_v)^2 + (dz/du / h_u)^2) with ``metric`` = (h_u, h_v); on planar
     grids the surface area per unit of grid area. ``periodic`` rows wrap around."""
+    h_u, h_v = metric
     with np.errstate(divide="ignore", invalid="ignore"):
-        across = gradient(z, 0, spacing[0]) / metric[0]
-        along = gradient(z, 1, spacing[1], periodic) / metric[1]
+        across = gradient(z, 0, spacing[0]) / h_v
+        along = gradient(z, 1, spacing[1], periodic) / h_u
         return np.sqrt(1.0 + across ** 2 + along ** 2)
 
 
@@ -206,10 +207,10 @@ def node_areas(z, geometry):
     """(1/cos(t), a): the lean factor and the metric area h_u h_v of every node of a grid
     of values ``z`` (filled, NaN-free); a node stands for the surface area a/cos(t) d1 d2."""
     if geometry.projection == "planar":
-        return area_factor(z, (geometry.d1, geometry.d2)), 1.0
+        return area_factor(z, (geometry.d1, geometry.d2)), np.ones(z.shape)
     v = (geometry.v0 + geometry.d1 * np.arange(z.shape[0]))[:, None]
     h_u, h_v = projections.metric(geometry.projection, geometry.radius, v, z)
-    return area_factor(z, (geometry.d1, geometry.d2), (h_v, h_u), geometry.periodic), h_u * h_v
+    return area_factor(z, (geometry.d1, geometry.d2), (h_u, h_v), geometry.periodic), h_u * h_v
 
 
 def gradient(values, axis, spacing, periodic=False):

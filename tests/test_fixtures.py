@@ -207,7 +207,8 @@ def test_a_projection_line_in_an_old_major_zgrid_is_refused():
 
 
 @pytest.mark.parametrize("name", [n for n in fixture_names()
-                                  if split_magic(fixture_bytes(n), n)[1] < module_for(n.split("-")[0]).PROJECTED_VERSION[0]])
+                                  if split_magic(fixture_bytes(n), n)[1]
+                                  < module_for(n.split("-")[0]).PROJECTED_VERSION[0]])
 def test_every_planar_major_refuses_a_projection_line(name):
     """Inserted into each real planar fixture (text header, even before dwt2d's binary payload)."""
     first, rest = fixture_bytes(name).split(b"\n", 1)

@@ -324,8 +324,7 @@ class Prepared:
         self.bands = w2.flatten(self.transform.forward(self.filled, wavelet, self.levels, periodic))
         self.relevant = w2.flatten(self.transform.relevance(self.valid, wavelet, self.levels, periodic))
         lean, metric = w2.node_areas(self.filled, self.geometry)
-        self.lean = lean[self.valid]
-        self.metric = metric[self.valid] if np.ndim(metric) else metric
+        self.lean, self.metric = lean[self.valid], metric[self.valid]
 
     def decoded(self, step, deadzone=DEADZONE):
         """(integer bands as coded, the decoder's wavelet-only reconstruction) for one detail step."""
@@ -356,7 +355,8 @@ class Prepared:
     def header(self, step, correction, max_error):
         """The text header up to and including the ``data`` line."""
         # lines at their defaults are left out: a face's file can be 1.5 KB, and they were 50 B of it
-        lines = [magic_line(KIND, file_version(self.grid, VERSION, PROJECTED_VERSION)), *grid_header_lines(self.grid, write_defaults=False)]
+        lines = [magic_line(KIND, file_version(self.grid, VERSION, PROJECTED_VERSION)),
+                 *grid_header_lines(self.grid, write_defaults=False)]
         if self.wavelet != DEFAULT_WAVELET:
             lines.append(f"wavelet {self.wavelet}")
         if self.levels != w2.default_levels(self.grid.shape, self.transform.coarsest):
