@@ -28,6 +28,13 @@ with interior holes splits a gap into runs of such columns; for ``thesis`` and
 two end columns (a run of one or two columns is just those lines), which is the thesis
 itself when there are no holes. ``biharmonic`` treats run ends as free edges instead.
 
+Depth jumps. Rows are never inserted across a depth jump (an edge between two nodes that
+runs nearly along the node lines, ``mzc.triangulation``): such a column is outside the
+gap's domain, as if one of its rows were invalid there, and the inserted nodes are not
+smoothed across a jump along a row (a jump in either row of the gap): for ``thesis`` and
+``laplace`` its columns are run ends, for ``biharmonic`` no stencil spans it. So a person
+in front of a wall gets no sheet of inserted nodes between them.
+
 Central grids are densified in their own coordinates (rows inserted in v, values along
 the rays). A grid whose columns make a full turn is periodic: it is padded with copies of
 its own columns, wrapped round, on both sides, densified, and cut back, so every column,
@@ -48,15 +55,23 @@ DEFAULT_ITERATIONS = 100   # the thesis's fixed Jacobi count (§6.2.3)
 WRAP_DECAY = 9.0           # periodic padding of the converged solves, in gap heights
 
 
-def densify_grid(grid, n, method=DEFAULT_METHOD, iterations=DEFAULT_ITERATIONS, tol=None):
+def densify_grid(grid, n, method=DEFAULT_METHOD, iterations=DEFAULT_ITERATIONS, tol=None, jump_angle=None):
     """``grid`` (a ZGrid) with ``n`` rows inserted between each pair of rows; row step d1/(n+1).
 
-    A periodic grid (a full turn) is densified with its columns wrapped round (module docstring).
+    No row is inserted across a depth jump of ``jump_angle`` degrees (default the
+    triangulation's JUMP_ANGLE; 0 ignores jumps), and no row is smoothed across one (module
+    docstring). A periodic grid (a full turn) is densified with its columns wrapped round.
     """
+    from mzc.triangulation import jump_edges
+
+    jumps = jump_edges(grid, jump_angle)
     cols = grid.shape[1]
     pad = wrap_width(grid, method, iterations, tol) if grid.periodic else 0
-    z = np.pad(grid.z, ((0, 0), (pad, pad)), mode="wrap") if pad else grid.z
-    dense = densify(z, n, grid.d1, grid.d2, method=method, iterations=iterations, tol=tol)
+    z, across, along = grid.z, jumps.across[:, :cols], jumps.along
+    if pad:
+        z, across = (np.pad(a, ((0, 0), (pad, pad)), mode="wrap") for a in (z, across))
+        along = np.take(along, np.arange(-pad, cols + pad - 1), axis=1, mode="wrap")
+    dense = densify(z, n, grid.d1, grid.d2, method=method, iterations=iterations, tol=tol, breaks=(across, along))
     return grid.with_z(dense[:, pad:pad + cols], d1=grid.d1 / (n + 1))
 
 
@@ -70,24 +85,27 @@ def wrap_width(grid, method, iterations, tol):
     return min(cols, int(np.ceil(WRAP_DECAY * grid.d1 / grid.d2)) + 1)
 
 
-def densify(z, n, d1, d2, method=DEFAULT_METHOD, iterations=DEFAULT_ITERATIONS, tol=None):
+def densify(z, n, d1, d2, method=DEFAULT_METHOD, iterations=DEFAULT_ITERATIONS, tol=None, breaks=None):
     """Heights ``z`` (rows x cols, NaN = invalid) with ``n`` rows inserted between each pair of rows.
 
     ``d1`` and ``d2`` are the row and column steps of ``z``. Returns (k1-1)(n+1)+1 rows
     (k1 rows when k1 < 2); original row r is dense row r*(n+1), bit for bit.
-    ``iterations`` and ``tol`` drive the ``thesis`` Jacobi sweeps only.
+    ``iterations`` and ``tol`` drive the ``thesis`` Jacobi sweeps only. ``breaks`` =
+    (across (rows-1, cols), along (rows, cols-1)) marks the edges between neighbouring
+    nodes that nothing is inserted or smoothed across (depth jumps); none by default.
     """
     z = np.asarray(z, dtype=float)
     check_request(z, n, d1, d2, method, iterations, tol)
     if n == 0 or z.shape[0] < 2:
         return z.copy()
     step = d1 / (n + 1)
+    gaps = Gaps(z, breaks)
     if method == "thesis":
-        inserted = thesis_inserted(z, n, iterations, tol)
+        inserted = thesis_inserted(z, n, gaps, iterations, tol)
     elif method == "laplace":
-        inserted = laplace_inserted(z, n, step, d2)
+        inserted = laplace_inserted(z, n, gaps, step, d2)
     else:
-        inserted = biharmonic_inserted(z, n, step, d2)
+        inserted = biharmonic_inserted(z, n, gaps, step, d2)
     return interleave(z, inserted)
 
 
@@ -122,17 +140,30 @@ def interleave(z, inserted):
 # --------------------------------------------------------------------------- domains
 
 
-def gap_domains(z):
-    """(gaps, cols) mask of the columns valid in both rows of each gap: where rows are inserted."""
-    valid = ~np.isnan(z)
-    return valid[:-1] & valid[1:]
+class Gaps:
+    """Where rows are inserted between each pair of neighbouring rows (a gap) of ``z``.
 
+    ``domain`` (gaps, cols): the columns valid in both rows of the gap, except where the
+    edge between them is a break; ``along`` (gaps, cols-1): the breaks between neighbouring
+    columns of a gap (a break in either of its rows); ``interior``: the domain columns whose
+    left and right neighbours are in the domain too, with no break between (not run ends).
+    """
 
-def run_interiors(domain):
-    """The domain columns whose left and right neighbours are in the domain too (not run ends)."""
-    interior = np.zeros_like(domain)
-    interior[:, 1:-1] = domain[:, :-2] & domain[:, 1:-1] & domain[:, 2:]
-    return interior
+    def __init__(self, z, breaks=None):
+        valid = ~np.isnan(z)
+        across, along = breaks if breaks is not None else (np.zeros((len(z) - 1, z.shape[1]), dtype=bool),
+                                                           np.zeros((len(z), z.shape[1] - 1), dtype=bool))
+        self.domain = valid[:-1] & valid[1:] & ~across
+        self.rows_along = along
+        self.along = along[:-1] | along[1:]
+        self.interior = np.zeros_like(self.domain)
+        self.interior[:, 1:-1] = (self.domain[:, :-2] & self.domain[:, 1:-1] & self.domain[:, 2:]
+                                  & ~self.along[:, :-1] & ~self.along[:, 1:])
+
+    def dense_along(self, n):
+        """(dense rows, cols-1) breaks of the dense grid: each original row's own, each
+        inserted row's those of its gap."""
+        return interleave(self.rows_along, np.repeat(self.along[:, None, :], n, axis=1))
 
 
 def straight_lines(z, n):
@@ -149,10 +180,10 @@ def gap_stack(z, n, inside):
 # --------------------------------------------------------------------------- thesis
 
 
-def thesis_inserted(z, n, iterations, tol):
+def thesis_inserted(z, n, gaps, iterations, tol):
     """Inserted rows by the thesis's Jacobi iteration (eq. 3.40), all gaps stacked and swept at once."""
-    domain = gap_domains(z)
-    free = run_interiors(domain)[:, None, :]
+    domain = gaps.domain
+    free = gaps.interior[:, None, :]
     start = np.where(free, 0.0, straight_lines(z, n))
     u = np.nan_to_num(gap_stack(z, n, start))
     for _ in range(iterations):
@@ -167,7 +198,7 @@ def thesis_inserted(z, n, iterations, tol):
 # --------------------------------------------------------------------------- laplace
 
 
-def laplace_inserted(z, n, step, d2):
+def laplace_inserted(z, n, gaps, step, d2):
     """Inserted rows solving the 5-point Laplace equation with true steps, one sparse solve for all gaps.
 
     Dirichlet data: the two rows of each gap and the thesis's straight lines at the run ends.
@@ -175,8 +206,8 @@ def laplace_inserted(z, n, step, d2):
     from scipy.sparse import csr_matrix
     from scipy.sparse.linalg import spsolve
 
-    domain = gap_domains(z)
-    free = np.broadcast_to(run_interiors(domain)[:, None, :], (len(domain), n, z.shape[1]))
+    domain = gaps.domain
+    free = np.broadcast_to(gaps.interior[:, None, :], (len(domain), n, z.shape[1]))
     known = np.nan_to_num(gap_stack(z, n, straight_lines(z, n)))
     # Unknowns numbered gap by gap, column by column, row by row: the matrix is banded (width n).
     order = np.full(known.shape, -1)
@@ -203,7 +234,7 @@ def laplace_inserted(z, n, step, d2):
 # --------------------------------------------------------------------------- biharmonic
 
 
-def biharmonic_inserted(z, n, step, d2):
+def biharmonic_inserted(z, n, gaps, step, d2):
     """Inserted rows minimising the thin-plate energy over the whole dense grid.
 
     The energy's normal equations A u = b couple the gaps only through the across-row
@@ -217,10 +248,10 @@ def biharmonic_inserted(z, n, step, d2):
     """
     from scipy.linalg import cho_solve_banded, cholesky_banded
 
-    domain = gap_domains(z)
+    domain = gaps.domain
     inside = np.where(domain[:, None, :], straight_lines(z, n), np.nan)
     dense = interleave(z, inside)
-    masks = stencil_masks(~np.isnan(dense), step, d2)
+    masks = stencil_masks(~np.isnan(dense), step, d2, gaps.dense_along(n))
     keep = np.broadcast_to(domain[:, :, None], (len(domain), z.shape[1], n)).ravel()
     if keep.any():
         band, coupling = normal_matrix(masks, n, z.shape, keep)
@@ -273,11 +304,12 @@ def inner(u, v):
     return float(np.sum(u * v))
 
 
-def stencil_masks(valid, step, d2):
+def stencil_masks(valid, step, d2, along=None):
     """The thin-plate stencils as (offsets, coefficients, weights): weights = scale² where the stencil fits.
 
     |D u|² = the discrete thin-plate energy of u on the ``valid`` nodes: one term per
-    stencil whose nodes all hold data (the free plate's natural boundary conditions):
+    stencil whose nodes all hold data (the free plate's natural boundary conditions) and
+    that crosses none of the ``along`` breaks between neighbouring columns (rows, cols-1):
     second differences along rows (/d2²) and across rows (/step²), and the twist over
     each 2x2 cell (/(step·d2), weight √2 for the factor 2 of u_xy²). weights[p] belongs
     to the stencil on the nodes p + offsets.
@@ -287,11 +319,16 @@ def stencil_masks(valid, step, d2):
         ([(-1, 0), (0, 0), (1, 0)], [1.0, -2.0, 1.0], step**-2),
         ([(0, 0), (0, 1), (1, 0), (1, 1)], [1.0, -1.0, -1.0, 1.0], np.sqrt(2) / (step * d2)),
     ]
+    joined = np.ones(valid.shape, dtype=bool)   # joined[p]: no break between p and p + (0, 1)
+    if along is not None:
+        joined[:, :-1] = ~along
     masks = []
     for offsets, coefficients, scale in stencils:
         fits = np.ones(valid.shape, dtype=bool)
         for drow, dcol in offsets:
             fits &= shifted(valid, -drow, -dcol)
+            if (drow, dcol + 1) in offsets:
+                fits &= shifted(joined, -drow, -dcol)
         masks.append((offsets, coefficients, np.where(fits, scale**2, 0.0)))
     return masks
 

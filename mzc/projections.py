@@ -66,6 +66,20 @@ def ray_directions(projection, radius, u, v):
     return np.stack([ring * np.sin(azimuth), np.sin(elevation), ring * np.cos(azimuth)], axis=-1)
 
 
+def directions_through(projection, points):
+    """Unit directions (..., 3) of the node lines through grid-frame ``points``: +z on planar
+    grids, away from the axis on cylindrical ones, from the centre on spherical ones (zero
+    on the axis or at the centre, where no one line passes)."""
+    points = np.asarray(points, dtype=float)
+    if projection == "planar":
+        return np.broadcast_to(np.array([0.0, 0.0, 1.0]), points.shape).copy()
+    away = points.copy()
+    if projection == "cylindrical":
+        away[..., 1] = 0.0
+    length = np.linalg.norm(away, axis=-1, keepdims=True)
+    return np.divide(away, length, out=np.zeros_like(away), where=length > 0)
+
+
 def ray_origins(projection, v):
     """Grid-frame origins (..., 3) of the rays of central projections at row coordinate v:
     the centre for spherical grids, the point of the axis at height v for cylindrical ones."""

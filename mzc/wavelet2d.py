@@ -192,35 +192,64 @@ def coarse_metric(values, scale, geometry):
     return projections.metric(geometry.projection, geometry.radius, v, values)
 
 
-def area_factor(z, spacing, metric=(1.0, 1.0), periodic=False):
+def area_factor(z, spacing, metric=(1.0, 1.0), periodic=False, jumps=None):
     """1/cos(t) at every node, t the lean of the surface from the node's line:
     sqrt(1 + (dz/dv / h_v)^2 + (dz/du / h_u)^2) with ``metric`` = (h_u, h_v); on planar
-    grids the surface area per unit of grid area. ``periodic`` rows wrap around."""
+    grids the surface area per unit of grid area. ``periodic`` rows wrap around; the
+    differences never span an edge of ``jumps`` (a triangulation.Jumps)."""
     h_u, h_v = metric
     with np.errstate(divide="ignore", invalid="ignore"):
-        across = gradient(z, 0, spacing[0]) / h_v
-        along = gradient(z, 1, spacing[1], periodic) / h_u
+        across = gradient(z, 0, spacing[0], breaks=None if jumps is None else jumps.across) / h_v
+        along = gradient(z, 1, spacing[1], periodic, breaks=None if jumps is None else jumps.along) / h_u
         return np.sqrt(1.0 + across ** 2 + along ** 2)
 
 
-def node_areas(z, geometry):
+def node_areas(z, geometry, jumps=None):
     """(1/cos(t), a): the lean factor and the metric area h_u h_v of every node of a grid
-    of values ``z`` (filled, NaN-free); a node stands for the surface area a/cos(t) d1 d2."""
+    of values ``z`` (filled, NaN-free); a node stands for the surface area a/cos(t) d1 d2.
+    The lean at a node beside a depth jump (``jumps``) is that of the surface on its side."""
     if geometry.projection == "planar":
-        return area_factor(z, (geometry.d1, geometry.d2)), np.ones(z.shape)
+        return area_factor(z, (geometry.d1, geometry.d2), jumps=jumps), np.ones(z.shape)
     v = (geometry.v0 + geometry.d1 * np.arange(z.shape[0]))[:, None]
     h_u, h_v = projections.metric(geometry.projection, geometry.radius, v, z)
-    return area_factor(z, (geometry.d1, geometry.d2), (h_u, h_v), geometry.periodic), h_u * h_v
+    return area_factor(z, (geometry.d1, geometry.d2), (h_u, h_v), geometry.periodic, jumps), h_u * h_v
 
 
-def gradient(values, axis, spacing, periodic=False):
+def gradient(values, axis, spacing, periodic=False, breaks=None):
     """numpy.gradient along one axis (central inside, one-sided at the ends; 0 when the axis has
-    one node); ``periodic``: central differences everywhere, the ends neighbouring each other."""
+    one node); ``periodic``: central differences everywhere, the ends neighbouring each other.
+    ``breaks`` (one per edge along the axis: n-1, or n when periodic) are edges the
+    differences must not span: a node beside one takes the difference on its other side
+    (0 between two)."""
     if values.shape[axis] < 2:
         return np.zeros(values.shape)
     if periodic and values.shape[axis] > 2:
-        return (np.roll(values, -1, axis=axis) - np.roll(values, 1, axis=axis)) / (2 * spacing)
-    return np.gradient(values, spacing, axis=axis)
+        result = (np.roll(values, -1, axis=axis) - np.roll(values, 1, axis=axis)) / (2 * spacing)
+    else:
+        result = np.gradient(values, spacing, axis=axis)
+    if breaks is None or not breaks.any():
+        return result
+    return np.moveaxis(avoiding_breaks(np.moveaxis(result, axis, -1), np.moveaxis(values, axis, -1),
+                                       np.moveaxis(breaks, axis, -1), spacing), -1, axis)
+
+
+def avoiding_breaks(result, values, breaks, spacing):
+    """``result`` (differences along the last axis) with the nodes beside a break given the
+    mean of their differences over the edges that are not breaks (0 when both are)."""
+    n = values.shape[-1]
+    edges = np.diff(values, axis=-1, append=values[..., :1])[..., :breaks.shape[-1]] / spacing
+    before, after = np.full(values.shape, np.nan), np.full(values.shape, np.nan)
+    before[..., 1:], after[..., :-1] = edges[..., :n - 1], edges[..., :n - 1]
+    broken_before, broken_after = np.zeros(values.shape, dtype=bool), np.zeros(values.shape, dtype=bool)
+    broken_before[..., 1:], broken_after[..., :-1] = breaks[..., :n - 1], breaks[..., :n - 1]
+    if breaks.shape[-1] == n:   # periodic: the last edge joins node n-1 to node 0
+        before[..., 0], after[..., -1] = edges[..., -1], edges[..., -1]
+        broken_before[..., 0], broken_after[..., -1] = breaks[..., -1], breaks[..., -1]
+    before[broken_before], after[broken_after] = np.nan, np.nan
+    with np.errstate(invalid="ignore"):
+        count = np.isfinite(before).astype(float) + np.isfinite(after)
+        one_sided = (np.nan_to_num(before) + np.nan_to_num(after)) / np.maximum(count, 1)
+    return np.where(broken_before | broken_after, one_sided, result)
 
 
 def resample(values, size, axis):

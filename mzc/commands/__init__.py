@@ -12,6 +12,10 @@ from mzc.streams import display_name, read_input
 input_argument = click.argument("input", required=False, default="-", metavar="[INPUT]")
 output_option = click.option("-o", "--output", default="-", metavar="FILE",
                              help="Write here instead of stdout (atomically).")
+jump_angle_option = click.option(
+    "--jump-angle", type=click.FloatRange(0, 90), metavar="DEG",
+    help="An edge within DEG degrees of the node lines is a depth jump, joined by no triangle "
+         "(spec/zgrid.md; 0 joins every neighbour) [default: 3].")
 
 
 def read_grid(path):

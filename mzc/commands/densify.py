@@ -2,7 +2,7 @@
 
 import click
 
-from mzc.commands import input_argument, output_option, read_grid, write_grid
+from mzc.commands import input_argument, jump_angle_option, output_option, read_grid, write_grid
 
 METHODS = ("thesis", "laplace", "biharmonic")
 DEFAULT_METHOD = "biharmonic"   # lowest error on the shared faces (see mzc.densify)
@@ -11,7 +11,8 @@ DEFAULT_METHOD = "biharmonic"   # lowest error on the shared faces (see mzc.dens
 @click.command(help="""Insert N rows between each pair of rows of a z-grid.
 
 The row step becomes d1/(N+1) and there are (rows-1)(N+1)+1 rows; the original rows are
-kept exactly. Rows are only inserted in columns valid in both neighbouring rows.
+kept exactly. Rows are only inserted in columns valid in both neighbouring rows and not
+across a depth jump (--jump-angle), and never smoothed across one.
 
 \b
   biharmonic  thin-plate surface over the whole grid, smooth across planes (default)
@@ -29,10 +30,11 @@ kept exactly. Rows are only inserted in columns valid in both neighbouring rows.
               help="Stop the thesis sweeps once no node moves by T or more.")
 @click.option("--precision", type=click.IntRange(0, 17), metavar="DIGITS",
               help="Decimal digits of the written heights.")
-def command(input, output, count, method, iterations, tol, precision):
+@jump_angle_option
+def command(input, output, count, method, iterations, tol, precision, jump_angle):
     from mzc.densify import densify_grid
     from mzc.streams import check_not_input
 
     check_not_input(output, input)
     grid = read_grid(input)
-    write_grid(densify_grid(grid, count, method, iterations=iterations, tol=tol), output, precision=precision)
+    write_grid(densify_grid(grid, count, method, iterations=iterations, tol=tol, jump_angle=jump_angle), output, precision=precision)

@@ -2,7 +2,7 @@
 
 import click
 
-from mzc.commands import input_argument, output_option, read_grid
+from mzc.commands import input_argument, jump_angle_option, output_option, read_grid
 
 FORMATS = ("obj", "ply", "vtk", "stl", "off")
 
@@ -10,17 +10,20 @@ FORMATS = ("obj", "ply", "vtk", "stl", "off")
 @click.command(help="""Turn a z-grid into a triangle mesh.
 
 Each grid cell gives the thesis's triangles 1-2-3 and 2-3-4 wherever their corners are
-valid; vertices are placed back in the input surface's frame. The output format follows
-the -o extension or --format; OBJ text goes to stdout when there is no -o.""")
+valid and none of their edges is a depth jump (an edge within --jump-angle degrees of the
+node lines: the step between a person and the wall behind, spec/zgrid.md); vertices are
+placed back in the input surface's frame. The output format follows the -o extension or
+--format; OBJ text goes to stdout when there is no -o.""")
 @input_argument
 @output_option
 @click.option("--format", "file_format", type=click.Choice(FORMATS),
               help="Mesh format (default: from the -o extension; obj on stdout).")
-def command(input, output, file_format):
+@jump_angle_option
+def command(input, output, file_format, jump_angle):
     from mzc.meshes import Mesh, write_mesh
     from mzc.streams import check_not_input
     from mzc.triangulation import grid_to_mesh
 
     check_not_input(output, input)
-    points, triangles = grid_to_mesh(read_grid(input))
+    points, triangles = grid_to_mesh(read_grid(input), jump_angle)
     write_mesh(output, Mesh(points, triangles), file_format)

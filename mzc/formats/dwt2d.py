@@ -16,6 +16,7 @@ from mzc.errors import MzcError
 from mzc.formats.header import (file_version, format_number, grid_header_lines, magic_line, read_grid_fields,
                                 read_header)
 from mzc.grid import ZGrid
+from mzc.triangulation import jump_edges
 
 KIND = "dwt2d"
 VERSION = (3, 0)             # every grid; 2.0 (planar, periodised transform) is still read
@@ -323,7 +324,7 @@ class Prepared:
         periodic = self.geometry.periodic
         self.bands = w2.flatten(self.transform.forward(self.filled, wavelet, self.levels, periodic))
         self.relevant = w2.flatten(self.transform.relevance(self.valid, wavelet, self.levels, periodic))
-        lean, metric = w2.node_areas(self.filled, self.geometry)
+        lean, metric = w2.node_areas(self.filled, self.geometry, jump_edges(grid))
         self.lean, self.metric = lean[self.valid], metric[self.valid]
 
     def decoded(self, step, deadzone=DEADZONE):

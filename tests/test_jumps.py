@@ -1,0 +1,136 @@
+"""Depth discontinuities: triangulate, densify and the --rmse estimate never bridge a depth jump
+(spec/zgrid.md, Connectivity), and leave real surface, steep or not, alone."""
+
+import numpy as np
+import pytest
+
+from conftest import FACE_NAMES, face_path
+from mzc.densify import densify_grid
+from mzc.formats import dwt2d, zgrid
+from mzc.grid import ZGrid
+from mzc.meshes import Mesh
+from mzc.metrics import surface_distance
+from mzc.slicing import slice_surface
+from mzc.triangulation import JUMP_ANGLE, grid_to_mesh, grid_triangles, jump_edges
+
+FRONT, BACK = 60.0, 0.0
+
+
+def sheet(xs, ys, height):
+    """A flat mesh at z = ``height`` over the grid of ``xs`` by ``ys``."""
+    u, v = np.meshgrid(xs, ys)
+    points = np.stack([u, v, np.full(u.shape, height)], axis=-1).reshape(-1, 3)
+    return points, grid_triangles(np.ones(u.shape, dtype=bool))
+
+
+def person_before_wall():
+    """A square 'person' 60 mm in front of a wall, as one mesh of two sheets."""
+    wall_points, wall_triangles = sheet(np.linspace(-50, 50, 51), np.linspace(-40, 40, 41), BACK)
+    person_points, person_triangles = sheet(np.linspace(-15, 15, 16), np.linspace(-20, 20, 21), FRONT)
+    return Mesh(np.vstack([wall_points, person_points]),
+                np.vstack([wall_triangles, person_triangles + len(wall_points)]))
+
+
+def spans_both_levels(points, triangles):
+    """Per triangle, True when its corners lie on both the wall and the person."""
+    z = points[triangles][:, :, 2]
+    return (z.max(axis=1) - z.min(axis=1)) > 1.0
+
+
+def test_a_person_in_front_of_a_wall_triangulates_with_no_sheet_between():
+    mesh = person_before_wall()
+    grid = slice_surface(mesh, d1=1, d2=1, projection="planar")
+    points, triangles = grid_to_mesh(grid)
+    assert not spans_both_levels(points, triangles).any()
+    walled = grid_to_mesh(grid, jump_angle=0)
+    assert spans_both_levels(*walled).sum() > 100          # what the grid joined before
+    rebuilt = surface_distance((mesh.points, mesh.triangles), (points, triangles), samples=20_000)
+    assert rebuilt["b_to_a_hausdorff"] < 1e-9               # every triangle lies on the scene
+    assert surface_distance((mesh.points, mesh.triangles), walled, samples=20_000)["b_to_a_hausdorff"] > 10
+
+
+def test_a_layer_above_a_spherical_cap_is_cut_from_it():
+    """Central grids: the jump is measured along the rays (a cap of radius 160 over one of 100,
+    rays half a degree apart)."""
+    azimuth, elevation = np.meshgrid(np.radians(np.linspace(-40, 40, 161)), np.radians(np.linspace(-30, 30, 121)))
+    inner = np.abs(np.degrees(azimuth)) <= 10
+    radius = np.where(inner & (np.abs(np.degrees(elevation)) <= 10), 160.0, 100.0)
+    points = radius[..., None] * np.stack([np.cos(elevation) * np.sin(azimuth), np.sin(elevation),
+                                           np.cos(elevation) * np.cos(azimuth)], axis=-1)
+    grid = ZGrid(radius, np.radians(0.5) * 100, np.radians(0.5) * 100,
+                 origin=(-np.radians(40) * 100, -np.radians(30) * 100), projection="spherical", radius=100)
+    assert np.allclose(grid.node_points(), points)
+    rebuilt, triangles = grid_to_mesh(grid)
+    distance = np.linalg.norm(rebuilt[triangles], axis=2)
+    assert (distance.max(axis=1) - distance.min(axis=1)).max() < 1e-9
+    assert len(grid_to_mesh(grid, jump_angle=0)[1]) > len(triangles)
+
+
+def test_steep_real_surface_keeps_every_triangle():
+    """A plane leaning 80 degrees from the node lines, a cylinder seen side-on: all of it is surface."""
+    u, v = np.meshgrid(np.arange(40.0), np.arange(30.0))
+    steep = ZGrid(np.tan(np.radians(80)) * u, 1, 1)
+    assert len(grid_to_mesh(steep)[1]) == len(grid_to_mesh(steep, jump_angle=0)[1]) == 2 * 39 * 29
+    x = np.linspace(-0.99, 0.99, 199) * 50
+    side = ZGrid(np.tile(np.sqrt(50 ** 2 - x ** 2), (20, 1)), 1, x[1] - x[0])
+    assert len(grid_to_mesh(side)[1]) == len(grid_to_mesh(side, jump_angle=0)[1])
+
+
+@pytest.mark.parametrize("name", FACE_NAMES or ["f18.ply"])
+def test_the_faces_default_grids_lose_no_triangle(name):
+    from mzc.meshes import read_mesh
+
+    grid = slice_surface(read_mesh(face_path(name)), d1=0.5, d2=0.5)
+    jumps = jump_edges(grid)
+    assert not (jumps.across.any() or jumps.along.any() or jumps.diagonal.any())
+
+
+@pytest.mark.parametrize("method", ["biharmonic", "laplace", "thesis"])
+def test_densify_inserts_nothing_across_a_jump(method):
+    grid = slice_surface(person_before_wall(), d1=1, d2=1, projection="planar")
+    dense = densify_grid(grid, 3, method, iterations=20_000, tol=1e-12)
+    values = dense.z[dense.valid]
+    on_a_level = np.minimum(np.abs(values - BACK), np.abs(values - FRONT))
+    assert on_a_level.max() < 1e-6
+    assert not spans_both_levels(*grid_to_mesh(dense)).any()
+    assert np.isnan(dense.z).sum() > np.isnan(densify_grid(grid, 3, method, iterations=20_000, tol=1e-12,
+                                                             jump_angle=0).z).sum()
+
+
+def test_densify_keeps_jumps_across_the_seam_of_a_full_turn():
+    """A tube of radius 50 with a ridge of radius 100 on the seam: the ridge stays cut from the tube."""
+    cols = 512
+    radius = np.full((12, cols), 50.0)
+    radius[:, [0, 1, 2, cols - 2, cols - 1]] = 100.0
+    grid = ZGrid(radius, 2.0, 2 * np.pi * 50 / cols, origin=(-np.pi * 50, 0), projection="cylindrical", radius=50)
+    assert grid.periodic
+    dense = densify_grid(grid, 2)
+    values = dense.z[dense.valid]
+    assert np.minimum(np.abs(values - 50), np.abs(values - 100)).max() < 1e-6
+    smoothed = densify_grid(grid, 2, jump_angle=0).z                # smoothed across the ridge's flanks
+    assert np.minimum(np.abs(smoothed - 50), np.abs(smoothed - 100)).max() > 0.1
+
+
+def test_rmse_estimate_holds_on_a_scene_with_a_jump():
+    """The estimate gives a node beside a jump the lean of its own side, so the measured error
+    between the rebuilt scenes (no sheets in either) stays under the target."""
+    mesh = person_before_wall()
+    bumps = mesh.points.copy()
+    bumps[:, 2] += 2 * np.sin(bumps[:, 0] / 7) * np.cos(bumps[:, 1] / 5)
+    grid = slice_surface(Mesh(bumps, mesh.triangles), d1=0.5, d2=0.5, projection="planar")
+    for target in (0.05, 0.2):
+        decoded = dwt2d.read(dwt2d.write(grid, rmse=target))
+        measured = surface_distance(grid_to_mesh(grid), grid_to_mesh(decoded), samples=50_000)["rms"]
+        assert measured <= 1.1 * target
+
+
+def test_the_command_line_drops_jumps_unless_told(mzc, tmp_path):
+    grid = slice_surface(person_before_wall(), d1=1, d2=1, projection="planar")
+    data = zgrid.write(grid)
+    cut = mzc("triangulate", input=data, check=True).stdout.decode()
+    joined = mzc("triangulate", "--jump-angle", "0", input=data, check=True).stdout.decode()
+    assert cut.count("\nf ") < joined.count("\nf ")
+    assert f"default: {JUMP_ANGLE:g}]" in mzc("triangulate", "--help").stdout.decode()
+    dense = mzc("densify", "-n", "2", input=data, check=True).stdout
+    assert np.isnan(zgrid.read(dense).z).sum() > np.isnan(
+        zgrid.read(mzc("densify", "-n", "2", "--jump-angle", "0", input=data, check=True).stdout).z).sum()
