@@ -8,11 +8,12 @@ usage errors exit 2.
 import importlib
 import os
 import sys
+import warnings
 
 import click
 
 from mzc import __version__
-from mzc.errors import MzcError
+from mzc.errors import MzcError, MzcWarning
 
 COMMANDS = {
     "slice": "Cut a mesh or point cloud into a z-grid.",
@@ -60,6 +61,8 @@ def group():
 
 def main():
     """Entry point: run the group, turning MzcError and other failures into one line on stderr."""
+    warnings.simplefilter("once", MzcWarning)
+    warnings.showwarning = show_warning
     try:
         group.main(standalone_mode=False, prog_name="mzc")
     except click.exceptions.Exit as done:
@@ -87,3 +90,11 @@ def main():
         click.echo(f"mzc: internal error: {type(error).__name__}: {error} "
                    "(set MZC_DEBUG=1 for a traceback)", err=True)
         sys.exit(3)
+
+
+def show_warning(message, category, filename, lineno, file=None, line=None):
+    """Warnings as one line on stderr: ``mzc: warning: ...`` for mzc's own, Python's form for others."""
+    if issubclass(category, MzcWarning):
+        click.echo(f"mzc: warning: {message}", err=True)
+    else:
+        sys.stderr.write(warnings.formatwarning(message, category, filename, lineno, line))

@@ -1,4 +1,5 @@
-"""The one exception type that the command line turns into a one-line error message."""
+"""The exception type that the command line turns into a one-line error message, and the
+warning it prints as one line."""
 
 
 class MzcError(Exception):
@@ -35,3 +36,8 @@ class MzcError(Exception):
             where = f"line {self.line}: "
         field = f"{self.field}: " if self.field else ""
         return f"{where}{field}{self.message}"
+
+
+class MzcWarning(UserWarning):
+    """A result that is valid but likely not what the user wants (a grid that sees little of
+    the surface); the command line prints it once as ``mzc: warning: ...``."""

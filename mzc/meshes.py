@@ -32,14 +32,18 @@ WRITE_FORMATS = ("obj", "ply", "vtk", "stl", "off")
 
 @dataclass
 class Mesh:
-    """Vertices ``points`` (n, 3) and ``triangles`` (m, 3) indexing them; (0, 3) for a point cloud."""
+    """Vertices ``points`` (n, 3) and ``triangles`` (m, 3) indexing them; (0, 3) for a point
+    cloud, whose file may give ``normals`` (n, 3) (they tell a slice which side it was seen from)."""
 
     points: np.ndarray
     triangles: np.ndarray = field(default_factory=lambda: np.empty((0, 3), dtype=np.int64))
+    normals: np.ndarray | None = None
 
     def __post_init__(self):
         self.points = np.asarray(self.points, dtype=np.float64).reshape(-1, 3)
         self.triangles = np.asarray(self.triangles, dtype=np.int64).reshape(-1, 3)
+        if self.normals is not None:
+            self.normals = np.asarray(self.normals, dtype=np.float64).reshape(self.points.shape)
 
     @property
     def is_point_cloud(self):
@@ -425,6 +429,7 @@ PLY_TYPES = {
     "float": "f4", "float32": "f4", "double": "f8", "float64": "f8",
 }
 FACE_LIST_NAMES = ("vertex_indices", "vertex_index")
+PLY_ELEMENTS = ("vertex", "face", "tristrips")
 
 
 @dataclass
@@ -604,16 +609,52 @@ def binary_records_one_by_one(element, body, offset, order, source):
 
 
 def ply_mesh(elements, tables, source):
-    """Build the Mesh from the 'vertex' and 'face' elements of a parsed PLY file."""
+    """Build the Mesh from the 'vertex', 'face' and 'tristrips' elements of a parsed PLY file.
+
+    Any other element holding records is refused by name: read as a bare cloud, a file whose
+    surface lives in an element mzc does not know would be re-triangulated into noise. A
+    cloud keeps the normals its vertices carry (nx, ny, nz)."""
+    unknown = [element for element in elements if element.name not in PLY_ELEMENTS and element.count]
+    if unknown:
+        raise MzcError(f"PLY element '{unknown[0].name}' ({unknown[0].count} records) is not one mzc reads "
+                       f"({', '.join(PLY_ELEMENTS)})", source=source)
     vertex = tables.get("vertex")
     if vertex is None or not all(axis in vertex for axis in "xyz"):
         raise MzcError("PLY file has no 'vertex' element with x, y, z", source=source)
     points = np.column_stack([np.asarray(vertex[axis], dtype=np.float64) for axis in "xyz"])
-    face = tables.get("face", {})
-    lists = [face[name] for name in FACE_LIST_NAMES if name in face]
-    if not lists:
-        return Mesh(points)
-    return Mesh(points, ply_face_triangles(lists[0], source))
+    faces, strips = index_lists(tables, "face"), index_lists(tables, "tristrips")
+    triangles = ([ply_face_triangles(faces, source)] if faces is not None else []) + \
+        ([strip_triangles(strips)] if strips is not None else [])
+    if triangles:
+        return Mesh(points, np.concatenate(triangles))
+    normals = None
+    if all(axis in vertex for axis in ("nx", "ny", "nz")):
+        normals = np.column_stack([np.asarray(vertex[axis], dtype=np.float64) for axis in ("nx", "ny", "nz")])
+    return Mesh(points, normals=normals)
+
+
+def index_lists(tables, element):
+    """The vertex-index lists of a PLY ``element`` (its first FACE_LIST_NAMES property), or None."""
+    table = tables.get(element, {})
+    return next((table[name] for name in FACE_LIST_NAMES if name in table), None)
+
+
+def strip_triangles(strips):
+    """Triangles of PLY triangle strips (``element tristrips``): each record's list holds
+    strips separated by -1; triangle i of a strip is (v_i, v_i+1, v_i+2), its odd ones
+    written (v_i+1, v_i, v_i+2) so all face the same way, the degenerate ones (a repeated
+    vertex, used to join strips) dropped."""
+    records = [np.append(np.asarray(record, dtype=np.int64), -1) for record in strips]
+    flat = np.concatenate(records) if records else np.empty(0, dtype=np.int64)
+    if len(flat) < 3:
+        return np.empty((0, 3), dtype=np.int64)
+    position = np.arange(len(flat))
+    strip_start = np.maximum.accumulate(np.where(flat < 0, position, -1)) + 1
+    a, b, c = flat[:-2], flat[1:-1], flat[2:]
+    odd = ((position[:-2] - strip_start[:-2]) % 2).astype(bool)
+    triangles = np.stack([np.where(odd, b, a), np.where(odd, a, b), c], axis=1)
+    whole = (a >= 0) & (b >= 0) & (c >= 0) & (a != b) & (b != c) & (a != c)
+    return triangles[whole]
 
 
 def ply_face_triangles(faces, source):

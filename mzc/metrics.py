@@ -34,6 +34,14 @@ def grid_error_stats(reference, other):
     }
 
 
+def distance_stats(distances):
+    """count, RMS (as ``rmse``), max, mean and the 50/95/99th percentiles of unsigned ``distances``."""
+    p50, p95, p99 = np.percentile(distances, [50, 95, 99])
+    return {"count": int(distances.size), "rmse": float(np.sqrt(np.mean(distances ** 2))),
+            "max": float(distances.max()), "mean": float(distances.mean()),
+            "p50": float(p50), "p95": float(p95), "p99": float(p99)}
+
+
 def triangle_areas(points, triangles):
     """Area of every triangle."""
     a, b, c = (points[triangles[:, i]] for i in range(3))

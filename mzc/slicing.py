@@ -14,8 +14,11 @@ from mzc.errors import MzcError
 from mzc.formats.header import MAX_DIMENSION, MAX_NODES
 from mzc.grid import ZGrid
 
-DEFAULT_ROWS = 72           # the thesis cuts a face with about 70 horizontal planes
+DEFAULT_ROWS = 72           # the thesis cuts a face with about 70 horizontal planes (--thesis-grid)
 COLUMN_STEP_RATIO = 10      # and uses about 10x as many vertical planes: d2 = d1/10
+DATA_SPACING_FRACTION = 0.5   # default spacing: half the median edge of the surface's triangles
+SNAP_TOLERANCE = 1e-3       # a spacing this close (relative) to a lattice's own step snaps to it
+LATTICE_TOLERANCE = 1e-6    # coordinates this close (in steps) to a multiple of the step lie on a lattice
 LONG_EDGE_FACTOR = 5.0
 
 
@@ -84,38 +87,55 @@ def triangulate_point_cloud(points_xy, long_edge_factor=LONG_EDGE_FACTOR):
 
 
 def slice_surface(mesh, d1=None, d2=None, rows=None, cols=None, align="none", units=None,
-                  projection="auto", center=None, axis=None):
+                  projection="auto", center=None, axis=None, view="auto", thesis_grid=False):
     """Cut ``mesh`` (a Mesh; no triangles = point cloud) into a ZGrid.
 
     ``projection`` names the cutting surfaces (``mzc.projections``); ``auto`` picks the
-    one that sees the surface best, and ``center``/``axis`` fix those of a central one
-    (``mzc.views``). The grid covers the extent of the surface in (u, v) with node (0, 0)
-    at its low corner, a full turn of a surface that goes all the way round. Spacings come
-    from ``d1``/``d2`` or from counts ``rows`` (across v) and ``cols`` (across u); by
-    default 72 rows, as the thesis's ~70 planes, and d2 = d1/10.
+    one that sees the surface best, ``view`` the direction a planar grid looks along (auto
+    or +x, -x, +y, -y, +z, -z of the ``align`` frame), and ``center``/``axis`` fix those of a
+    central one (``mzc.views``). The grid covers the extent of the surface in (u, v) with
+    node (0, 0) at its low corner, a full turn of a surface that goes all the way round.
+    Spacings come from ``d1``/``d2`` or from counts ``rows`` (across v) and ``cols``
+    (across u), else from the data (``spacings``); ``thesis_grid``: 72 rows, as the
+    thesis's ~70 planes, and d2 = d1/10. Warns (MzcWarning) when the grid's lines meet less
+    than SEEN_WARNING of the area well.
     """
-    from mzc.views import choose_view
+    from mzc.views import SEEN_WARNING, choose_view
 
-    view = choose_view(mesh, frame_for(mesh, align), projection, center, axis)
-    grid = slice_in_frame(mesh, view.rotation, view.shift, d1=d1, d2=d2, rows=rows, cols=cols, units=units,
-                          projection=view.projection, radius=view.radius, full_turn=view.full_turn)
+    chosen = choose_view(mesh, frame_for(mesh, align), projection, center, axis, view)
+    grid = slice_in_frame(mesh, chosen.rotation, chosen.shift, d1=d1, d2=d2, rows=rows, cols=cols, units=units,
+                          projection=chosen.projection, radius=chosen.radius, full_turn=chosen.full_turn,
+                          thesis_grid=thesis_grid)
     if np.isnan(grid.z).all():
-        raise MzcError("no grid node meets the surface (seen edge-on from +z? try --align pca)")
+        raise MzcError("no grid node meets the surface (seen edge-on? try --view or --align pca)")
+    if chosen.seen is not None and chosen.seen < SEEN_WARNING:
+        import warnings
+
+        from mzc.errors import MzcWarning
+
+        warnings.warn(MzcWarning(
+            f"the {chosen.projection} grid meets only {100 * chosen.seen:.0f}% of the surface's area within "
+            f"60 degrees of its node lines; the rest comes back coarse or not at all (try --projection auto, "
+            f"--view or --align pca)"), stacklevel=2)
     return grid
 
 
 def slice_in_frame(mesh, rotation, shift, d1=None, d2=None, rows=None, cols=None, units=None,
-                   projection="planar", radius=None, full_turn=False):
+                   projection="planar", radius=None, full_turn=False, thesis_grid=False):
     """The z-grid of ``mesh`` in the frame where input = rotation @ p + shift, over its (u, v) extent.
 
     Shared by ``slice_surface`` and ``mzc diff``, which samples surfaces in a given frame.
+    A planar grid of points that lie on a lattice, at the lattice's own spacings, holds
+    exactly their values, node for node (a DEM as x y z text).
     """
     from mzc.projections import to_nodes
 
     local = (mesh.points - shift) @ rotation
     nodes = to_nodes(projection, radius, local)
-    triangles = mesh.triangles if len(mesh.triangles) else triangulate_point_cloud(nodes[:, :2])
     low, high = nodes[:, :2].min(axis=0), nodes[:, :2].max(axis=0)
+    lattice = lattice_steps(nodes[:, :2]) if projection == "planar" else None
+    on_lattice = mesh.is_point_cloud and lattice is not None
+    triangles = mesh.triangles if len(mesh.triangles) or on_lattice else triangulate_point_cloud(nodes[:, :2])
     if projection != "planar":   # central grids start on a round (u, v): shorter headers, the same cover
         from mzc.views import rounded
 
@@ -127,11 +147,84 @@ def slice_in_frame(mesh, rotation, shift, d1=None, d2=None, rows=None, cols=None
         low[0], high[0] = -np.pi * radius, np.pi * radius
     if pole_to_pole:
         low[1], high[1] = -np.pi / 2 * radius, np.pi / 2 * radius
-    d1, d2, n_rows, n_cols = grid_size(high - low, d1, d2, rows, cols, full_turn, pole_to_pole)
+    if rows is None and cols is None:
+        d1, d2 = spacings(d1, d2, lattice, local, triangles, thesis_grid)
+    d1, d2, n_rows, n_cols = grid_size(high - low, d1, d2, rows, cols, full_turn, pole_to_pole, thesis_grid)
     xs, ys = low[0] + d2 * np.arange(n_cols), low[1] + d1 * np.arange(n_rows)
-    z = values_along(projection, radius, local, triangles, xs, ys)
+    if on_lattice and lattice == (d2, d1):
+        z = lattice_values(nodes, low, d1, d2, (n_rows, n_cols))
+    else:
+        if on_lattice:
+            triangles = triangulate_point_cloud(nodes[:, :2])
+        z = values_along(projection, radius, local, triangles, xs, ys)
     return ZGrid(z, d1, d2, origin=tuple(low), transform=np.column_stack([rotation, shift]), units=units,
                  projection=projection, radius=radius)
+
+
+def spacings(d1, d2, lattice, local, triangles, thesis_grid):
+    """(d1, d2) from the data where not given: on a lattice (``lattice_steps``) its own steps,
+    else DATA_SPACING_FRACTION of the median edge length of the ``triangles`` (a cloud's
+    Delaunay ones), for both; one spacing given, the other equals it. A given spacing
+    within SNAP_TOLERANCE of the lattice's own step is that step. ``thesis_grid`` leaves
+    them to ``grid_size`` (72 rows, d2 = d1/10)."""
+    if lattice is not None:
+        d2, d1 = (snapped(given, step, thesis_grid) for given, step in ((d2, lattice[0]), (d1, lattice[1])))
+    if thesis_grid or (d1 is not None and d2 is not None):
+        return d1, d2
+    if d1 is None and d2 is None:
+        d1 = d2 = data_spacing(local, triangles)
+    return (d1, d1) if d2 is None else (d2, d2)
+
+
+def snapped(given, step, keep_open=False):
+    """``step`` when ``given`` is within SNAP_TOLERANCE of it, or None (unless ``keep_open``),
+    else ``given``."""
+    if given is None:
+        return None if keep_open else step
+    return step if abs(given - step) <= SNAP_TOLERANCE * step else given
+
+
+def data_spacing(points, triangles):
+    """DATA_SPACING_FRACTION of the median edge length of ``triangles`` over ``points``."""
+    corners = points[np.asarray(triangles, dtype=np.int64)]
+    if not len(corners):
+        raise MzcError("the surface has no triangles to measure its sampling: give --d1 and --d2")
+    edges = np.linalg.norm(corners - np.roll(corners, 1, axis=1), axis=2)
+    return float(DATA_SPACING_FRACTION * np.median(edges))
+
+
+def lattice_steps(uv):
+    """(step in u, step in v) when every point's u and v lie on a regular lattice (within
+    LATTICE_TOLERANCE of a step; whole lines may be missing), else None."""
+    steps = []
+    for values in (uv[:, 0], uv[:, 1]):
+        distinct = np.unique(values)
+        extent = distinct[-1] - distinct[0]
+        gaps = np.diff(distinct)
+        gaps = gaps[gaps > LATTICE_TOLERANCE * extent]
+        if len(gaps) < 2:
+            return None
+        count = np.round(extent / gaps.min())
+        if count > MAX_DIMENSION:
+            return None
+        step = extent / count
+        position = (distinct - distinct[0]) / step
+        if np.abs(position - np.round(position)).max() > LATTICE_TOLERANCE:
+            return None
+        steps.append(float(step))
+    return tuple(steps)
+
+
+def lattice_values(nodes, low, d1, d2, shape):
+    """The grid of lattice points ``nodes`` (u, v, value) with node (0, 0) at ``low``: each
+    node holds its point's value (the outermost of several), NaN where there is none."""
+    col = np.round((nodes[:, 0] - low[0]) / d2).astype(np.int64)
+    row = np.round((nodes[:, 1] - low[1]) / d1).astype(np.int64)
+    inside = (row >= 0) & (row < shape[0]) & (col >= 0) & (col < shape[1])
+    z = np.full(shape, -np.inf)
+    np.maximum.at(z, (row[inside], col[inside]), nodes[inside, 2])
+    z[np.isinf(z)] = np.nan
+    return z
 
 
 def values_along(projection, radius, local, triangles, xs, ys):
@@ -157,15 +250,17 @@ def frame_for(mesh, align):
     raise MzcError(f"unknown alignment {align!r} (choose none or pca)", field="align")
 
 
-def grid_size(extent, d1, d2, rows, cols, full_turn=False, pole_to_pole=False):
+def grid_size(extent, d1, d2, rows, cols, full_turn=False, pole_to_pole=False, thesis_grid=False):
     """Resolve (d1, d2, rows, cols) from the options and the (u, v) ``extent`` (width, height).
 
-    With ``full_turn`` the width is a whole turn and the columns divide it evenly (the
-    last column neighbours the first), their count a multiple of 2^k, k = min(5, floor(log2
-    n) - 3) for about n columns, so that the wavelet of dwt2d wraps round at every level
-    down to about 8 columns (spec/dwt2d.md); with ``pole_to_pole`` the rows divide the
-    height evenly with a row on each end. Either way the spacing is the nearest to the one
-    asked that such a count allows.
+    Counts and spacings left open: ``thesis_grid`` puts 72 rows across, d2 = d1/10;
+    otherwise the cells are square (d2 = d1, or d1 = d2), a count gives the spacing that
+    puts that many nodes end to end. With ``full_turn`` the width is a whole turn and the columns
+    divide it evenly (the last column neighbours the first), their count a multiple of 2^k,
+    k = min(5, floor(log2 n) - 3) for about n columns, so that the wavelet of dwt2d wraps
+    round at every level down to about 8 columns (spec/dwt2d.md); with ``pole_to_pole`` the
+    rows divide the height evenly with a row on each end. Either way the spacing is the
+    nearest to the one asked that such a count allows.
     """
     width, height = float(extent[0]), float(extent[1])
     if d1 is not None and rows is not None:
@@ -174,10 +269,13 @@ def grid_size(extent, d1, d2, rows, cols, full_turn=False, pole_to_pole=False):
         raise MzcError("give either a column spacing (--d2) or a column count (--cols), not both")
     check_count(rows, "rows")
     check_count(cols, "cols")
-    if d1 is None:
+    if d1 is None and (rows is not None or thesis_grid or cols is None):
         d1 = spacing_from_count(height, rows or DEFAULT_ROWS, "rows", "y")
     if d2 is None:
-        d2 = d1 / COLUMN_STEP_RATIO if cols is None else spacing_from_count(width, cols, "cols", "x")
+        d2 = spacing_from_count(width, cols, "cols", "x") if cols is not None else \
+            d1 / COLUMN_STEP_RATIO if thesis_grid else d1
+    if d1 is None:
+        d1 = d2
     check_spacing(d1, "d1")
     check_spacing(d2, "d2")
     n_rows = rows or nodes_across(height, d1)
@@ -213,7 +311,9 @@ def check_spacing(value, name):
 
 
 def nodes_across(extent, step):
-    """How many nodes of spacing ``step`` fit across ``extent``, counting both ends."""
+    """How many nodes of spacing ``step`` fit across ``extent``, counting both ends (a node
+    past the end would miss the surface; a lattice's own step, which ``spacings`` snaps a
+    spacing within SNAP_TOLERANCE of to, puts the last node on the last lattice line)."""
     count = extent / step
     if count >= MAX_DIMENSION:
         return MAX_DIMENSION + 1

@@ -20,6 +20,11 @@ class Surface:
     triangles: np.ndarray
     grid: object = None
 
+    @property
+    def is_point_cloud(self):
+        """True for points without triangles (a cloud read from a file)."""
+        return len(self.triangles) == 0 and self.grid is None
+
 
 def starts_like_mzc(path):
     """True when the file at ``path`` begins with an mzc magic line."""

@@ -45,61 +45,117 @@ SCORE_TRIANGLES = 4096       # triangles scored (a seeded random sample of the m
 class View:
     """How to slice: ``projection``, the grid frame (input = rotation @ p + shift; for central
     projections ``shift`` is the centre and rotation's second column the axis), the
-    reference ``radius`` and whether the columns make a ``full_turn``."""
+    reference ``radius``, whether the columns make a ``full_turn``, and the share of the
+    area its node lines meet within 60 degrees (``seen``; None when not scored)."""
 
     projection: str
     rotation: np.ndarray
     shift: np.ndarray
     radius: float | None = None
     full_turn: bool = False
+    seen: float | None = None
 
 
-def choose_view(mesh, frame, projection="auto", center=None, axis=None):
+PLANAR_VIEWS = {   # the grid frame's axes (columns) in the slicing frame, per view direction
+    "+z": ((1, 0, 0), (0, 1, 0), (0, 0, 1)),
+    "-z": ((-1, 0, 0), (0, 1, 0), (0, 0, -1)),
+    "+x": ((0, 0, -1), (0, 1, 0), (1, 0, 0)),
+    "-x": ((0, 0, 1), (0, 1, 0), (-1, 0, 0)),
+    "+y": ((-1, 0, 0), (0, 0, 1), (0, 1, 0)),
+    "-y": ((1, 0, 0), (0, 0, 1), (0, -1, 0)),
+}
+VIEW_MARGIN = 0.05           # another axis must see 5% more of the area than the frame's z
+SEEN_WARNING = 0.5           # say so when the grid sees less than half the area well
+NEIGHBOURS = 10              # points whose spread gives a cloud point's normal
+
+
+def choose_view(mesh, frame, projection="auto", center=None, axis=None, view="auto"):
     """The View of ``mesh`` (a Mesh) for ``projection`` (auto, planar, cylindrical, spherical).
 
-    ``frame`` = (rotation, shift) of the planar slicing frame (``--align``); ``center`` and
-    ``axis`` (input-frame 3-vectors) fix those of a central projection, auto choosing the rest.
+    ``frame`` = (rotation, shift) of the slicing frame (``--align``); ``view`` (auto or one
+    of PLANAR_VIEWS) the direction a planar grid looks along in it, and the one central
+    centres are sought behind; ``center`` and ``axis`` (input-frame 3-vectors) fix those of
+    a central projection, auto choosing the rest.
     """
     rotation, shift = frame
-    if projection == "planar":
-        if center is not None or axis is not None:
-            raise MzcError("--center and --axis need a central projection (cylindrical or spherical)",
-                           field="projection")
-        return View("planar", rotation, shift)
-    if not len(mesh.triangles):   # a point cloud has no normals to score views with
-        if projection == "auto":
-            return View("planar", rotation, shift)
+    if (center is not None or axis is not None) and projection == "planar":
+        raise MzcError("--center and --axis need a central projection (cylindrical or spherical)",
+                       field="projection")
+    surface = Facets.of_mesh(mesh)
+    rotation, planar_score = planar_view(surface, rotation, view)
+    if projection == "planar" or (projection == "auto" and mesh.is_point_cloud):
+        return View("planar", rotation, shift, seen=planar_score)
+    if mesh.is_point_cloud:   # a cloud's central grid, about the middle of its box unless told
         low, high = mesh.points.min(axis=0), mesh.points.max(axis=0)
         return central_view(mesh.points, projection, (low + high) / 2 if center is None else center,
                             rotation[:, 1] if axis is None else axis, rotation[:, 2])
-    surface = Facets(mesh.points, mesh.triangles)
-    planar_score = surface.share_along(rotation[:, 2])
     kinds = ("cylindrical", "spherical") if projection == "auto" else (projection,)
     best = max((central_candidate(surface, kind, rotation, center, axis) for kind in kinds), key=lambda c: c[0])
     if projection == "auto" and planar_score >= best[0] - PLANAR_MARGIN:
-        return View("planar", rotation, shift)
-    _score, kind, centre, direction = best
+        return View("planar", rotation, shift, seen=planar_score)
+    score, kind, centre, direction = best
     if center is None:   # any centre near the best will do: one with short numbers keeps headers short
         centre = rounded(centre, surface.half_diagonal)
-    return central_view(mesh.points, kind, centre, direction, rotation[:, 2])
+    chosen = central_view(mesh.points, kind, centre, direction, rotation[:, 2])
+    chosen.seen = score
+    return chosen
+
+
+def planar_view(surface, rotation, view):
+    """(rotation of the planar grid frame, its share) looking along ``view`` of the slicing
+    frame ``rotation``; ``auto``: along the frame axis that sees most of the area (z unless
+    another sees VIEW_MARGIN more), from the side the surface faces (``Facets.facing``)."""
+    if view == "auto":
+        shares = [surface.share_along(rotation[:, k]) for k in (2, 1, 0)]
+        k = (2, 1, 0)[int(np.argmax(shares))] if max(shares) > shares[0] + VIEW_MARGIN else 2
+        view = ("+" if surface.facing(rotation[:, k]) >= 0 else "-") + "xyz"[k]
+    if view not in PLANAR_VIEWS:
+        raise MzcError(f"unknown view {view!r} (choose auto or one of {', '.join(PLANAR_VIEWS)})", field="view")
+    rotation = rotation @ np.array(PLANAR_VIEWS[view], dtype=float).T
+    return rotation, surface.share_along(rotation[:, 2])
 
 
 class Facets:
-    """The triangles that score a view: centroids, unit normals and areas of a sample of them."""
+    """What scores a view: centroids, unit normals and areas of a sample of a surface's
+    triangles (``of_mesh``), or of a point cloud's points, each with the normal its file
+    gives or the spread of its neighbours (unoriented) shows and equal areas.
+    ``oriented`` says whether the normals' signs mean anything."""
 
-    def __init__(self, points, triangles):
-        points = np.asarray(points, dtype=float)
-        triangles = np.asarray(triangles, dtype=np.int64)
-        if len(triangles) > SCORE_TRIANGLES:   # a seeded draw: a stride can follow the mesh's own order
-            triangles = triangles[np.random.default_rng(0).choice(len(triangles), SCORE_TRIANGLES, replace=False)]
+    def __init__(self, centroid, normal, area, points, oriented=True):
+        self.centroid, self.normal, self.area, self.oriented = centroid, normal, area, oriented
+        low, high = points.min(axis=0), points.max(axis=0)
+        self.box_centre, self.half_diagonal = (low + high) / 2, np.linalg.norm(high - low) / 2
+
+    @classmethod
+    def of_mesh(cls, mesh):
+        """The Facets of a Mesh: a seeded sample of SCORE_TRIANGLES triangles (or points)."""
+        points = np.asarray(mesh.points, dtype=float)
+        rng = np.random.default_rng(0)   # a seeded draw: a stride can follow the mesh's own order
+        if mesh.is_point_cloud:
+            chosen = rng.choice(len(points), SCORE_TRIANGLES, replace=False) if len(points) > SCORE_TRIANGLES \
+                else np.arange(len(points))
+            if mesh.normals is not None:
+                normal, oriented = mesh.normals[chosen], True
+            else:
+                normal, oriented = cloud_normals(points, chosen), False
+            length = np.linalg.norm(normal, axis=1)
+            keep = length > 0
+            return cls(points[chosen][keep], normal[keep] / length[keep, None], np.ones(keep.sum()), points,
+                       oriented)
+        triangles = np.asarray(mesh.triangles, dtype=np.int64)
+        if len(triangles) > SCORE_TRIANGLES:
+            triangles = triangles[rng.choice(len(triangles), SCORE_TRIANGLES, replace=False)]
         corners = points[triangles]
         normal = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
         doubled = np.linalg.norm(normal, axis=1)
         keep = doubled > 0
-        self.area, self.normal = doubled[keep], normal[keep] / doubled[keep, None]
-        self.centroid = corners[keep].mean(axis=1)
-        low, high = points.min(axis=0), points.max(axis=0)
-        self.box_centre, self.half_diagonal = (low + high) / 2, np.linalg.norm(high - low) / 2
+        return cls(corners[keep].mean(axis=1), normal[keep] / doubled[keep, None], doubled[keep], points)
+
+    def facing(self, direction):
+        """Which way along ``direction`` the surface faces: the sign of its area-weighted
+        normal (its winding, or the normals a cloud's file gives); + when the normals are
+        unoriented (a bare cloud: which side it was seen from is not in its points)."""
+        return float(np.dot(self.area, self.normal @ direction)) if self.oriented else 1.0
 
     def share(self, rays):
         """Area share of the facets whose normal is within 60 degrees of their (unit) ray.
@@ -109,6 +165,8 @@ class Facets:
         near side of a closed surface seen from outside, hidden behind the outermost hit.
         """
         cosine = np.einsum("ij,ij->i", self.normal, rays)
+        if not self.oriented:
+            cosine = np.abs(cosine)
         cosine *= 1.0 if np.dot(self.area, cosine) >= 0 else -1.0
         total = self.area.sum()
         return float(self.area[cosine >= FACING_COSINE].sum() / total) if total > 0 else 0.0
@@ -200,6 +258,19 @@ def golden_section(score, low, high):
             right = low + ratio * (high - low)
             score_right = score(right)
     return (left, score_left) if score_left >= score_right else (right, score_right)
+
+
+def cloud_normals(points, chosen):
+    """Unit normals (unoriented) of the ``chosen`` points of a cloud: the direction of least
+    spread of each one's NEIGHBOURS nearest points."""
+    from scipy.spatial import cKDTree
+
+    count = min(NEIGHBOURS, len(points))
+    _distance, neighbours = cKDTree(points).query(points[chosen], k=count)
+    near = points[np.asarray(neighbours).reshape(len(chosen), count)]
+    offsets = near - near.mean(axis=1, keepdims=True)
+    _spread, axes = np.linalg.eigh(np.einsum("nki,nkj->nij", offsets, offsets))
+    return axes[:, :, 0]
 
 
 def unit(vector, name):

@@ -163,7 +163,9 @@ def test_point_cloud_slices_like_the_surface_it_samples():
 def test_point_cloud_plane_is_exact():
     rng = np.random.default_rng(4)
     xy = rng.uniform(0, 10, (3000, 2))
-    grid = slice_surface(Mesh(np.column_stack([xy, 0.3 * xy[:, 0] - 2 * xy[:, 1] + 1])), d1=0.5)
+    # steeper than 60 degrees: auto would look along y; the heights are checked in the input frame
+    grid = slice_surface(Mesh(np.column_stack([xy, 0.3 * xy[:, 0] - 2 * xy[:, 1] + 1])), d1=0.5, d2=0.05,
+                         view="+z")
     x, y = np.meshgrid(grid.xs(), grid.ys())
     valid = grid.valid
     assert valid.mean() > 0.9
@@ -256,8 +258,27 @@ def rectangle():
     return grid_mesh(np.linspace(0, 20, 11), np.linspace(0, 71, 11), lambda x, y: x * 0 + 1)
 
 
-def test_default_grid_follows_the_thesis(rectangle):
+def test_default_grid_is_the_lattice_the_vertices_lie_on(rectangle):
     grid = slice_surface(rectangle)
+    assert grid.shape == (11, 11) and (grid.d1, grid.d2) == pytest.approx((7.1, 2))
+    assert slice_surface(rectangle, d1=7.1001).d1 == pytest.approx(7.1)      # a hair off snaps to it
+
+
+def test_default_spacing_elsewhere_is_half_the_median_edge():
+    rng = np.random.default_rng(8)
+    xy = rng.uniform(0, 10, (4000, 2))
+    cloud = Mesh(np.column_stack([xy, np.sin(xy[:, 0])]))
+    triangles = triangulate_point_cloud(xy)
+    corners = cloud.points[triangles]
+    median = np.median(np.linalg.norm(corners - np.roll(corners, 1, axis=1), axis=2))
+    grid = slice_surface(cloud, view="+z")
+    assert grid.d1 == grid.d2 == pytest.approx(median / 2)
+    x, y = grid.xs(), grid.ys()
+    assert xy[:, 0].max() - x[-1] < grid.d2 and xy[:, 1].max() - y[-1] < grid.d1
+
+
+def test_thesis_grid_option(rectangle):
+    grid = slice_surface(rectangle, thesis_grid=True)
     assert grid.shape == (72, 201)
     assert grid.d1 == pytest.approx(1) and grid.d2 == pytest.approx(0.1)
     assert grid.origin == (0, 0) and grid.units is None
@@ -265,11 +286,12 @@ def test_default_grid_follows_the_thesis(rectangle):
 
 
 @pytest.mark.parametrize("options,shape,spacings", [
-    ({"d1": 2}, (36, 101), (2, 0.2)),
+    ({"d1": 2}, (36, 11), (2, 2)),          # d2: the vertices' own lattice step
     ({"d1": 2, "d2": 1}, (36, 21), (2, 1)),
     ({"rows": 11, "cols": 5}, (11, 5), (7.1, 5)),
-    ({"rows": 36}, (36, 99), (71 / 35, 71 / 350)),
+    ({"rows": 36}, (36, 10), (71 / 35, 71 / 35)),
     ({"d1": 10, "cols": 3}, (8, 3), (10, 10)),
+    ({"d1": 2, "thesis_grid": True}, (36, 101), (2, 0.2)),
 ])
 def test_spacing_and_count_options(rectangle, options, shape, spacings):
     grid = slice_surface(rectangle, units="mm", **options)
@@ -294,8 +316,10 @@ def test_bad_grid_options_are_refused(rectangle, options, message):
 
 def test_surface_seen_edge_on_is_refused():
     wall = Mesh([[0, 0, 0], [1, 0, 0], [0, 0, 1], [1, 1e-20, 1]], [[0, 1, 2], [1, 3, 2]])
-    with pytest.raises(MzcError):
-        slice_surface(wall, d1=0.1)
+    with pytest.raises(MzcError, match="edge-on"):
+        slice_surface(wall, d1=0.1, view="+z")
+    grid = slice_surface(wall, d1=0.1)                 # auto looks at it along y
+    assert grid.valid.all() and abs(grid.transform[1, 2]) == 1
 
 
 # --------------------------------------------------------------------------- real faces
@@ -349,7 +373,7 @@ def test_cli_slices_a_mesh_to_a_zgrid(tmp_path, mzc):
     result = mzc("slice", source, "-o", tmp_path / "out.zg", "--d1", "0.5", "--units", "mm")
     assert result.returncode == 0, result.stderr
     grid = zgrid.read((tmp_path / "out.zg").read_bytes(), "out.zg")
-    assert grid.shape == (9, 81) and grid.units == "mm"
+    assert grid.shape == (9, 9) and grid.units == "mm"                 # d2: the vertices' own 0.5
     np.testing.assert_allclose(grid.z, grid.xs()[None, :] - grid.ys()[:, None], atol=1e-12)
 
 

@@ -50,9 +50,13 @@ def command(a, b, rmse, max_, mean, r2, percentiles, count, surface, heightfield
         if output:
             check_not_input(output, a, b)
     first, second = load_surface(a), load_surface(b)
+    chosen = [name for name, on in zip(STATISTICS, (rmse, max_, mean, r2, percentiles, count)) if on]
+    if first.is_point_cloud or second.is_point_cloud:
+        report = cloud_report(first, second, a, b, chosen, error_grid or plot)
+        click.echo(json.dumps(report, indent=2) if as_json else format_report(report))
+        return
     reference, errors = compute_error_grid(first, second, d1, d2)
     stats = grid_error_stats(reference.z, reference.z + errors.z)
-    chosen = [name for name, on in zip(STATISTICS, (rmse, max_, mean, r2, percentiles, count)) if on]
     report = select(stats, chosen or STATISTICS)
     if surface or heightfield or any(side.grid is not None and side.grid.projection != "planar"
                                      for side in (first, second)):
@@ -64,6 +68,22 @@ def command(a, b, rmse, max_, mean, r2, percentiles, count, surface, heightfield
     if plot:
         write_plot(plot, reference, errors, stats)
     click.echo(json.dumps(report, indent=2) if as_json else format_report(report))
+
+
+def cloud_report(first, second, a, b, chosen, grid_output):
+    """The distances of a point cloud's points to the other side's surface, direction stated."""
+    from mzc.errors import MzcError
+    from mzc.metrics import distance_to_mesh, distance_stats
+
+    if first.is_point_cloud and second.is_point_cloud:
+        raise MzcError("both sides are point clouds: give a mesh or an mzc file on one side", field="diff")
+    if grid_output:
+        raise MzcError("--error-grid and --plot need two surfaces, not a point cloud", field="diff")
+    (cloud, cloud_name), (mesh, mesh_name) = ((first, a), (second, b)) if first.is_point_cloud else \
+        ((second, b), (first, a))
+    stats = distance_stats(distance_to_mesh(cloud.points, mesh.points, mesh.triangles))
+    return {"direction": f"points of {cloud_name} to the surface of {mesh_name}",
+            **select(stats, [name for name in chosen or STATISTICS if name != "r2"])}
 
 
 def surface_report(first, second, heightfield, samples, seed):

@@ -8,10 +8,13 @@ from mzc.commands import input_argument, output_option, write_grid
 @click.command("slice")
 @input_argument
 @output_option
-@click.option("--d1", type=float, metavar="F", help="Row spacing: distance between horizontal planes.")
-@click.option("--d2", type=float, metavar="F", help="Column spacing along each row [default: d1/10].")
-@click.option("--rows", type=int, metavar="N", help="Number of rows across y instead of --d1 [default: 72].")
+@click.option("--d1", type=float, metavar="F",
+              help="Row spacing: distance between horizontal planes [default: from the data].")
+@click.option("--d2", type=float, metavar="F", help="Column spacing along each row [default: d1].")
+@click.option("--rows", type=int, metavar="N", help="Number of rows across y instead of --d1.")
 @click.option("--cols", type=int, metavar="N", help="Number of columns across x instead of --d2.")
+@click.option("--thesis-grid", is_flag=True,
+              help="The thesis's grid: 72 rows across the surface, columns ten times denser.")
 @click.option("--align", type=click.Choice(["none", "pca"]), default="none", show_default=True,
               help="pca: rotate so the least spread is z and the most spread is y.")
 @click.option("--projection", type=click.Choice(["auto", "planar", "cylindrical", "spherical"]), default="auto",
@@ -19,6 +22,10 @@ from mzc.commands import input_argument, output_option, write_grid
               help="Cutting surfaces: the thesis's parallel planes, or planes and half-planes through an axis "
                    "(cylindrical), or half-planes and cones about a centre (spherical); auto picks what sees "
                    "the surface best.")
+@click.option("--view", type=click.Choice(["auto", "+z", "-z", "+x", "-x", "+y", "-y"]), default="auto",
+              show_default=True,
+              help="The direction a planar grid looks along (the side it sees the surface from), in the "
+                   "--align frame; auto: the axis that sees most of the surface, from the side it faces.")
 @click.option("--center", type=float, nargs=3, metavar="X Y Z",
               help="Centre of a central projection (a point of a cylinder's axis) [default: chosen].")
 @click.option("--axis", type=float, nargs=3, metavar="X Y Z",
@@ -26,7 +33,8 @@ from mzc.commands import input_argument, output_option, write_grid
 @click.option("--units", metavar="TEXT", help="Length unit to record, e.g. mm.")
 @click.option("--precision", type=click.IntRange(0, 17), metavar="DIGITS",
               help="Decimal digits of the written heights.")
-def command(input, output, d1, d2, rows, cols, align, projection, center, axis, units, precision):
+def command(input, output, d1, d2, rows, cols, thesis_grid, align, projection, view, center, axis, units,
+            precision):
     """Cut a mesh (OBJ, PLY, VTK, STL, OFF) or point cloud (x y z text, vertex-only PLY)
     into a z-grid: each node holds the outermost hit of its line with the surface (the
     front-most height of planar grids, the farthest distance along a central ray)."""
@@ -41,5 +49,6 @@ def command(input, output, d1, d2, rows, cols, align, projection, center, axis, 
     check_not_input(output, input)
     mesh = read_mesh(input)
     grid = slice_surface(mesh, d1=d1, d2=d2, rows=rows, cols=cols, align=align, units=units,
-                         projection=projection, center=center, axis=axis)
+                         projection=projection, center=center, axis=axis, view=view,
+                         thesis_grid=thesis_grid)
     write_grid(grid, output, precision=precision)
