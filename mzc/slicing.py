@@ -16,7 +16,8 @@ from mzc.grid import ZGrid
 
 DEFAULT_ROWS = 72           # the thesis cuts a face with about 70 horizontal planes (--thesis-grid)
 COLUMN_STEP_RATIO = 10      # and uses about 10x as many vertical planes: d2 = d1/10
-DATA_SPACING_FRACTION = 0.5   # default spacing: half the median edge of the surface's triangles
+DATA_SPACING_FRACTION = 0.5   # default spacing: half the median edge of the surface's triangles,
+MIN_NODES_ACROSS = 200        # and at least 200 nodes along the longest side
 SNAP_TOLERANCE = 1e-3       # a spacing this close (relative) to a lattice's own step snaps to it
 LATTICE_TOLERANCE = 1e-6    # coordinates this close (in steps) to a multiple of the step lie on a lattice
 LONG_EDGE_FACTOR = 5.0
@@ -163,7 +164,7 @@ def slice_in_frame(mesh, rotation, shift, d1=None, d2=None, rows=None, cols=None
 
 def spacings(d1, d2, lattice, local, triangles, thesis_grid):
     """(d1, d2) from the data where not given: on a lattice (``lattice_steps``) its own steps,
-    else DATA_SPACING_FRACTION of the median edge length of the ``triangles`` (a cloud's
+    else ``data_spacing`` (half the median edge length of the ``triangles``, a cloud's
     Delaunay ones), for both; one spacing given, the other equals it. A given spacing
     within SNAP_TOLERANCE of the lattice's own step is that step. ``thesis_grid`` leaves
     them to ``grid_size`` (72 rows, d2 = d1/10)."""
@@ -185,12 +186,15 @@ def snapped(given, step, keep_open=False):
 
 
 def data_spacing(points, triangles):
-    """DATA_SPACING_FRACTION of the median edge length of ``triangles`` over ``points``."""
+    """DATA_SPACING_FRACTION of the median edge length of ``triangles`` over ``points``, at
+    most 1/MIN_NODES_ACROSS of the surface's longest side (a CAD part's few large
+    triangles say nothing of the detail it needs)."""
     corners = points[np.asarray(triangles, dtype=np.int64)]
     if not len(corners):
         raise MzcError("the surface has no triangles to measure its sampling: give --d1 and --d2")
     edges = np.linalg.norm(corners - np.roll(corners, 1, axis=1), axis=2)
-    return float(DATA_SPACING_FRACTION * np.median(edges))
+    longest = float(np.ptp(points, axis=0).max())
+    return float(min(DATA_SPACING_FRACTION * np.median(edges), longest / MIN_NODES_ACROSS))
 
 
 def lattice_steps(uv):

@@ -199,7 +199,7 @@ def area_factor(z, spacing, metric=(1.0, 1.0), periodic=False, jumps=None):
     differences never span an edge of ``jumps`` (a triangulation.Jumps)."""
     h_u, h_v = metric
     with np.errstate(divide="ignore", invalid="ignore"):
-        across = gradient(z, 0, spacing[0], breaks=None if jumps is None else jumps.across) / h_v
+        across = gradient(z, 0, spacing[0], breaks=None if jumps is None else jumps.across[:, :z.shape[1]]) / h_v
         along = gradient(z, 1, spacing[1], periodic, breaks=None if jumps is None else jumps.along) / h_u
         return np.sqrt(1.0 + across ** 2 + along ** 2)
 

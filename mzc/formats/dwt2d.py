@@ -37,6 +37,9 @@ DEFAULT_WAVELET = "bior4.4"
 ALPHAS = (3.2, 4.8, 7.2)   # max_error: wavelet step = alpha * E (the best alpha grows from 3 to 8 as E
                            # goes from 0.05 to 2 mm on the faces), the smallest file wins...
 ALPHA_SLACK = 0.01         # ...but a smaller alpha within 1% of it is taken for its lower RMS error
+UNIT_RATIO = 100.0          # heights spanning more than 100x the width: not one unit (check_shared_unit)
+GEOGRAPHIC_RATIO = 10.0     # within lon/lat bounds at spacings under GEOGRAPHIC_STEP, 10x already
+GEOGRAPHIC_STEP = 0.1
 SLOPE_LIMIT = 2.0          # steps grow as 1/sqrt(cos(lean)) up to 2x (76 degrees); 1 = equal steps
 APPROXIMATION_GAIN = 0.7   # band 0's step over the finest detail step (measured: 0.5-3% smaller files)
 LEVEL_RATIO = 0.9          # each coarser detail level's step over the next finer one's (measured: 0.4-3.6%)
@@ -429,6 +432,8 @@ def write(grid, max_error=None, rmse=None, size=None, wavelet=DEFAULT_WAVELET, l
     target = float({"max_error": max_error, "rmse": rmse, "size": size}[given[0]])
     if not np.isfinite(target) or target <= 0:
         raise MzcError(f"must be a positive number, found {target}", field=given[0])
+    if max_error is None:
+        check_shared_unit(grid, given[0])
     if slope_limit is None:
         slope_limit = 1.0 if max_error is not None else SLOPE_LIMIT
     if not slope_limit >= 1:
@@ -447,6 +452,30 @@ def write(grid, max_error=None, rmse=None, size=None, wavelet=DEFAULT_WAVELET, l
     step = 1.0 / w2.search_step(lambda inv: len(prepared.encode(w2.round_step(1.0 / inv))), target,
                                 1.0 / (4.0 * span), 1e9 / span, iterations=20)
     return prepared.encode(w2.round_step(step))
+
+
+def check_shared_unit(grid, field):
+    """Refuse ``rmse`` and ``size`` on a planar grid whose x, y and z cannot share a unit.
+
+    Both measure errors as distances across all three axes (the slope model weighs a
+    height error by the lean of the surface); a DEM in lon/lat degrees with heights in
+    metres leans by nearly 90 degrees everywhere to that model, and a --rmse of 1.34 once
+    gave 306 m. Such grids show heights spanning more than UNIT_RATIO times their width,
+    or GEOGRAPHIC_RATIO times on a grid within lon/lat bounds with spacings under
+    GEOGRAPHIC_STEP (a DEM's arc-seconds). Central grids are lengths by
+    construction."""
+    z = grid.z[grid.valid]
+    if grid.projection != "planar" or z.size < 2:
+        return
+    xs, ys = grid.xs(), grid.ys()
+    width = max(np.ptp(xs), np.ptp(ys), grid.d1, grid.d2)
+    ratio = float(np.ptp(z)) / width
+    geographic = np.abs(xs).max() <= 180 and np.abs(ys).max() <= 90 and max(grid.d1, grid.d2) < GEOGRAPHIC_STEP
+    if ratio > UNIT_RATIO or (geographic and ratio > GEOGRAPHIC_RATIO):
+        raise MzcError(f"the heights span {ratio:.0f} times the grid's width, so x, y and z cannot share one unit "
+                       f"(lon/lat degrees with heights in metres?) and a surface error means nothing: project "
+                       f"the grid to a metric frame, or use --max-error, which bounds the heights alone",
+                       field=field)
 
 
 # --------------------------------------------------------------------------- decoder
