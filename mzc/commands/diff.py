@@ -19,7 +19,9 @@ honest on steep walls where z error explodes; it is on by default when either si
 a central (cylindrical or spherical) grid, which is compared in space.
 --heightfield adds the same distance over A's height-field part (triangles facing
 within 60 degrees of +z and seen from +z, and the samples of B nearest to them), the
-part a z-grid can represent; the benchmarks report both.""")
+part a z-grid can represent; the benchmarks report both. With a point cloud on either
+side, the distances of its points to the other side's surface are reported instead, the
+direction on the first line.""")
 @click.argument("a", metavar="A")
 @click.argument("b", metavar="B")
 @click.option("--rmse", is_flag=True, help="Root mean square of B - A.")
