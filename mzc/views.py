@@ -11,7 +11,11 @@ so the inside of a fold, or the near side of a closed surface seen from outside,
 the outermost hit cannot see, does not count. Planar wins unless a central projection sees more than
 PLANAR_MARGIN more of the area, so terrain stays on the thesis's planes.
 
-Candidates, in the slicing frame (``--align``; planar grids look along its z): centres
+The planar grid looks along an axis of the slicing frame (``--align``): its z, unless its
+y or x sees VIEW_MARGIN more of the area (a part lying in the xz plane), from the side the
+surface faces (the sign of its area-weighted normal, so a scan facing -z is seen from -z;
+a cloud without normals in its file from the + side); ``--view`` sets it. Central
+candidates, in the frame of that view (planar grids look along its z): centres
 on the line from the centre of the bounding box backwards along -z, 0 to 2 half-diagonals
 of the box behind it; the axis of a spherical grid is the frame's y (its score does not
 depend on the axis: rays from one centre are the same rays), a cylinder's the frame's y,
@@ -132,16 +136,7 @@ class Facets:
         points = np.asarray(mesh.points, dtype=float)
         rng = np.random.default_rng(0)   # a seeded draw: a stride can follow the mesh's own order
         if mesh.is_point_cloud:
-            chosen = rng.choice(len(points), SCORE_TRIANGLES, replace=False) if len(points) > SCORE_TRIANGLES \
-                else np.arange(len(points))
-            if mesh.normals is not None:
-                normal, oriented = mesh.normals[chosen], True
-            else:
-                normal, oriented = cloud_normals(points, chosen), False
-            length = np.linalg.norm(normal, axis=1)
-            keep = length > 0
-            return cls(points[chosen][keep], normal[keep] / length[keep, None], np.ones(keep.sum()), points,
-                       oriented)
+            return cls.of_cloud(points, mesh.normals, rng)
         triangles = np.asarray(mesh.triangles, dtype=np.int64)
         if len(triangles) > SCORE_TRIANGLES:
             triangles = triangles[rng.choice(len(triangles), SCORE_TRIANGLES, replace=False)]
@@ -150,6 +145,18 @@ class Facets:
         doubled = np.linalg.norm(normal, axis=1)
         keep = doubled > 0
         return cls(corners[keep].mean(axis=1), normal[keep] / doubled[keep, None], doubled[keep], points)
+
+    @classmethod
+    def of_cloud(cls, points, normals, rng):
+        """The Facets of a point cloud: SCORE_TRIANGLES of its points, equal areas, with the
+        ``normals`` of its file (oriented) or those of their neighbourhoods (unoriented)."""
+        count = min(SCORE_TRIANGLES, len(points))
+        chosen = rng.choice(len(points), count, replace=False) if len(points) > count else np.arange(count)
+        normal = normals[chosen] if normals is not None else cloud_normals(points, chosen)
+        length = np.linalg.norm(normal, axis=1)
+        keep = length > 0
+        return cls(points[chosen][keep], normal[keep] / length[keep, None], np.ones(keep.sum()), points,
+                   oriented=normals is not None)
 
     def facing(self, direction):
         """Which way along ``direction`` the surface faces: the sign of its area-weighted
