@@ -198,3 +198,15 @@ def test_a_real_cad_part_encodes_on_its_full_turn_grid():
 def whole_rms(mesh, grid):
     """The symmetric point-to-surface RMS between ``mesh`` and the triangulated ``grid``."""
     return surface_distance((mesh.points, mesh.triangles), grid_to_mesh(grid), samples=20_000)["rms"]
+
+
+@pytest.mark.parametrize("name", ["jacksboro", "topobathy"])
+def test_a_dem_mesh_slices_by_default_to_its_own_grid_exactly(name):
+    """matplotlib's DEMs as meshes: the default grid is the DEM's, every node its height (no
+    resampling: 72 x 669 resampled nodes before the default followed the data)."""
+    from mzc import samples
+
+    truth = getattr(samples, name)()
+    grid = slice_surface(samples.sample_mesh(name))
+    assert grid.shape == truth.shape and (grid.d1, grid.d2) == (truth.d1, truth.d2)
+    assert np.array_equal(grid.valid, truth.valid) and np.array_equal(grid.z[grid.valid], truth.z[truth.valid])
