@@ -65,8 +65,9 @@ def timed(function, *args, **kwargs):
 
 
 def dense_rmse(decoded, truth, method):
-    """RMSE of the densified decoded grid against the surface sampled at the dense spacing."""
-    dense = densify_grid(decoded, INSERTED, method=method)
+    """RMSE of the densified decoded grid against the surface sampled at the dense spacing
+    (every neighbour joined, depth jumps or not, as in the thesis)."""
+    dense = densify_grid(decoded, INSERTED, method=method, jump_angle=0)
     rows = min(dense.z.shape[0], truth.z.shape[0])
     return grid_error_stats(truth.z[:rows], dense.z[:rows])["rmse"]
 
