@@ -135,8 +135,9 @@ def slice_in_frame(mesh, rotation, shift, d1=None, d2=None, rows=None, cols=None
     nodes = to_nodes(projection, radius, local)
     low, high = nodes[:, :2].min(axis=0), nodes[:, :2].max(axis=0)
     lattice = lattice_steps(nodes[:, :2]) if projection == "planar" else None
-    on_lattice = mesh.is_point_cloud and lattice is not None
-    triangles = mesh.triangles if len(mesh.triangles) or on_lattice else triangulate_point_cloud(nodes[:, :2])
+    triangles = mesh.triangles
+    if mesh.is_point_cloud and lattice is None:   # a lattice cloud at its own steps needs none
+        triangles = triangulate_point_cloud(nodes[:, :2])
     if projection != "planar":   # central grids start on a round (u, v): shorter headers, the same cover
         from mzc.views import rounded
 
@@ -152,10 +153,10 @@ def slice_in_frame(mesh, rotation, shift, d1=None, d2=None, rows=None, cols=None
         d1, d2 = spacings(d1, d2, lattice, local, triangles, thesis_grid)
     d1, d2, n_rows, n_cols = grid_size(high - low, d1, d2, rows, cols, full_turn, pole_to_pole, thesis_grid)
     xs, ys = low[0] + d2 * np.arange(n_cols), low[1] + d1 * np.arange(n_rows)
-    if on_lattice and lattice == (d2, d1):
+    if mesh.is_point_cloud and lattice == (d2, d1):
         z = lattice_values(nodes, low, d1, d2, (n_rows, n_cols))
     else:
-        if on_lattice:
+        if not len(triangles):
             triangles = triangulate_point_cloud(nodes[:, :2])
         z = values_along(projection, radius, local, triangles, xs, ys)
     return ZGrid(z, d1, d2, origin=tuple(low), transform=np.column_stack([rotation, shift]), units=units,
@@ -259,8 +260,8 @@ def grid_size(extent, d1, d2, rows, cols, full_turn=False, pole_to_pole=False, t
 
     Counts and spacings left open: ``thesis_grid`` puts 72 rows across, d2 = d1/10;
     otherwise the cells are square (d2 = d1, or d1 = d2), a count gives the spacing that
-    puts that many nodes end to end. With ``full_turn`` the width is a whole turn and the columns
-    divide it evenly (the last column neighbours the first), their count a multiple of 2^k,
+    puts that many nodes end to end. With ``full_turn`` the width is a whole turn and the
+    columns divide it evenly (the last column neighbours the first), their count a multiple of 2^k,
     k = min(5, floor(log2 n) - 3) for about n columns, so that the wavelet of dwt2d wraps
     round at every level down to about 8 columns (spec/dwt2d.md); with ``pole_to_pole`` the
     rows divide the height evenly with a row on each end. Either way the spacing is the
