@@ -210,3 +210,11 @@ def test_a_dem_mesh_slices_by_default_to_its_own_grid_exactly(name):
     grid = slice_surface(samples.sample_mesh(name))
     assert grid.shape == truth.shape and (grid.d1, grid.d2) == (truth.d1, truth.d2)
     assert np.array_equal(grid.valid, truth.valid) and np.array_equal(grid.z[grid.valid], truth.z[truth.valid])
+
+
+def test_the_command_line_warns_once_when_the_grid_sees_little(mzc, tmp_path):
+    seen_edge_on = mzc("slice", PUBLIC / "moon.stl", "--projection", "planar", "--view", "+z", "-o", tmp_path / "a.zg")
+    assert seen_edge_on.returncode == 0
+    lines = seen_edge_on.stderr.decode().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("mzc: warning: the planar grid meets only")
+    assert mzc("slice", PUBLIC / "moon.stl", "-o", tmp_path / "b.zg").stderr == b""
