@@ -40,12 +40,13 @@ class Jumps:
     diagonal: np.ndarray
 
 
-def jump_edges(grid, angle=None):
+def jump_edges(grid, angle=None, points=None):
     """The Jumps of a ZGrid: edges between valid nodes within ``angle`` degrees (default
     JUMP_ANGLE) of the node line through their midpoint (none when ``angle`` is 0); edges
-    along a pole row join nodes of one ray, which are one vertex, and are never jumps."""
+    along a pole row join nodes of one ray, which are one vertex, and are never jumps.
+    ``points``: the grid's ``node_points()`` when the caller has them already."""
     angle = JUMP_ANGLE if angle is None else angle
-    points = grid.node_points()
+    points = grid.node_points() if points is None else points
     if grid.periodic:
         points = np.concatenate([points, points[:, :1]], axis=1)
     cosine = np.cos(np.radians(angle))
@@ -92,8 +93,9 @@ def grid_to_mesh(grid, jump_angle=None):
     no triangle across a depth jump of ``jump_angle`` degrees (default JUMP_ANGLE; 0 keeps
     them all)."""
     valid = grid.valid
-    points = grid.node_points().reshape(-1, 3)
-    triangles = grid_triangles(valid, grid.periodic, jump_edges(grid, jump_angle))
+    nodes = grid.node_points()
+    triangles = grid_triangles(valid, grid.periodic, jump_edges(grid, jump_angle, nodes))
+    points = nodes.reshape(-1, 3)
     triangles = merge_poles(triangles, points, valid, grid.pole_rows())
     used = np.zeros(valid.size, dtype=bool)
     used[triangles.ravel()] = True

@@ -49,6 +49,14 @@ def test_the_view_can_be_set_and_flips_the_side_seen():
                        atol=0.01)
 
 
+def test_the_command_offers_exactly_the_views_the_library_knows():
+    from mzc.commands.slice import command
+    from mzc.views import PLANAR_VIEWS
+
+    view = next(option for option in command.params if option.name == "view")
+    assert list(view.type.choices) == ["auto", *PLANAR_VIEWS]
+
+
 def wavy_cloud(count=6000, seed=2):
     """Points of a wavy sheet 100 mm in front of a camera at the origin looking along +z."""
     rng = np.random.default_rng(seed)

@@ -37,4 +37,5 @@ def command(input, output, count, method, iterations, tol, precision, jump_angle
 
     check_not_input(output, input)
     grid = read_grid(input)
-    write_grid(densify_grid(grid, count, method, iterations=iterations, tol=tol, jump_angle=jump_angle), output, precision=precision)
+    dense = densify_grid(grid, count, method, iterations=iterations, tol=tol, jump_angle=jump_angle)
+    write_grid(dense, output, precision=precision)

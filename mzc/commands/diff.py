@@ -85,7 +85,7 @@ def cloud_report(first, second, a, b, chosen, grid_output):
         ((second, b), (first, a))
     stats = distance_stats(distance_to_mesh(cloud.points, mesh.points, mesh.triangles))
     return {"direction": f"points of {cloud_name} to the surface of {mesh_name}",
-            **select(stats, [name for name in chosen or STATISTICS if name != "r2"])}
+            **select(stats, chosen or STATISTICS)}
 
 
 def surface_report(first, second, heightfield, samples, seed):

@@ -10,7 +10,7 @@ from mzc.commands import input_argument, output_option, write_grid
 @output_option
 @click.option("--d1", type=float, metavar="F",
               help="Row spacing: distance between horizontal planes [default: from the data].")
-@click.option("--d2", type=float, metavar="F", help="Column spacing along each row [default: d1].")
+@click.option("--d2", type=float, metavar="F", help="Column spacing along each row [default: from the data, else d1].")
 @click.option("--rows", type=int, metavar="N", help="Number of rows across y instead of --d1.")
 @click.option("--cols", type=int, metavar="N", help="Number of columns across x instead of --d2.")
 @click.option("--thesis-grid", is_flag=True,
