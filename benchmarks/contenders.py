@@ -19,7 +19,7 @@ import numpy as np
 
 from mzc.grid import ZGrid
 from mzc.projections import PROJECTIONS
-from mzc.triangulation import grid_to_mesh
+from mzc.ops.triangulation import grid_to_mesh
 
 BOUNDS = (0.02, 0.05, 0.1, 0.2, 0.35, 0.5, 0.75, 1.0, 1.5, 2.0, 3.0, 4.0)   # absolute error bounds, in units
 RMS_TARGETS = (0.01, 0.02, 0.03, 0.04, 0.06, 0.08, 0.11, 0.16, 0.23, 0.32, 0.64)   # dwt2d's --rmse targets
@@ -71,7 +71,7 @@ def mzc_contenders(missing, faces=True):
     ``thesis_variants``). The lossless z-grid text format gives the gridding floor.
     """
     table = []
-    dwt2d = load("mzc.formats.dwt2d", missing, "mzc dwt2d")
+    dwt2d = load("mzc.codecs.dwt2d", missing, "mzc dwt2d")
     if dwt2d:
         table.append(Contender("mzc dwt2d", "mzc", "grid", "max_error", BOUNDS,
                                lambda g, s, u: dwt2d.write(g, max_error=s * u), grid_decoder(dwt2d), scaled=True))
@@ -83,7 +83,7 @@ def mzc_contenders(missing, faces=True):
                                lambda g, s, u: zgrid.write(g), grid_decoder(zgrid)))
     for kind, knob, ladder in [("dct", "quality", (10, 20, 50)), ("dft", "quality", (10, 20, 50)),
                                ("dwt", "quality", (10, 20, 50)), ("poly", "degree", (20, 40, 80))]:
-        module = load(f"mzc.formats.{kind}", missing, f"mzc {kind}")
+        module = load(f"mzc.codecs.rows.{kind}", missing, f"mzc {kind}")
         if module:
             table.append(row_codec(module, kind, knob, ladder, "grid", grid_decoder(module)))
             if faces:
@@ -101,7 +101,7 @@ def thesis_variants(module, kind, knob, ladder, missing):
     """The row codec on the thesis grid, decoded then densified (n = 3): by every densify
     method for dct (the thesis's codec), by the default method for the others (to keep the
     full run within its time budget)."""
-    densify = load("mzc.densify", missing, "mzc densify (thesis-grid variants)")
+    densify = load("mzc.ops.densify", missing, "mzc densify (thesis-grid variants)")
     if not densify:
         return []
     methods = densify.METHODS if kind == "dct" else (densify.DEFAULT_METHOD,)
@@ -208,8 +208,8 @@ def read_grid_file(data, extra_size=0):
 
 def mask_bytes(valid):
     """The validity mask coded exactly as mzc's dwt2d codes it (row spans through rANS)."""
-    from mzc.entropy import Encoder
-    from mzc.formats.dwt2d import encode_mask
+    from mzc.codecs.dwt2d.entropy import Encoder
+    from mzc.codecs.dwt2d import encode_mask
 
     encoder = Encoder()
     encode_mask(encoder, valid)
@@ -217,15 +217,15 @@ def mask_bytes(valid):
 
 
 def read_mask(data, rows, cols):
-    from mzc.entropy import Decoder
-    from mzc.formats.dwt2d import decode_mask
+    from mzc.codecs.dwt2d.entropy import Decoder
+    from mzc.codecs.dwt2d import decode_mask
 
     return decode_mask(Decoder(data, "<mask>"), rows, cols)
 
 
 def filled(grid):
     """Heights with invalid nodes filled smoothly (mzc's own harmonic fill), for codecs without a mask."""
-    from mzc.wavelet2d import laplace_fill
+    from mzc.codecs.dwt2d.wavelet import laplace_fill
 
     return laplace_fill(grid.z, grid.valid)
 

@@ -4,7 +4,7 @@
 
 Every contender of ``contenders.py`` codes each corpus item at every setting of its
 ladder; each file is decoded, turned into a mesh and measured against the original mesh
-with mzc's own symmetric point-to-surface distance (``mzc.metrics.surface_distance_parts``,
+with mzc's own symmetric point-to-surface distance (``mzc.compare.metrics.surface_distance_parts``,
 the code behind ``mzc diff --surface --heightfield``): over the whole surface (every
 triangle; the primary figure) and over its height-field part (the secondary one). Writes
 rd-results.md, rd-results.json and one rd-<corpus>.png per corpus into --out (default:
@@ -58,8 +58,8 @@ def load_item(corpus, source):
     """Inputs of one item: the original mesh, its grid(s), the error unit and vertex count."""
     from mzc import samples
     from mzc.meshes import read_mesh
-    from mzc.slicing import slice_surface
-    from mzc.triangulation import grid_to_mesh
+    from mzc.ops.slicing import slice_surface
+    from mzc.ops.triangulation import grid_to_mesh
 
     if corpus == "faces":
         mesh = read_mesh(source)
@@ -78,7 +78,7 @@ def load_item(corpus, source):
 
 def without_degenerate(mesh):
     """The mesh without zero-area triangles (quantisers collapse some; they add no surface)."""
-    from mzc.metrics import triangle_areas
+    from mzc.compare.metrics import triangle_areas
 
     points, triangles = mesh
     return points, triangles[triangle_areas(points, triangles) > 0]
@@ -86,7 +86,7 @@ def without_degenerate(mesh):
 
 def measure(original, decoded, filters, samples):
     """Whole-surface and height-field distances of ``decoded`` to ``original``."""
-    from mzc.metrics import surface_distance_parts
+    from mzc.compare.metrics import surface_distance_parts
 
     return surface_distance_parts(original, without_degenerate(decoded),
                                   {"whole": (None, None), "heightfield": filters}, samples=samples, seed=SEED)
@@ -135,7 +135,7 @@ def prepared_item(corpus, name, source):
     item at most once.
     """
     from mzc.meshes import Mesh
-    from mzc.metrics import heightfield_filters
+    from mzc.compare.metrics import heightfield_filters
 
     inputs, unit, units = load_item(corpus, source)
     grid = inputs["grid"]
@@ -150,7 +150,7 @@ def prepared_item(corpus, name, source):
 def slice_seconds(mesh, repeats=3):
     """CPU seconds (the fastest of ``repeats``: this process's own time, whatever the other
     workers do) of slicing ``mesh`` at the grid step in the default projection and in planes."""
-    from mzc.slicing import slice_surface
+    from mzc.ops.slicing import slice_surface
 
     def fastest(projection):
         runs = []

@@ -23,11 +23,11 @@ from pathlib import Path
 
 import numpy as np
 
-from mzc.densify import METHODS, densify_grid
+from mzc.ops.densify import METHODS, densify_grid
 from mzc.formats import module_for
 from mzc.meshes import read_mesh
-from mzc.metrics import grid_error_stats
-from mzc.slicing import slice_surface
+from mzc.compare.metrics import grid_error_stats
+from mzc.ops.slicing import slice_surface
 
 HERE = Path(__file__).resolve().parent
 DEFAULT_FACES = HERE.parent.parent / "shared" / "data" / "faces"

@@ -93,7 +93,7 @@ def tube(around=240, along=200):
     """An open tube 200 mm long about the y axis, mm: a full turn's lattice, triangulated as a grid."""
     azimuth, height = np.meshgrid(np.linspace(0, 2 * np.pi, around, endpoint=False), np.linspace(-100, 100, along))
     radius = tube_radius(azimuth, height)
-    from mzc.triangulation import grid_triangles
+    from mzc.ops.triangulation import grid_triangles
 
     points = np.stack([radius * np.sin(azimuth), height, radius * np.cos(azimuth)], axis=-1).reshape(-1, 3)
     return Mesh(points, grid_triangles(np.ones(azimuth.shape, dtype=bool), periodic=True))
@@ -104,7 +104,7 @@ SAMPLES = {"jacksboro": jacksboro, "topobathy": topobathy, "bump": bump, "blob":
 
 def sample_mesh(name):
     """The mesh of sample ``name``: a grid sample through its derived connectivity."""
-    from mzc.triangulation import grid_to_mesh
+    from mzc.ops.triangulation import grid_to_mesh
 
     surface = SAMPLES[name]()
     return surface if isinstance(surface, Mesh) else Mesh(*grid_to_mesh(surface))

@@ -10,8 +10,8 @@ import pytest
 
 from conftest import REPO, face_path, run_mzc
 from mzc.grid import ZGrid
-from mzc.metrics import heightfield_filters, surface_distance, surface_distance_parts
-from mzc.triangulation import grid_to_mesh
+from mzc.compare.metrics import heightfield_filters, surface_distance, surface_distance_parts
+from mzc.ops.triangulation import grid_to_mesh
 
 BENCHMARK = REPO / "benchmarks" / "rd.py"
 sys.path.insert(0, str(BENCHMARK.parent))

@@ -8,10 +8,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from mzc import transforms as T
+from mzc.codecs.rows import transforms as T
 from mzc.formats import read_any
-from mzc.formats.legacy import dwt_kept_mask, read_legacy, thesis_lengths
-from mzc.formats.rows import spans
+from mzc.codecs.rows.legacy import dwt_kept_mask, read_legacy, thesis_lengths
+from mzc.codecs.rows import spans
 from mzc.grid import ZGrid
 
 SPEC = Path(__file__).resolve().parents[1] / "spec"

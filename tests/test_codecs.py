@@ -5,9 +5,10 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from mzc import transforms as T
-from mzc.formats import dct, dft, dwt, poly, read_any
-from mzc.formats.rows import spans
+from mzc.codecs.rows import transforms as T
+from mzc.codecs.rows import dct, dft, dwt, poly
+from mzc.formats import read_any
+from mzc.codecs.rows import spans
 from mzc.grid import ZGrid
 from conftest import face_path
 
@@ -34,7 +35,7 @@ def generated_grid(seed=0, rows=12, cols=90):  # cols >= 61
 def face_grid():
     """f18 sliced like the thesis: rows 3 mm apart, columns 0.25 mm."""
     from mzc.meshes import read_mesh
-    from mzc.slicing import slice_surface
+    from mzc.ops.slicing import slice_surface
 
     return slice_surface(read_mesh(face_path("f18.ply")), d1=3, d2=0.25, projection="planar")
 

@@ -1,11 +1,11 @@
-"""mzc.densify and ``mzc densify``: analytic solutions, holes, layout, speed and the CLI."""
+"""mzc.ops.densify and ``mzc densify``: analytic solutions, holes, layout, speed and the CLI."""
 
 import time
 
 import numpy as np
 import pytest
 
-from mzc.densify import METHODS, densify, densify_grid
+from mzc.ops.densify import METHODS, densify, densify_grid
 from mzc.errors import MzcError
 from mzc.grid import ZGrid
 
@@ -238,7 +238,7 @@ def test_a_face_sized_grid_densifies_quickly(method):
 
 def test_face_densified_is_close_to_the_face_sliced_densely(f18):
     from mzc.meshes import read_mesh
-    from mzc.slicing import slice_surface
+    from mzc.ops.slicing import slice_surface
 
     mesh = read_mesh(f18)
     sparse_grid = slice_surface(mesh, d1=3, d2=0.25, projection="planar")

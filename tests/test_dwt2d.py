@@ -9,13 +9,14 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from mzc.entropy import Decoder, TABLE_BITS
+from mzc.codecs.dwt2d.entropy import Decoder, TABLE_BITS
 from mzc.errors import MzcError
-from mzc.formats import dwt2d, read_any
+from mzc.codecs import dwt2d
+from mzc.formats import read_any
 from mzc.grid import ZGrid
-from mzc import wavelet2d as w2
-from mzc.metrics import surface_distance
-from mzc.triangulation import grid_to_mesh, jump_edges
+from mzc.codecs.dwt2d import wavelet as w2
+from mzc.compare.metrics import surface_distance
+from mzc.ops.triangulation import grid_to_mesh, jump_edges
 from conftest import FACE_NAMES, face_path
 
 SPEC = Path(__file__).resolve().parents[1] / "spec" / "dwt2d.md"
@@ -25,7 +26,7 @@ SPEC = Path(__file__).resolve().parents[1] / "spec" / "dwt2d.md"
 def face_grid(name):
     """A face sliced at 0.5 mm (cached: several tests share it)."""
     from mzc.meshes import read_mesh
-    from mzc.slicing import slice_surface
+    from mzc.ops.slicing import slice_surface
     return slice_surface(read_mesh(face_path(name)), d1=0.5, d2=0.5, projection="planar")
 
 
@@ -77,7 +78,7 @@ def test_rmse_target_bounds_the_measured_surface_distance(f18):
 
 def test_slope_scaled_steps_make_smaller_files_at_equal_surface_error(f18):
     from mzc.meshes import read_mesh
-    from mzc.slicing import slice_surface
+    from mzc.ops.slicing import slice_surface
 
     grid = slice_surface(read_mesh(f18), d1=0.5, d2=0.5)   # the default, spherical grid: no depth jumps
     sized = {limit: dwt2d.write(grid, rmse=0.1, slope_limit=limit) for limit in (1, 2)}

@@ -16,7 +16,9 @@ import numpy as np
 import pytest
 
 from mzc.errors import MzcError
-from mzc.formats import REGISTRY, dct, dft, dwt, dwt2d, module_for, poly, read_any, zgrid
+from mzc.codecs import dwt2d
+from mzc.codecs.rows import dct, dft, dwt, poly
+from mzc.formats import REGISTRY, module_for, read_any, zgrid
 from mzc.formats.header import split_magic
 from mzc.grid import IDENTITY_TRANSFORM, ZGrid
 

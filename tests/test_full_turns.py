@@ -3,13 +3,15 @@
 import numpy as np
 import pytest
 
-from mzc.densify import densify_grid
-from mzc.formats import dct, dwt2d, read_any, zgrid
+from mzc.ops.densify import densify_grid
+from mzc.codecs import dwt2d
+from mzc.codecs.rows import dct
+from mzc.formats import read_any, zgrid
 from mzc.meshes import read_mesh
-from mzc.metrics import surface_distance
-from mzc.slicing import slice_surface
-from mzc.triangulation import grid_to_mesh
-from mzc.wavelet2d import laplace_fill
+from mzc.compare.metrics import surface_distance
+from mzc.ops.slicing import slice_surface
+from mzc.ops.triangulation import grid_to_mesh
+from mzc.codecs.dwt2d.wavelet import laplace_fill
 from conftest import edge_counts
 from mzc.samples import BLOB_CENTRE, blob, tube
 

@@ -6,7 +6,8 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from mzc.errors import MzcError
-from mzc.formats import dct, dft, dwt, poly, read_any
+from mzc.codecs.rows import dct, dft, dwt, poly
+from mzc.formats import read_any
 from mzc.grid import ZGrid
 from mzc.meshes import read_mesh
 

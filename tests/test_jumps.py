@@ -5,13 +5,14 @@ import numpy as np
 import pytest
 
 from conftest import FACE_NAMES, face_path
-from mzc.densify import densify_grid
-from mzc.formats import dwt2d, zgrid
+from mzc.ops.densify import densify_grid
+from mzc.codecs import dwt2d
+from mzc.formats import zgrid
 from mzc.grid import ZGrid
 from mzc.meshes import Mesh
-from mzc.metrics import surface_distance
-from mzc.slicing import slice_surface
-from mzc.triangulation import JUMP_ANGLE, grid_to_mesh, grid_triangles, jump_edges
+from mzc.compare.metrics import surface_distance
+from mzc.ops.slicing import slice_surface
+from mzc.ops.triangulation import JUMP_ANGLE, grid_to_mesh, grid_triangles, jump_edges
 
 FRONT, BACK = 60.0, 0.0
 

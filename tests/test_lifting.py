@@ -6,7 +6,7 @@ import pywt
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from mzc import lifting
+from mzc.codecs.dwt2d import lifting
 
 WAVELETS = ["bior4.4", "bior2.2"]
 REFLECT_OFFSET = {"bior4.4": 2, "bior2.2": 1}

@@ -4,8 +4,8 @@ import numpy as np
 import pytest
 
 from mzc.grid import ZGrid
-from mzc.metrics import grid_error_stats, point_triangle_distance, surface_distance
-from mzc.triangulation import grid_to_mesh
+from mzc.compare.metrics import grid_error_stats, point_triangle_distance, surface_distance
+from mzc.ops.triangulation import grid_to_mesh
 
 
 def brute_force_distance(p, a, b, c, steps=300):

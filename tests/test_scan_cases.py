@@ -8,12 +8,13 @@ import numpy as np
 import pytest
 
 from mzc.errors import MzcError, MzcWarning
-from mzc.formats import dwt2d, zgrid
+from mzc.codecs import dwt2d
+from mzc.formats import zgrid
 from mzc.grid import ZGrid
 from mzc.meshes import Mesh, read_mesh
-from mzc.metrics import surface_distance
-from mzc.slicing import slice_surface
-from mzc.triangulation import grid_to_mesh, grid_triangles
+from mzc.compare.metrics import surface_distance
+from mzc.ops.slicing import slice_surface
+from mzc.ops.triangulation import grid_to_mesh, grid_triangles
 
 
 def gear_in_xz():
@@ -50,8 +51,8 @@ def test_the_view_can_be_set_and_flips_the_side_seen():
 
 
 def test_the_command_offers_exactly_the_views_the_library_knows():
-    from mzc.commands.slice import command
-    from mzc.views import PLANAR_VIEWS
+    from mzc.cli.slice import command
+    from mzc.ops.views import PLANAR_VIEWS
 
     view = next(option for option in command.params if option.name == "view")
     assert list(view.type.choices) == ["auto", *PLANAR_VIEWS]

@@ -10,8 +10,8 @@ from conftest import FACE_NAMES, face_path
 from mzc.errors import MzcError
 from mzc.formats import zgrid
 from mzc.meshes import Mesh, read_mesh
-from mzc.raster import rasterize
-from mzc.slicing import pca_frame, slice_surface, triangulate_point_cloud
+from mzc.ops.raster import rasterize
+from mzc.ops.slicing import pca_frame, slice_surface, triangulate_point_cloud
 
 
 def grid_mesh(xs, ys, height):
@@ -130,13 +130,13 @@ def test_edge_on_triangles_are_skipped_and_misses_are_nan():
 
 
 def test_many_candidates_are_processed_in_chunks(monkeypatch):
-    import mzc.raster
+    import mzc.ops.raster
 
     lattice = np.linspace(0, 1, 6)
     mesh = grid_mesh(lattice, lattice, lambda x, y: 2 * x - y)
     nodes = np.linspace(0, 1, 101)
     whole = rasterize(mesh.points, mesh.triangles, nodes, nodes)
-    monkeypatch.setattr(mzc.raster, "CANDIDATES_PER_CHUNK", 500)
+    monkeypatch.setattr(mzc.ops.raster, "CANDIDATES_PER_CHUNK", 500)
     np.testing.assert_array_equal(rasterize(mesh.points, mesh.triangles, nodes, nodes), whole)
     assert not np.isnan(whole).any()
 

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from mzc.grid import ZGrid
-from mzc.triangulation import grid_to_mesh, grid_triangles
+from mzc.ops.triangulation import grid_to_mesh, grid_triangles
 
 
 def test_full_cell_gives_the_thesis_triangles_facing_up():

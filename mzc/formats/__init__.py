@@ -11,20 +11,20 @@ import importlib
 from mzc.errors import MzcError
 from mzc.formats.header import split_magic
 
-# kind -> module name under mzc.formats; imported on first use to keep start-up fast.
+# kind -> module; imported on first use to keep start-up fast.
 REGISTRY = {
-    "zgrid": "zgrid",
-    "dwt2d": "dwt2d",
-    "poly": "poly",
-    "dft": "dft",
-    "dct": "dct",
-    "dwt": "dwt",
+    "zgrid": "mzc.formats.zgrid",
+    "dwt2d": "mzc.codecs.dwt2d",
+    "poly": "mzc.codecs.rows.poly",
+    "dft": "mzc.codecs.rows.dft",
+    "dct": "mzc.codecs.rows.dct",
+    "dwt": "mzc.codecs.rows.dwt",
 }
 
 
 def module_for(kind):
     """The format module of an mzc kind."""
-    return importlib.import_module(f"mzc.formats.{REGISTRY[kind]}")
+    return importlib.import_module(REGISTRY[kind])
 
 
 def detect(data, source):

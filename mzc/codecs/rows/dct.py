@@ -4,8 +4,8 @@ Each row's valid span is coded by its orthonormal DCT-II (thesis §7.2.2, Table 
 quality Q keeps the first floor(Q*m/100) coefficients of a span of m samples.
 """
 
-from mzc.formats import rows
-from mzc.transforms import dct_forward, dct_inverse, kept
+from mzc.codecs import rows
+from mzc.codecs.rows.transforms import dct_forward, dct_inverse, kept
 
 KIND = "dct"
 VERSION, PROJECTED_VERSION, OLDEST_MAJOR = rows.VERSION, rows.PROJECTED_VERSION, rows.OLDEST_MAJOR

@@ -2,10 +2,10 @@
 
 import click
 
-from mzc.commands import input_argument, jump_angle_option, output_option, read_grid, write_grid
+from mzc.cli.options import input_argument, jump_angle_option, output_option, read_grid, write_grid
 
 METHODS = ("thesis", "laplace", "biharmonic")
-DEFAULT_METHOD = "biharmonic"   # lowest error on the shared faces (see mzc.densify)
+DEFAULT_METHOD = "biharmonic"   # lowest error on the shared faces (see mzc.ops.densify)
 
 
 @click.command(help="""Insert N rows between each pair of rows of a z-grid.
@@ -32,7 +32,7 @@ across a depth jump (--jump-angle), and never smoothed across one.
               help="Decimal digits of the written heights.")
 @jump_angle_option
 def command(input, output, count, method, iterations, tol, precision, jump_angle):
-    from mzc.densify import densify_grid
+    from mzc.ops.densify import densify_grid
     from mzc.streams import check_not_input
 
     check_not_input(output, input)

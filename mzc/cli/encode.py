@@ -10,7 +10,7 @@ from dataclasses import dataclass
 
 import click
 
-from mzc.commands import input_argument, output_option, read_grid
+from mzc.cli.options import input_argument, output_option, read_grid
 
 
 @dataclass(frozen=True)

@@ -18,7 +18,7 @@ def common_grid(a, d1=None, d2=None):
     """The comparison grid (a ZGrid of A's values) for Surface ``a``."""
     from mzc.meshes import Mesh
     from mzc.projections import to_nodes
-    from mzc.slicing import slice_in_frame
+    from mzc.ops.slicing import slice_in_frame
 
     if a.grid is not None and d1 is None and d2 is None:
         return a.grid
@@ -35,7 +35,7 @@ def common_grid(a, d1=None, d2=None):
 
 def sample_like(grid, surface):
     """Values of ``surface`` along the node lines of ``grid``, in grid's frame (outermost hit)."""
-    from mzc.slicing import values_along
+    from mzc.ops.slicing import values_along
 
     local = grid.to_grid_frame(surface.points)
     return values_along(grid.projection, grid.radius, local, surface.triangles, grid.xs(), grid.ys())

@@ -43,10 +43,10 @@ direction on the first line.""")
 @click.option("--plot", metavar="FILE.png", help="Write the quality plots (error map, residuals, normal probability).")
 def command(a, b, rmse, max_, mean, r2, percentiles, count, surface, heightfield, samples, seed, d1, d2,
             as_json, error_grid, plot):
-    from mzc.compare import error_grid as compute_error_grid
-    from mzc.metrics import grid_error_stats
+    from mzc.compare.sampling import error_grid as compute_error_grid
+    from mzc.compare.metrics import grid_error_stats
     from mzc.streams import check_not_input
-    from mzc.surfaces import load_surface
+    from mzc.compare.surfaces import load_surface
 
     for output in (error_grid, plot):
         if output:
@@ -64,7 +64,7 @@ def command(a, b, rmse, max_, mean, r2, percentiles, count, surface, heightfield
                                      for side in (first, second)):
         report.update(surface_report(first, second, heightfield, samples, seed))
     if error_grid:
-        from mzc.commands import write_grid
+        from mzc.cli.options import write_grid
 
         write_grid(errors, error_grid)
     if plot:
@@ -75,7 +75,7 @@ def command(a, b, rmse, max_, mean, r2, percentiles, count, surface, heightfield
 def cloud_report(first, second, a, b, chosen, grid_output):
     """The distances of a point cloud's points to the other side's surface, direction stated."""
     from mzc.errors import MzcError
-    from mzc.metrics import distance_to_mesh, distance_stats
+    from mzc.compare.metrics import distance_to_mesh, distance_stats
 
     if first.is_point_cloud and second.is_point_cloud:
         raise MzcError("both sides are point clouds: give a mesh or an mzc file on one side", field="diff")
@@ -90,7 +90,7 @@ def cloud_report(first, second, a, b, chosen, grid_output):
 
 def surface_report(first, second, heightfield, samples, seed):
     """surface_* entries (and surface_heightfield_* ones) of the point-to-surface distance."""
-    from mzc.metrics import heightfield_filters, surface_distance_parts
+    from mzc.compare.metrics import heightfield_filters, surface_distance_parts
 
     parts = {"surface_": (None, None)}
     if heightfield:

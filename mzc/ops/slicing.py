@@ -4,8 +4,8 @@ Every grid node stands for the line where two cutting surfaces meet: on the thes
 planes the vertical line where a "horizontal" plane (constant y, one grid row) meets a
 "vertical" one (constant x, one column), on central grids a ray (``mzc.projections``).
 Its value is the exact outermost intersection of that line with the surface
-(``mzc.raster`` for planes, ``mzc.rays`` for rays); the projection comes from
-``mzc.views``.
+(``mzc.ops.raster`` for planes, ``mzc.ops.rays`` for rays); the projection comes from
+``mzc.ops.views``.
 """
 
 import numpy as np
@@ -94,14 +94,14 @@ def slice_surface(mesh, d1=None, d2=None, rows=None, cols=None, align="none", un
     ``projection`` names the cutting surfaces (``mzc.projections``); ``auto`` picks the
     one that sees the surface best, ``view`` the direction a planar grid looks along (auto
     or +x, -x, +y, -y, +z, -z of the ``align`` frame), and ``center``/``axis`` fix those of a
-    central one (``mzc.views``). The grid covers the extent of the surface in (u, v) with
+    central one (``mzc.ops.views``). The grid covers the extent of the surface in (u, v) with
     node (0, 0) at its low corner, a full turn of a surface that goes all the way round.
     Spacings come from ``d1``/``d2`` or from counts ``rows`` (across v) and ``cols``
     (across u), else from the data (``spacings``); ``thesis_grid``: 72 rows, as the
     thesis's ~70 planes, and d2 = d1/10. Warns (MzcWarning) when the grid's lines meet less
     than SEEN_WARNING of the area well.
     """
-    from mzc.views import SEEN_WARNING, choose_view
+    from mzc.ops.views import SEEN_WARNING, choose_view
 
     chosen = choose_view(mesh, frame_for(mesh, align), projection, center, axis, view)
     grid = slice_in_frame(mesh, chosen.rotation, chosen.shift, d1=d1, d2=d2, rows=rows, cols=cols, units=units,
@@ -139,7 +139,7 @@ def slice_in_frame(mesh, rotation, shift, d1=None, d2=None, rows=None, cols=None
     if mesh.is_point_cloud and lattice is None:   # a lattice cloud at its own steps needs none
         triangles = triangulate_point_cloud(nodes[:, :2])
     if projection != "planar":   # central grids start on a round (u, v): shorter headers, the same cover
-        from mzc.views import rounded
+        from mzc.ops.views import rounded
 
         low = rounded(low, np.max(high - low), down=True)
         if projection == "spherical":
@@ -236,10 +236,10 @@ def values_along(projection, radius, local, triangles, xs, ys):
     """Outermost hits of the node lines (u in xs, v in ys) on a grid-frame mesh: the front-most
     height for planar grids, the farthest distance along each ray for central ones."""
     if projection == "planar":
-        from mzc.raster import rasterize
+        from mzc.ops.raster import rasterize
 
         return rasterize(local, triangles, xs, ys)
-    from mzc.rays import cast
+    from mzc.ops.rays import cast
 
     return cast(local, triangles, projection, radius, xs, ys)
 

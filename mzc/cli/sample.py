@@ -2,7 +2,7 @@
 
 import click
 
-from mzc.commands import output_option
+from mzc.cli.options import output_option
 
 
 @click.command(help="""Write a built-in sample surface as a mesh (OBJ on stdout, or -o FILE).

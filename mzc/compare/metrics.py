@@ -206,7 +206,7 @@ def front_most(corners):
     """
     from scipy.spatial import cKDTree
 
-    from mzc.raster import cross2, heights_on_triangles
+    from mzc.ops.raster import cross2, heights_on_triangles
 
     centroids = corners.mean(axis=1)
     radius = np.linalg.norm(corners[:, :, :2] - centroids[:, None, :2], axis=2).max(axis=1)

@@ -6,17 +6,17 @@ the quantised wavelet bands (the transform of the version, ``wavelet2d.TRANSFORM
 detail steps scaled up where the surface leans from the node lines, magnitudes and signs
 each with their own contexts), and an optional correction layer of residuals that makes
 ``max_error`` hold at every valid node of the decoder's own reconstruction. All integers
-are entropy coded by mzc.entropy (magnitude classes through rANS, one model per context).
+are entropy coded by mzc.codecs.dwt2d.entropy (magnitude classes through rANS, one model per context).
 """
 import numpy as np
 
-from mzc import wavelet2d as w2
-from mzc.entropy import Decoder, Encoder
+from mzc.codecs.dwt2d import wavelet as w2
+from mzc.codecs.dwt2d.entropy import Decoder, Encoder
 from mzc.errors import MzcError
 from mzc.formats.header import (file_version, format_number, grid_header_lines, magic_line, read_grid_fields,
                                 read_header)
 from mzc.grid import ZGrid
-from mzc.triangulation import jump_edges
+from mzc.ops.triangulation import jump_edges
 
 KIND = "dwt2d"
 VERSION = (3, 0)             # every grid; 2.0 (planar, periodised transform) is still read

@@ -9,8 +9,8 @@ first (D_1, then D_2, ...) and never the approximation.
 import numpy as np
 
 from mzc.errors import MzcError
-from mzc.formats import rows
-from mzc.transforms import DEFAULT_LEVEL, DEFAULT_WAVELET, dwt_forward, dwt_inverse, dwt_lengths, kept
+from mzc.codecs import rows
+from mzc.codecs.rows.transforms import DEFAULT_LEVEL, DEFAULT_WAVELET, dwt_forward, dwt_inverse, dwt_lengths, kept
 
 KIND = "dwt"
 VERSION, PROJECTED_VERSION, OLDEST_MAJOR = rows.VERSION, rows.PROJECTED_VERSION, rows.OLDEST_MAJOR

@@ -1,6 +1,6 @@
 """The ``mzc`` command group.
 
-Subcommands live in ``mzc/commands/`` and are imported only when invoked, so ``mzc
+Subcommands live in ``mzc/cli/`` and are imported only when invoked, so ``mzc
 --help`` stays fast. Any MzcError becomes one line on stderr and exit status 1; click
 usage errors exit 2.
 """
@@ -36,7 +36,7 @@ class LazyGroup(click.Group):
     def get_command(self, ctx, name):
         if name not in COMMANDS:
             return None
-        module = importlib.import_module(f"mzc.commands.{name}")
+        module = importlib.import_module(f"mzc.cli.{name}")
         return module.command
 
     def format_commands(self, ctx, formatter):

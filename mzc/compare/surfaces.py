@@ -56,7 +56,7 @@ def load_surface(path):
 
 def surface_from_grid(grid):
     """The Surface of a z-grid: its derived triangle mesh in the input frame."""
-    from mzc.triangulation import grid_to_mesh
+    from mzc.ops.triangulation import grid_to_mesh
 
     points, triangles = grid_to_mesh(grid)
     return Surface(points, triangles, grid)

@@ -2,7 +2,7 @@
 
 import click
 
-from mzc.commands import input_argument
+from mzc.cli.options import input_argument
 
 
 @click.command(help="""Describe any mzc file: format, version, grid size, spacings, valid nodes, bytes.

@@ -29,7 +29,7 @@ two end columns (a run of one or two columns is just those lines), which is the 
 itself when there are no holes. ``biharmonic`` treats run ends as free edges instead.
 
 Depth jumps. Rows are never inserted across a depth jump (an edge between two nodes that
-runs nearly along the node lines, ``mzc.triangulation``): such a column is outside the
+runs nearly along the node lines, ``mzc.ops.triangulation``): such a column is outside the
 gap's domain, as if one of its rows were invalid there, and the inserted nodes are not
 smoothed across a jump along a row (a jump in either row of the gap): for ``thesis`` and
 ``laplace`` its columns are run ends, for ``biharmonic`` no stencil spans it. So a person
@@ -62,7 +62,7 @@ def densify_grid(grid, n, method=DEFAULT_METHOD, iterations=DEFAULT_ITERATIONS, 
     triangulation's JUMP_ANGLE; 0 ignores jumps), and no row is smoothed across one (module
     docstring). A periodic grid (a full turn) is densified with its columns wrapped round.
     """
-    from mzc.triangulation import jump_edges
+    from mzc.ops.triangulation import jump_edges
 
     jumps = jump_edges(grid, jump_angle)
     cols = grid.shape[1]

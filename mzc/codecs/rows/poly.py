@@ -7,8 +7,8 @@ stable at any degree; ``power`` is the thesis's polyfit on raw x and is unstable
 """
 
 from mzc.errors import MzcError
-from mzc.formats import rows
-from mzc.transforms import BASES, poly_degree, poly_forward, poly_inverse
+from mzc.codecs import rows
+from mzc.codecs.rows.transforms import BASES, poly_degree, poly_forward, poly_inverse
 
 KIND = "poly"
 VERSION, PROJECTED_VERSION, OLDEST_MAJOR = rows.VERSION, rows.PROJECTED_VERSION, rows.OLDEST_MAJOR

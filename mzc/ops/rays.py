@@ -1,6 +1,6 @@
 """Outermost hits of the node rays of a central grid (cylindrical or spherical) on a triangle mesh.
 
-The generalisation of the planar slicer's front-most height (``mzc.raster.rasterize``):
+The generalisation of the planar slicer's front-most height (``mzc.ops.raster.rasterize``):
 every node's ray (``mzc.projections``) is intersected exactly with the triangles, and the
 node takes the largest distance along its ray at which it meets the surface, NaN where
 it meets none. Each triangle's candidate nodes come from a box in (u, v) that bounds its
@@ -13,7 +13,7 @@ the grid's azimuth window. Each candidate gets an exact ray-triangle test.
 
 import numpy as np
 
-from mzc.raster import BARYCENTRIC_TOLERANCE, candidate_chunks, candidate_nodes, index_range
+from mzc.ops.raster import BARYCENTRIC_TOLERANCE, candidate_chunks, candidate_nodes, index_range
 
 TURN = 2 * np.pi
 

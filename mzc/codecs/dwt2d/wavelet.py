@@ -8,7 +8,7 @@ decoder's own inverse runs in the encoder too, so it sees exactly what the decod
 produce and can add the correction layer that makes a max-error bound hold.
 
 The transform is a property of the format's major version (``TRANSFORMS``): dwt2d 3.0
-lifts with symmetric extension (``mzc.lifting``), 2.0 files are read with PyWavelets'
+lifts with symmetric extension (``mzc.codecs.dwt2d.lifting``), 2.0 files are read with PyWavelets'
 periodization, which joined a grid's opposite edges.
 """
 
@@ -18,7 +18,8 @@ from typing import Callable
 
 import numpy as np
 
-from mzc import lifting, projections
+from mzc import projections
+from mzc.codecs.dwt2d import lifting
 from mzc.errors import MzcError
 
 WAVELETS = ("bior4.4", "bior2.2", "bior3.3", "db2", "db4", "sym4", "coif1", "haar")   # of dwt2d 2.0

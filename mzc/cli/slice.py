@@ -2,7 +2,7 @@
 
 import click
 
-from mzc.commands import input_argument, output_option, write_grid
+from mzc.cli.options import input_argument, output_option, write_grid
 
 
 @click.command("slice")
@@ -39,7 +39,7 @@ def command(input, output, d1, d2, rows, cols, thesis_grid, align, projection, v
     into a z-grid: each node holds the outermost hit of its line with the surface (the
     front-most height of planar grids, the farthest distance along a central ray)."""
     from mzc.meshes import read_mesh
-    from mzc.slicing import slice_surface
+    from mzc.ops.slicing import slice_surface
     from mzc.streams import check_not_input
 
     if d1 is not None and rows is not None:

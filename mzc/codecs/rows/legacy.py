@@ -14,11 +14,12 @@ import math
 import numpy as np
 
 from mzc.errors import MzcError
-from mzc.formats import dct, dft, dwt, poly, rows
+from mzc.codecs import rows
+from mzc.codecs.rows import dct, dft, dwt, poly
 from mzc.formats.header import MAX_DIMENSION, MAX_NODES, format_number
 from mzc.formats.zgrid import body_lines
 from mzc.grid import ZGrid
-from mzc.transforms import dft_length, dwt_inverse
+from mzc.codecs.rows.transforms import dft_length, dwt_inverse
 
 KINDS = ("poly", "dft", "dct", "dwt")
 LEGACY_WAVELET = "db1"

@@ -5,7 +5,7 @@ Node (r, c) of a planar grid stands for the vertical line where a "horizontal" p
 is the exact front-most intersection of that line with the surface, not the nearest
 vertex the thesis takes, so a piecewise-linear surface is reproduced exactly at the
 nodes. The blocks of candidate nodes per triangle, in chunks of bounded size, serve the
-rays of central grids too (``mzc.rays``).
+rays of central grids too (``mzc.ops.rays``).
 """
 
 import numpy as np

@@ -2,7 +2,7 @@
 
 import click
 
-from mzc.commands import input_argument, jump_angle_option, output_option, read_grid
+from mzc.cli.options import input_argument, jump_angle_option, output_option, read_grid
 
 FORMATS = ("obj", "ply", "vtk", "stl", "off")
 
@@ -22,7 +22,7 @@ placed back in the input surface's frame. The output format follows the -o exten
 def command(input, output, file_format, jump_angle):
     from mzc.meshes import Mesh, write_mesh
     from mzc.streams import check_not_input
-    from mzc.triangulation import grid_to_mesh
+    from mzc.ops.triangulation import grid_to_mesh
 
     check_not_input(output, input)
     points, triangles = grid_to_mesh(read_grid(input), jump_angle)

@@ -23,7 +23,7 @@ from mzc.formats.header import (file_version, format_number, grid_header_lines, 
                                 read_header)
 from mzc.formats.zgrid import body_lines
 from mzc.grid import ZGrid
-from mzc.transforms import fill_holes
+from mzc.codecs.rows.transforms import fill_holes
 
 DEFAULT_PRECISION = 4
 MAX_PRECISION = 17

@@ -2,7 +2,7 @@
 
 import click
 
-from mzc.commands import input_argument, output_option, read_grid, write_grid
+from mzc.cli.options import input_argument, output_option, read_grid, write_grid
 
 LEGACY_KINDS = ("poly", "dft", "dct", "dwt")
 
@@ -24,7 +24,7 @@ def command(input, output, legacy, precision):
 
     check_not_input(output, input)
     if legacy:
-        from mzc.formats.legacy import read_legacy
+        from mzc.codecs.rows.legacy import read_legacy
 
         grid = read_legacy(read_input(input), display_name(input), legacy)
     else:

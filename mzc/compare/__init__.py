@@ -1,0 +1,1 @@
+"""Comparing surfaces: sampling two on one grid, and the distances between them."""

@@ -1,0 +1,1 @@
+"""The operations on surfaces and grids: cutting (slicing), densifying and triangulating."""
