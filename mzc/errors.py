@@ -2,8 +2,8 @@
 warning it prints as one line."""
 
 
-class MzcError(Exception):
-    """Bad input or an impossible request.
+class MzcError(ValueError):
+    """Bad input or an impossible request (a ValueError, so callers may catch either).
 
     The command line prints it as one line on stderr (``source:line: field: message``)
     and exits with status 1; it never shows a traceback.

@@ -13,6 +13,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from mzc import projections
+from mzc.errors import MzcError
 
 IDENTITY_TRANSFORM = np.hstack([np.eye(3), np.zeros((3, 1))])
 
@@ -42,23 +43,23 @@ class ZGrid:
     def __post_init__(self):
         self.z = np.asarray(self.z, dtype=float)
         if self.z.ndim != 2:
-            raise ValueError("z must be a 2D array")
+            raise MzcError("z must be a 2D array")
         self.transform = np.asarray(self.transform, dtype=float).reshape(3, 4)
         self.origin = (float(self.origin[0]), float(self.origin[1]))
         self.d1 = float(self.d1)
         self.d2 = float(self.d2)
         if self.projection not in projections.PROJECTIONS:
-            raise ValueError(f"unknown projection {self.projection!r}")
+            raise MzcError(f"unknown projection {self.projection!r}")
         if self.projection == "planar":
             self.radius = None
         elif not (self.radius is not None and np.isfinite(self.radius) and self.radius > 0):
-            raise ValueError(f"a {self.projection} grid needs a positive radius")
+            raise MzcError(f"a {self.projection} grid needs a positive radius")
         else:
             self.radius = float(self.radius)
             problem = projections.extent_problem(self.projection, self.radius, *self.z.shape, self.d1, self.d2,
                                                  self.origin[1])
             if problem:
-                raise ValueError(f"{problem[0]}: {problem[1]}")
+                raise MzcError(f"{problem[0]}: {problem[1]}")
 
     @property
     def shape(self):

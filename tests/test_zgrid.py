@@ -120,7 +120,7 @@ GOOD = b"mzc-zgrid 1.0\nrows 2\ncols 2\nd1 1\nd2 1\ndata\n1 2\n3 4\n"
     (GOOD.replace(b"d1 1", b"d1 -1"), "must be > 0", 4),
     (GOOD.replace(b"d1 1", b"d1 nan"), "must be finite", 4),
     (GOOD.replace(b"rows 2", b"rows two"), "not an integer", 2),
-    (GOOD.replace(b"rows 2\ncols 2", b"rows 100000\ncols 100000"), "more than the", 3),
+    (GOOD.replace(b"rows 2\ncols 2", b"rows 100000\ncols 100000"), "too large", 3),
     (GOOD.replace(b"rows 2", b"rows 99999999999"), "outside", 2),
     (GOOD.replace(b"d2 1\n", b"d2 1\nd2 1\n"), "given twice", 6),
     (GOOD.replace(b"d2 1\n", b"d2 1\ntransform 2 0 0 0 0 1 0 0 0 0 1 0\n"), "not a rotation", 6),

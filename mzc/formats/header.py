@@ -24,9 +24,8 @@ import numpy as np
 from mzc import projections
 from mzc.errors import MzcError
 from mzc.grid import IDENTITY_TRANSFORM
+from mzc.limits import MAX_DIMENSION, check_grid_size
 
-MAX_DIMENSION = 1_000_000
-MAX_NODES = 100_000_000
 RIGID_TOLERANCE = 1e-6
 
 
@@ -181,8 +180,7 @@ def read_grid_fields(header):
     """
     rows = header.integer("rows", 1, MAX_DIMENSION)
     cols = header.integer("cols", 1, MAX_DIMENSION)
-    if rows * cols > MAX_NODES:
-        raise header.error("cols", f"{rows} x {cols} nodes is more than the {MAX_NODES} this mzc accepts")
+    check_grid_size(rows, cols, source=header.source, line=header.fields["cols"][1], field="cols")
     transform = header.floats("transform", 12, required=False)
     if transform is None:
         transform = IDENTITY_TRANSFORM

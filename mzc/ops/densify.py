@@ -47,7 +47,7 @@ of the padding's far edge decays below 1e-12 (it decays as exp(-pi x / d1) along
 import numpy as np
 
 from mzc.errors import MzcError
-from mzc.formats.header import MAX_DIMENSION, MAX_NODES
+from mzc.limits import check_grid_size
 
 METHODS = ("thesis", "laplace", "biharmonic")
 DEFAULT_METHOD = "biharmonic"
@@ -124,10 +124,7 @@ def check_request(z, n, d1, d2, method, iterations, tol):
         raise MzcError(f"must be >= 0, not {iterations}", field="iterations")
     if tol is not None and not tol > 0:
         raise MzcError(f"must be a positive number, not {tol}", field="tol")
-    rows = (z.shape[0] - 1) * (n + 1) + 1
-    if rows > MAX_DIMENSION or rows * z.shape[1] > MAX_NODES:
-        raise MzcError(f"{rows} x {z.shape[1]} dense nodes is more than this mzc accepts "
-                       f"({MAX_DIMENSION} rows, {MAX_NODES} nodes): use a smaller n", field="n")
+    check_grid_size((z.shape[0] - 1) * (n + 1) + 1, z.shape[1], "use a smaller n", field="n")
 
 
 def interleave(z, inserted):

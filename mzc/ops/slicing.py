@@ -11,7 +11,7 @@ Its value is the exact outermost intersection of that line with the surface
 import numpy as np
 
 from mzc.errors import MzcError
-from mzc.formats.header import MAX_DIMENSION, MAX_NODES
+from mzc.limits import MAX_DIMENSION, check_grid_size
 from mzc.grid import ZGrid
 
 DEFAULT_ROWS = 72           # the thesis cuts a face with about 70 horizontal planes (--thesis-grid)
@@ -291,7 +291,7 @@ def grid_size(extent, d1, d2, rows, cols, full_turn=False, pole_to_pole=False, t
     if pole_to_pole:
         n_rows = rows or max(3, even_count(height, d1) + 1)
         d1 = height / (n_rows - 1)
-    check_grid_size(n_rows, n_cols, d1, d2)
+    check_grid_size(n_rows, n_cols, f"d1 {d1:g} and d2 {d2:g} are too fine: use larger spacings")
     return float(d1), float(d2), n_rows, n_cols
 
 
@@ -338,8 +338,3 @@ def even_count(extent, step):
     return int(min(round(extent / step), MAX_DIMENSION + 1))
 
 
-def check_grid_size(n_rows, n_cols, d1, d2):
-    """Refuse grids too large to store, before allocating anything."""
-    if n_rows > MAX_DIMENSION or n_cols > MAX_DIMENSION or n_rows * n_cols > MAX_NODES:
-        raise MzcError(f"grid of {n_rows} x {n_cols} nodes (d1 {d1:g}, d2 {d2:g}) is too large: "
-                       f"at most {MAX_DIMENSION} per side and {MAX_NODES} nodes; use larger spacings")

@@ -16,7 +16,8 @@ import numpy as np
 from mzc.errors import MzcError
 from mzc.codecs import rows
 from mzc.codecs.rows import dct, dft, dwt, poly
-from mzc.formats.header import MAX_DIMENSION, MAX_NODES, format_number
+from mzc.formats.header import format_number
+from mzc.limits import check_grid_size
 from mzc.formats.zgrid import body_lines
 from mzc.grid import ZGrid
 from mzc.codecs.rows.transforms import dft_length, dwt_inverse
@@ -108,13 +109,6 @@ ROW_READERS = {"dft": (dft_row, dft.decode), "dct": (dct_row, dct.decode), "dwt"
 
 # --- headers ------------------------------------------------------------------------------
 
-def check_sizes(rows_count, cols, source, line, field):
-    """Declared sizes within mzc's limits, checked before allocating."""
-    if not (1 <= rows_count <= MAX_DIMENSION and 1 <= cols <= MAX_DIMENSION) or rows_count * cols > MAX_NODES:
-        raise MzcError(f"{rows_count} x {cols} is not a grid size this mzc accepts (1..{MAX_DIMENSION} each, "
-                       f"at most {MAX_NODES} nodes)", source=source, line=line, field=field)
-
-
 def transform_header(lines, source):
     """(d1, d2, k1, k2, Q) from the line ``D1 D2 k1 k2 Q``."""
     number, text = lines[0]
@@ -131,7 +125,7 @@ def transform_header(lines, source):
     for name, value in (("D1", d1), ("D2", d2)):
         if value <= 0:
             raise MzcError(f"must be > 0, found {value}", source=source, line=number, field=name)
-    check_sizes(k1, k2, source, number, "k1")
+    check_grid_size(k1, k2, source=source, line=number, field="k1")
     if not 1 <= quality <= 100:
         raise MzcError(f"{quality} is outside 1..100", source=source, line=number, field="Q")
     return d1, d2, k1, k2, quality
@@ -152,7 +146,7 @@ def poly_header(lines, source):
     if len(values) < 4:
         raise MzcError("the polynomial header needs the lines k1, k2, D1, D2", source=source,
                        line=len(lines) + 1, field=("k1", "k2", "D1", "D2")[len(values)])
-    check_sizes(int(values["k1"]), int(values["k2"]), source, lines[1][0], "k2")
+    check_grid_size(int(values["k1"]), int(values["k2"]), source=source, line=lines[1][0], field="k2")
     return values["D1"], values["D2"], int(values["k1"]), int(values["k2"])
 
 
