@@ -1,4 +1,4 @@
-"""The planar rasterizer: the front-most hit of every node's vertical line (METHOD.md §1).
+"""The planar rasterizer: the front-most hit of every node's vertical line (METHOD.md §1, in ../shared/reference).
 
 Node (r, c) of a planar grid stands for the vertical line where a "horizontal" plane
 (constant y, one grid row) meets a "vertical" plane (constant x, one column); its height

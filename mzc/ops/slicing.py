@@ -1,4 +1,4 @@
-"""Cutting surfaces (METHOD.md §1): turn a triangle mesh or point cloud into a z-grid.
+"""Cutting surfaces (METHOD.md §1, in ../shared/reference): turn a triangle mesh or point cloud into a z-grid.
 
 Every grid node stands for the line where two cutting surfaces meet: on the thesis's
 planes the vertical line where a "horizontal" plane (constant y, one grid row) meets a
