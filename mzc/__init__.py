@@ -24,7 +24,10 @@ HOMES = {
     **dict.fromkeys(("register_codec", "get_codec", "codec_names"), "mzc.codecs"),
     **dict.fromkeys(("MzcError", "MzcWarning"), "mzc.errors"),
 }
-__all__ = ["__version__", *HOMES]
+__all__ = [  # the names of HOMES, spelled out so that linters and type checkers see them
+    "__version__", "slice", "encode", "decode", "densify", "triangulate", "compare", "read", "write", "sample",
+    "ZGrid", "Mesh", "Codec", "Option", "register_codec", "get_codec", "codec_names", "MzcError", "MzcWarning",
+]
 
 if TYPE_CHECKING:
     from mzc.api import compare, decode, densify, encode, read, sample, slice, triangulate, write

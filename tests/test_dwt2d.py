@@ -161,7 +161,7 @@ def small_grids(draw):
 @given(small_grids(), st.sampled_from([0.001, 0.05, 0.5]), st.sampled_from([None, 0, 1, 2, 3]),
        st.sampled_from(["bior4.4", "bior2.2"]))
 def test_random_grids_round_trip_within_the_bound(grid, bound, levels, wavelet):
-    data = dwt2d.write(grid, max_error=bound, levels=levels, wavelet=wavelet)
+    data = dwt2d.write(grid, max_error=bound, level=levels, wavelet=wavelet)
     assert errors(grid, data).max(initial=0) <= bound
 
 
@@ -183,7 +183,7 @@ def fuzz_base():
     rng = np.random.default_rng(7)
     z = rng.normal(size=(12, 17)).cumsum(axis=0)
     z[rng.random(z.shape) < 0.3] = np.nan
-    return dwt2d.write(ZGrid(z=z, d1=1, d2=1), max_error=0.05, levels=2)
+    return dwt2d.write(ZGrid(z=z, d1=1, d2=1), max_error=0.05, level=2)
 
 
 @settings(max_examples=400, deadline=None, derandomize=True)

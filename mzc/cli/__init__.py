@@ -28,7 +28,8 @@ COMMANDS = {
 
 
 class LazyGroup(click.Group):
-    """A click group that imports a subcommand's module only when it runs."""
+    """A click group that imports a subcommand's module only when it runs (``encode`` is built
+    then, from the codecs registered at that moment)."""
 
     def list_commands(self, ctx):
         return list(COMMANDS)
@@ -37,7 +38,7 @@ class LazyGroup(click.Group):
         if name not in COMMANDS:
             return None
         module = importlib.import_module(f"mzc.cli.{name}")
-        return module.command
+        return module.build_command() if hasattr(module, "build_command") else module.command
 
     def format_commands(self, ctx, formatter):
         rows = [(name, summary) for name, summary in COMMANDS.items()]

@@ -10,16 +10,15 @@ from mzc.cli.options import input_argument
 Every header line is shown as written; the file is decoded to count its valid nodes.""")
 @input_argument
 def command(input):
-    from mzc.formats import detect
+    from mzc.formats import read_any
     from mzc.formats.header import read_header, split_magic
     from mzc.streams import display_name, read_input
 
     data = read_input(input)
     source = display_name(input)
-    module = detect(data, source)
     kind, major, minor = split_magic(data, source)
     header, _body, _line = read_header(data, source, kind, major)
-    grid = module.read(data, source)
+    grid = read_any(data, source)
     valid = int(grid.valid.sum())
     rows, cols = grid.shape
     lines = [

@@ -1,1 +1,73 @@
-"""The codecs that compress a z-grid: the thesis's per-row codecs (rows/) and the 2D wavelet (dwt2d/)."""
+"""The codecs that compress a z-grid, registered in one place.
+
+The thesis's per-row codecs live in ``rows/`` (poly, dft, dct, dwt), the 2D wavelet in
+``dwt2d/``. Each codec module builds a ``mzc.codecs.base.Codec`` named ``CODEC``; the
+built-in ones are imported on first use (start-up stays fast), others come in through
+``register_codec`` or the ``mzc.codecs`` entry-point group of an installed package, as
+numcodecs finds its codecs.
+"""
+
+from __future__ import annotations
+
+import importlib
+from importlib.metadata import entry_points
+from typing import TYPE_CHECKING
+
+from mzc.errors import MzcError
+
+if TYPE_CHECKING:
+    from mzc.codecs.base import Codec
+
+BUILT_IN = {
+    "poly": "mzc.codecs.rows.poly",
+    "dft": "mzc.codecs.rows.dft",
+    "dct": "mzc.codecs.rows.dct",
+    "dwt": "mzc.codecs.rows.dwt",
+    "dwt2d": "mzc.codecs.dwt2d",
+}
+ENTRY_POINT_GROUP = "mzc.codecs"
+registered: dict[str, Codec] = {}
+
+
+def register_codec(codec: Codec) -> Codec:
+    """Make ``codec`` known to ``mzc encode``, ``mzc decode``, ``mzc info`` and ``mzc.encode``."""
+    registered[codec.name] = codec
+    return codec
+
+
+def unregister_codec(name: str) -> None:
+    """Forget a codec registered with ``register_codec`` (built-in ones stay)."""
+    registered.pop(name, None)
+
+
+def plugin_names() -> dict[str, object]:
+    """The codecs that installed packages declare in the ``mzc.codecs`` entry-point group."""
+    return {point.name: point for point in entry_points(group=ENTRY_POINT_GROUP)}
+
+
+def codec_names() -> list[str]:
+    """The names of every codec: built-in, registered, then declared by installed packages."""
+    return list(dict.fromkeys([*BUILT_IN, *registered, *plugin_names()]))
+
+
+def get_codec(name: str) -> Codec:
+    """The codec called ``name``."""
+    if name in registered:
+        return registered[name]
+    if name in BUILT_IN:
+        return register_codec(importlib.import_module(BUILT_IN[name]).CODEC)
+    plugins = plugin_names()
+    if name in plugins:
+        return register_codec(plugins[name].load())  # type: ignore[attr-defined]
+    raise MzcError(f"unknown codec {name!r} (known: {', '.join(codec_names())})", field="codec")
+
+
+def codec_for_kind(kind: str) -> Codec | None:
+    """The codec whose files carry ``mzc-KIND`` on their magic line, or None."""
+    if kind in BUILT_IN:
+        return get_codec(kind)
+    for name in codec_names():
+        codec = get_codec(name) if name not in BUILT_IN else None
+        if codec is not None and codec.kind == kind:
+            return codec
+    return None

@@ -1,39 +1,38 @@
-"""The mzc file formats, registered in one place.
+"""The mzc file container: the magic line and header every mzc file shares, and the z-grid.
 
-Each format is a module with ``KIND`` (the word after ``mzc-`` in its magic line),
-``VERSION`` (its version for planar grids), ``read(data, source)`` and ``write(obj, ...)``. ``read_any``
-recognises an mzc file by its magic line and hands it to the right module. Meshes at the
-edges (OBJ, PLY, STL, ...) are handled by ``mzc.meshes``, not here.
+Every mzc file starts with ``mzc-KIND MAJOR.MINOR``. ``read_any`` recognises the kind and
+hands the file to the z-grid reader (``mzc.formats.zgrid``) or to the registered codec of
+that kind (``mzc.codecs``), so a codec registered in-process is decoded like a built-in
+one. Meshes at the edges (OBJ, PLY, STL, ...) are handled by ``mzc.meshes``, not here.
 """
 
 import importlib
 
+from mzc.codecs import BUILT_IN, codec_for_kind
 from mzc.errors import MzcError
 from mzc.formats.header import split_magic
 
-# kind -> module; imported on first use to keep start-up fast.
-REGISTRY = {
-    "zgrid": "mzc.formats.zgrid",
-    "dwt2d": "mzc.codecs.dwt2d",
-    "poly": "mzc.codecs.rows.poly",
-    "dft": "mzc.codecs.rows.dft",
-    "dct": "mzc.codecs.rows.dct",
-    "dwt": "mzc.codecs.rows.dwt",
-}
+# kind -> module of the built-in formats (the z-grid and the built-in codecs), imported on first use
+REGISTRY = {"zgrid": "mzc.formats.zgrid", **BUILT_IN}
 
 
 def module_for(kind):
-    """The format module of an mzc kind."""
+    """The module of a built-in format (its VERSION, PROJECTED_VERSION, OLDEST_MAJOR, read, write)."""
     return importlib.import_module(REGISTRY[kind])
 
 
-def detect(data, source):
-    """The format module of mzc file bytes ``data``, recognised by its magic line."""
+def reader_for(data, source):
+    """The ``read(data, source)`` of an mzc file's kind, recognised by its magic line."""
     kind, _major, _minor = split_magic(data, source)
-    if kind not in REGISTRY:
-        raise MzcError(f"unknown mzc format 'mzc-{kind}' (known: {', '.join(sorted(REGISTRY))})",
+    if kind == "zgrid":
+        return module_for(kind).read
+    codec = codec_for_kind(kind)
+    if codec is None:
+        from mzc.codecs import codec_names
+
+        raise MzcError(f"unknown mzc format 'mzc-{kind}' (known: {', '.join(sorted(['zgrid', *codec_names()]))})",
                        source=source, line=1)
-    return module_for(kind)
+    return codec.decode
 
 
 def is_mzc(data):
@@ -42,5 +41,5 @@ def is_mzc(data):
 
 
 def read_any(data, source):
-    """Read any mzc file into the object its format holds."""
-    return detect(data, source).read(data, source)
+    """Read any mzc file into the ZGrid it holds."""
+    return reader_for(data, source)(data, source)

@@ -50,7 +50,7 @@ def body_lines(body, first_line, source):
     return [(first_line + i, line) for i, line in enumerate(lines)]
 
 
-def read(data, source="<stdin>"):
+def read(data, source="<bytes>"):
     """Parse z-grid bytes into a ZGrid; raise MzcError naming the line and field on bad input."""
     header, body, first_line = read_header(data, source, KIND, PROJECTED_VERSION[0],
                                            projected_major=PROJECTED_VERSION[0])

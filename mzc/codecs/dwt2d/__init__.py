@@ -10,6 +10,7 @@ are entropy coded by mzc.codecs.dwt2d.entropy (magnitude classes through rANS, o
 """
 import numpy as np
 
+from mzc.codecs.base import Codec, Option
 from mzc.codecs.dwt2d import wavelet as w2
 from mzc.codecs.dwt2d.entropy import Decoder, Encoder
 from mzc.errors import MzcError
@@ -312,16 +313,11 @@ class Prepared:
 
     def __init__(self, grid, wavelet, levels, slope_limit):
         self.transform = w2.TRANSFORMS[VERSION[0]]
-        if wavelet not in self.transform.wavelets:
-            raise MzcError(f"unknown wavelet {wavelet!r} (known: {', '.join(self.transform.wavelets)})",
-                           field="wavelet")
         if np.isinf(grid.z).any():
             raise MzcError("the grid holds infinite heights", field="z")
         self.grid, self.wavelet, self.slope_limit = grid, wavelet, slope_limit
         self.valid = grid.valid
         self.levels = w2.default_levels(grid.shape, self.transform.coarsest) if levels is None else int(levels)
-        if not 0 <= self.levels <= w2.MAX_LEVELS:
-            raise MzcError(f"levels must be 0..{w2.MAX_LEVELS}", field="levels")
         self.geometry = w2.Geometry.of(grid.d1, grid.d2, grid.origin, grid.shape, grid.projection, grid.radius)
         self.filled = w2.laplace_fill(grid.z, self.valid, self.geometry.periodic)
         periodic = self.geometry.periodic
@@ -418,27 +414,26 @@ def band_steps(geometry, steps, shapes, approximation_q, slope_limit):
     return w2.step_maps(expand_steps(steps, len(shapes)), approximation_q, levels, geometry, shapes, slope_limit)
 
 
-def write(grid, max_error=None, rmse=None, size=None, wavelet=DEFAULT_WAVELET, levels=None, slope_limit=None):
-    """Encode a ZGrid; exactly one of ``max_error`` (bound at every valid node, grid units),
+def one_target(options):
+    """Refuse anything but exactly one of max_error, rmse and size."""
+    if sum(options.get(name) is not None for name in TARGETS) != 1:
+        raise MzcError("give exactly one of max_error, rmse or size", field="dwt2d")
+
+
+def encode_grid(grid, max_error=None, rmse=None, size=None, wavelet=DEFAULT_WAVELET, level=None, slope_limit=None):
+    """Encode a ZGrid (options checked by CODEC); exactly one of ``max_error`` (bound at every valid node, grid units),
     ``rmse`` (target RMS surface error) or ``size`` (target file bytes, not exceeded when reachable).
 
     ``slope_limit`` defaults to SLOPE_LIMIT for ``rmse`` and ``size``, whose errors are
     surface distances, and to 1 (equal steps) for ``max_error``, a bound on heights, where
     slope-scaled steps measured 3% larger files (f18, E = 0.1).
     """
-    given = [name for name, v in (("max_error", max_error), ("rmse", rmse), ("size", size)) if v is not None]
-    if len(given) != 1:
-        raise MzcError("give exactly one of max_error, rmse or size", field="dwt2d")
-    target = float({"max_error": max_error, "rmse": rmse, "size": size}[given[0]])
-    if not np.isfinite(target) or target <= 0:
-        raise MzcError(f"must be a positive number, found {target}", field=given[0])
+    name, target = next((n, v) for n, v in (("max_error", max_error), ("rmse", rmse), ("size", size)) if v is not None)
     if max_error is None:
-        check_shared_unit(grid, given[0])
+        check_shared_unit(grid, name)
     if slope_limit is None:
         slope_limit = 1.0 if max_error is not None else SLOPE_LIMIT
-    if not slope_limit >= 1:
-        raise MzcError(f"must be >= 1, found {slope_limit}", field="slope_limit")
-    prepared = Prepared(grid, wavelet, levels, slope_limit)
+    prepared = Prepared(grid, wavelet, level, slope_limit)
     if max_error is not None:
         # the smallest file, except that a finer step (lower RMS error) wins within ALPHA_SLACK of it
         files = [prepared.encode(w2.round_step(a * target), target) for a in ALPHAS]
@@ -502,7 +497,7 @@ def read_codec_fields(header, shape, transform):
     return wavelet, levels, expand_steps(steps, 1 + 3 * levels), slope_limit, correction
 
 
-def read(data, source="<stdin>"):
+def read(data, source="<bytes>"):
     """Decode dwt2d bytes (3.0, or 2.0 with its periodised transform) into a ZGrid; any bad input
     raises MzcError."""
     header, body, _first = read_header(data, source, KIND, VERSION[0], oldest_major=OLDEST_MAJOR,
@@ -526,3 +521,22 @@ def read(data, source="<stdin>"):
         raise MzcError("decoded heights are not finite (corrupt steps or payload)", source=source, field="data")
     z[~valid] = np.nan
     return ZGrid(z=z, **fields)
+
+
+TARGETS = ("max_error", "rmse", "size")
+CODEC = Codec(
+    "dwt2d", encode_grid, read, version=VERSION, oldest_major=OLDEST_MAJOR, extension=".mzw2", spec="spec/dwt2d.md",
+    summary="2D wavelet of the whole grid, entropy coded, error-bounded", check_options=one_target, options=(
+        Option("max_error", float, None, 0, min_open=True, metavar="E",
+               help="|decoded - input| <= E at every valid node."),
+        Option("rmse", float, None, 0, min_open=True, metavar="E",
+               help="Aim at this RMS surface error (value error times cos of the lean)."),
+        Option("size", int, None, 1, metavar="BYTES", help="Aim at this file size."),
+        Option("wavelet", w2.TRANSFORMS[VERSION[0]].wavelets, DEFAULT_WAVELET,
+               help="Wavelet: bior4.4 (CDF 9/7) or bior2.2 (LeGall 5/3)."),
+        Option("level", int, None, 0, w2.MAX_LEVELS, metavar="N", help="Wavelet levels (--dwt2d: from the grid size unless given)."),
+        Option("slope_limit", float, None, 1, metavar="F",
+               help="Steps grow as 1/sqrt(cos lean) up to F times; 1 = equal steps [default: 2 for rmse and size, "
+                    "1 for max_error]."),
+    ))
+write = CODEC.encode

@@ -13,11 +13,13 @@ Rows are batched by span length so each transform runs once per length, not per 
 """
 
 from collections import defaultdict
+from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Callable
+from functools import partial
 
 import numpy as np
 
+from mzc.codecs.base import Codec, Option
 from mzc.errors import MzcError
 from mzc.formats.header import (file_version, format_number, grid_header_lines, magic_line, read_grid_fields,
                                 read_header)
@@ -30,6 +32,10 @@ MAX_PRECISION = 17
 VERSION = (1, 0)             # every row codec: planar grids, byte for byte as before projections
 PROJECTED_VERSION = (2, 0)   # 1.0 with the projection lines (mzc.formats.header)
 OLDEST_MAJOR = 1
+QUALITY = Option("quality", int, 100, 1, 100, metavar="Q",
+                 help="Percentage of coefficients kept, 1..100.")
+PRECISION = Option("precision", int, DEFAULT_PRECISION, 0, MAX_PRECISION, metavar="DIGITS",
+                   help="Decimals of the written coefficients.")
 
 
 @dataclass(frozen=True)
@@ -63,26 +69,15 @@ class RowRecord:
     line: int
 
 
+def codec_of(row_codec, extension, summary, options=(QUALITY, PRECISION), **settings):
+    """The registered Codec of a row format: options checked by the Codec, files written and read
+    through the shared row layout; ``settings`` are further Codec fields (selector, check_options)."""
+    return Codec(row_codec.kind, partial(write_options, row_codec), partial(read_grid, codec=row_codec),
+                 version=PROJECTED_VERSION, oldest_major=OLDEST_MAJOR, extension=extension, summary=summary,
+                 spec=f"spec/{row_codec.kind}.md", options=options, **settings)
+
+
 # --- writing ----------------------------------------------------------------------------
-
-def check_quality(quality):
-    """Refuse a quality outside 1..100 (the encoder's API; the CLI checks it too)."""
-    if not 1 <= quality <= 100:
-        raise MzcError(f"{quality} is outside 1..100", field="quality")
-    return quality
-
-
-def check_precision(precision):
-    """Refuse a precision outside 0..17 decimals."""
-    if not 0 <= precision <= MAX_PRECISION:
-        raise MzcError(f"{precision} is outside 0..{MAX_PRECISION}", field="precision")
-    return precision
-
-
-def quality_options(quality, precision):
-    """The checked options every quality-driven codec (DFT, DCT, DWT) starts from."""
-    return {"quality": check_quality(quality), "precision": check_precision(precision)}
-
 
 def format_values(values, precision=None):
     """Tokens for ``values``: rounded to ``precision`` decimals (None: exact), trailing zeros stripped."""
@@ -128,6 +123,11 @@ def encode_rows(grid, codec, options):
         if runs:
             holes.append(" ".join([str(r + 1), *(f"{a} {b}" for a, b in runs)]))
     return lines, (["holes " + str(len(holes)), *holes] if holes else [])
+
+
+def write_options(codec, grid, **options):
+    """Encode ``grid`` into the bytes of a ``codec`` file with checked ``options``."""
+    return write_grid(grid, codec, options)
 
 
 def write_grid(grid, codec, options):

@@ -30,14 +30,6 @@ def decode(vectors, length, firsts, d2, options):
     return dct_inverse(vectors, length)
 
 
-CODEC = rows.RowCodec(KIND, rows.common_options, rows.common_header_lines, encode, unpack, decode)
-
-
-def read(data, source="<stdin>"):
-    """Decode ``mzc-dct`` bytes into a ZGrid."""
-    return rows.read_grid(data, source, CODEC)
-
-
-def write(grid, quality=100, precision=rows.DEFAULT_PRECISION):
-    """Encode ``grid`` at quality Q (1..100) with coefficients rounded to ``precision`` decimals."""
-    return rows.write_grid(grid, CODEC, rows.quality_options(quality, precision))
+ROW_CODEC = rows.RowCodec(KIND, rows.common_options, rows.common_header_lines, encode, unpack, decode)
+CODEC = rows.codec_of(ROW_CODEC, ".mzd", "Discrete cosine transform per row (thesis §7.2.2)")
+read, write = CODEC.decode, CODEC.encode

@@ -53,14 +53,6 @@ def decode(vectors, length, firsts, d2, options):
     return dft_inverse(vectors[:, 0], vectors[:, 1], vectors[:, 2:2 + big_l], vectors[:, 2 + big_l:], length)
 
 
-CODEC = rows.RowCodec(KIND, rows.common_options, rows.common_header_lines, encode, unpack, decode)
-
-
-def read(data, source="<stdin>"):
-    """Decode ``mzc-dft`` bytes into a ZGrid."""
-    return rows.read_grid(data, source, CODEC)
-
-
-def write(grid, quality=100, precision=rows.DEFAULT_PRECISION):
-    """Encode ``grid`` at quality Q (1..100) with coefficients rounded to ``precision`` decimals."""
-    return rows.write_grid(grid, CODEC, rows.quality_options(quality, precision))
+ROW_CODEC = rows.RowCodec(KIND, rows.common_options, rows.common_header_lines, encode, unpack, decode)
+CODEC = rows.codec_of(ROW_CODEC, ".mzf", "Discrete Fourier transform per row (thesis Ch. 6)")
+read, write = CODEC.decode, CODEC.encode

@@ -8,6 +8,7 @@ first (D_1, then D_2, ...) and never the approximation.
 
 import numpy as np
 
+from mzc.codecs.base import Option
 from mzc.errors import MzcError
 from mzc.codecs import rows
 from mzc.codecs.rows.transforms import DEFAULT_LEVEL, DEFAULT_WAVELET, dwt_forward, dwt_inverse, dwt_lengths, kept
@@ -84,17 +85,14 @@ def decode(vectors, length, firsts, d2, options):
     return dwt_inverse(vectors, dwt_lengths(length, options["wavelet"], options["level"]), options["wavelet"])
 
 
-CODEC = rows.RowCodec(KIND, read_options, header_lines, encode, unpack, decode)
+def check_options(options):
+    """The wavelet must be one pywt has."""
+    check_wavelet(options["wavelet"])
 
 
-def read(data, source="<stdin>"):
-    """Decode ``mzc-dwt`` bytes into a ZGrid."""
-    return rows.read_grid(data, source, CODEC)
-
-
-def write(grid, quality=100, wavelet=DEFAULT_WAVELET, level=DEFAULT_LEVEL, precision=rows.DEFAULT_PRECISION):
-    """Encode ``grid`` at quality Q with a ``level``-level ``wavelet`` decomposition."""
-    if not 1 <= level <= MAX_LEVEL:
-        raise MzcError(f"{level} is outside 1..{MAX_LEVEL}", field="level")
-    options = {**rows.quality_options(quality, precision), "wavelet": check_wavelet(wavelet), "level": level}
-    return rows.write_grid(grid, CODEC, options)
+ROW_CODEC = rows.RowCodec(KIND, read_options, header_lines, encode, unpack, decode)
+WAVELET = Option("wavelet", str, DEFAULT_WAVELET, metavar="NAME", help="Wavelet, e.g. db1, db2, sym4.")
+LEVEL = Option("level", int, DEFAULT_LEVEL, 1, MAX_LEVEL, metavar="N", help="Wavelet levels.")
+CODEC = rows.codec_of(ROW_CODEC, ".mzw", "Discrete wavelet transform per row (thesis §7.2.3)",
+                      (rows.QUALITY, WAVELET, LEVEL, rows.PRECISION), check_options=check_options)
+read, write = CODEC.decode, CODEC.encode

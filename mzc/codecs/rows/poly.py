@@ -6,6 +6,7 @@ There is no quality factor: the degree is the knob. The ``chebyshev`` basis (def
 stable at any degree; ``power`` is the thesis's polyfit on raw x and is unstable past ~40.
 """
 
+from mzc.codecs.base import Option
 from mzc.errors import MzcError
 from mzc.codecs import rows
 from mzc.codecs.rows.transforms import BASES, poly_degree, poly_forward, poly_inverse
@@ -49,19 +50,21 @@ def decode(vectors, length, firsts, d2, options):
     return poly_inverse(vectors, length, options["basis"], firsts, d2)
 
 
-CODEC = rows.RowCodec(KIND, read_options, header_lines, encode, unpack, decode)
+def check_options(options):
+    """The degree is required: it is the codec's one knob."""
+    if options["degree"] is None:
+        raise MzcError("the polynomial codec needs a degree", field="degree")
 
 
-def read(data, source="<stdin>"):
-    """Decode ``mzc-poly`` bytes into a ZGrid."""
-    return rows.read_grid(data, source, CODEC)
+ROW_CODEC = rows.RowCodec(KIND, read_options, header_lines, encode, unpack, decode)
+DEGREE = Option("degree", int, None, 0, MAX_DEGREE, metavar="DEGREE", help="Polynomial degree per row.")
+BASIS = Option("basis", BASES, "chebyshev",
+               help="Polynomial basis: chebyshev (stable) or power (the thesis's polyfit).")
+CODEC = rows.codec_of(ROW_CODEC, ".mzp", "Polynomial of DEGREE per row (thesis Ch. 5)", (DEGREE, BASIS, rows.PRECISION),
+                      selector="degree", check_options=check_options)
+read = CODEC.decode
 
 
-def write(grid, degree, basis="chebyshev", precision=rows.DEFAULT_PRECISION):
-    """Encode ``grid`` with polynomials of ``degree`` in ``basis``."""
-    if not 0 <= degree <= MAX_DEGREE:
-        raise MzcError(f"{degree} is outside 0..{MAX_DEGREE}", field="degree")
-    if basis not in BASES:
-        raise MzcError(f"{basis!r} is not one of {', '.join(BASES)}", field="basis")
-    options = {"degree": degree, "basis": basis, "precision": rows.check_precision(precision)}
-    return rows.write_grid(grid, CODEC, options)
+def write(grid, degree, **options):
+    """Encode ``grid`` with polynomials of ``degree`` (the basis and precision as options)."""
+    return CODEC.encode(grid, degree=degree, **options)

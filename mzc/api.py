@@ -1,0 +1,161 @@
+"""The Python API: the work of the ``mzc`` commands as functions over grids, meshes and bytes.
+
+Every command is a thin wrapper over one of these; they take and return in-memory objects
+(``ZGrid``, ``Mesh``, ``bytes``) and raise ``MzcError`` (a ``ValueError``) for bad input,
+never a command-line message. Anything with ``vertices`` and ``faces`` (a trimesh mesh),
+a ``(points, triangles)`` pair, an (n, 3) array of points or a path is a surface.
+"""
+
+from __future__ import annotations
+
+import os
+from typing import TYPE_CHECKING, Any
+
+from mzc.errors import MzcError
+
+if TYPE_CHECKING:
+    import numpy as np
+
+    from mzc.grid import ZGrid
+    from mzc.meshes import Mesh
+
+PathLike = str | os.PathLike
+BYTES_SOURCE = "<bytes>"
+
+
+def as_mesh(surface: Any) -> Mesh:
+    """A ``Mesh`` of a surface given as a Mesh, a path, a trimesh-like object, a pair or an array."""
+    from mzc.meshes import Mesh, read_surface
+
+    if isinstance(surface, Mesh):
+        return surface
+    if isinstance(surface, (str, os.PathLike)):
+        return read_surface(os.fspath(surface))
+    if hasattr(surface, "vertices") and hasattr(surface, "faces"):
+        return Mesh(surface.vertices, surface.faces)
+    if isinstance(surface, tuple) and len(surface) == 2:
+        return Mesh(*surface)
+    if hasattr(surface, "z") and hasattr(surface, "transform"):
+        return triangulate(surface)
+    try:
+        return Mesh(surface)
+    except (TypeError, ValueError):
+        raise MzcError(f"cannot read a surface from a {type(surface).__name__}: give a path, a Mesh, "
+                       "an object with vertices and faces, (points, triangles) or an (n, 3) array") from None
+
+
+def as_grid(grid: ZGrid | np.ndarray) -> ZGrid:
+    """``grid`` itself, or a 2D array as a planar z-grid of unit spacing (NaN = no value)."""
+    from mzc.grid import ZGrid
+
+    if isinstance(grid, ZGrid):
+        return grid
+    import numpy as np
+
+    values = np.asarray(grid, dtype=float)
+    if values.ndim != 2:
+        raise MzcError(f"a z-grid is 2D; this array has shape {values.shape}")
+    return ZGrid(z=values, d1=1.0, d2=1.0)
+
+
+def slice(surface: Any, d1: float | None = None, d2: float | None = None, *, rows: int | None = None,
+          cols: int | None = None, align: str = "none", projection: str = "auto", view: str = "auto",
+          center: tuple[float, float, float] | None = None, axis: tuple[float, float, float] | None = None,
+          units: str | None = None, thesis_grid: bool = False) -> ZGrid:
+    """Cut a surface into a z-grid (``mzc slice``): spacings d1 (rows) and d2 (columns) default to
+    the data's own, the cutting surfaces (``projection``) to the ones that see it best."""
+    from mzc.ops.slicing import slice_surface
+
+    return slice_surface(as_mesh(surface), d1=d1, d2=d2, rows=rows, cols=cols, align=align, units=units,
+                         projection=projection, center=center, axis=axis, view=view, thesis_grid=thesis_grid)
+
+
+def encode(grid: ZGrid | np.ndarray, codec: str = "dwt2d", **options: Any) -> bytes:
+    """Compress a z-grid (or a 2D array) with a registered codec (``mzc encode``); ``options`` are
+    the codec's, e.g. ``max_error=0.01`` for dwt2d, ``quality=20`` for dct."""
+    from mzc.codecs import get_codec
+
+    return get_codec(codec).encode(as_grid(grid), **options)
+
+
+def decode(data: bytes, legacy: str | None = None) -> ZGrid:
+    """The z-grid of any mzc file's bytes (``mzc decode``); ``legacy`` names the kind of a thesis
+    file (poly, dft, dct, dwt), which has no magic line."""
+    if legacy is not None:
+        from mzc.codecs.rows.legacy import read_legacy
+
+        return read_legacy(bytes(data), BYTES_SOURCE, legacy)
+    from mzc.formats import is_mzc, read_any
+
+    if not is_mzc(bytes(data[:4])):
+        raise MzcError("not an mzc file (no 'mzc-' magic line)", source=BYTES_SOURCE, line=1)
+    return read_any(bytes(data), BYTES_SOURCE)
+
+
+def densify(grid: ZGrid, n: int, method: str = "biharmonic", *, iterations: int = 100,
+            tol: float | None = None, jump_angle: float | None = None) -> ZGrid:
+    """``grid`` with ``n`` rows inserted between each pair of rows (``mzc densify``, the PDE step)."""
+    from mzc.ops.densify import densify_grid
+
+    return densify_grid(grid, n, method, iterations=iterations, tol=tol, jump_angle=jump_angle)
+
+
+def triangulate(grid: ZGrid, jump_angle: float | None = None) -> Mesh:
+    """The triangle mesh of a z-grid in its input surface's frame (``mzc triangulate``)."""
+    from mzc.ops.triangulation import grid_to_mesh
+
+    return grid_to_mesh(grid, jump_angle)
+
+
+def compare(a: Any, b: Any, *, surface: bool = False, heightfield: bool = False, samples: int = 100_000,
+            seed: int = 0, d1: float | None = None, d2: float | None = None) -> dict[str, Any]:
+    """How far surface ``b`` is from ``a`` (``mzc diff``): the statistics of B - A along A's node
+    lines, and with ``surface`` the symmetric point-to-surface distance; a dict of name -> value."""
+    from mzc.compare import compare_surfaces
+
+    return compare_surfaces(as_surface(a), as_surface(b), surface=surface, heightfield=heightfield,
+                            samples=samples, seed=seed, d1=d1, d2=d2)
+
+
+def as_surface(surface: Any) -> Mesh:
+    """A Mesh that keeps its z-grid when ``surface`` is one (compared at its own nodes)."""
+    from mzc.grid import ZGrid
+
+    return triangulate(surface) if isinstance(surface, ZGrid) else as_mesh(surface)
+
+
+def sample(name: str = "bump") -> Mesh:
+    """A built-in sample surface (``mzc sample``): jacksboro, topobathy, bump, blob or tube."""
+    from mzc.samples import SAMPLES, sample_mesh
+
+    if name not in SAMPLES:
+        raise MzcError(f"no sample named {name!r} (known: {', '.join(SAMPLES)})")
+    return sample_mesh(name)
+
+
+def read(path: PathLike) -> ZGrid | Mesh:
+    """Read a file: an mzc file (z-grid or compressed) as its ZGrid, a mesh or cloud as a Mesh."""
+    from mzc.meshes import read_surface
+
+    mesh = read_surface(os.fspath(path))
+    return mesh.grid if mesh.grid is not None else mesh
+
+
+def write(path: PathLike, item: ZGrid | Mesh | bytes, file_format: str | None = None,
+          precision: int | None = None) -> None:
+    """Write a ZGrid as a z-grid, a Mesh in the format of ``path``'s extension (or ``file_format``),
+    or bytes (a compressed file) as they are; atomically: nothing is left on failure."""
+    from mzc.grid import ZGrid
+    from mzc.streams import write_output
+
+    path = os.fspath(path)
+    if isinstance(item, (bytes, bytearray)):
+        write_output(path, bytes(item))
+    elif isinstance(item, ZGrid):
+        from mzc.formats import zgrid
+
+        write_output(path, zgrid.write(item, precision=precision))
+    else:
+        from mzc.meshes import write_mesh
+
+        write_mesh(path, as_mesh(item), file_format)
