@@ -115,8 +115,14 @@ def grid_decoder(module, densify=None, method=None):
         grid = module.read(data, "<benchmark>")
         if densify:
             grid = densify.densify_grid(grid, THESIS_DENSIFY, method)
-        return grid_to_mesh(grid)
+        return mesh_pair(grid)
     return decode
+
+
+def mesh_pair(grid):
+    """(points, triangles) of ``grid``'s derived mesh: the pair every contender decodes to."""
+    mesh = grid_to_mesh(grid)
+    return mesh.points, mesh.triangles
 
 
 def load(name, missing, label):
@@ -232,7 +238,7 @@ def filled(grid):
 
 def masked_mesh(grid, z, valid):
     """The decoded mesh: heights ``z`` on the valid nodes."""
-    return grid_to_mesh(grid.with_z(np.where(valid, z, np.nan)))
+    return mesh_pair(grid.with_z(np.where(valid, z, np.nan)))
 
 
 def sz3_contender(pysz):

@@ -27,7 +27,7 @@ import numpy as np
 HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE))
 
-from contenders import THESIS_GRID, NotApplicable, all_contenders, mask_bytes  # noqa: E402
+from contenders import THESIS_GRID, NotApplicable, all_contenders, mask_bytes, mesh_pair  # noqa: E402
 
 FACES = HERE.parent.parent / "shared" / "data" / "faces"
 GRID_STEP = 0.5            # mm, the grid of the grid contenders
@@ -59,7 +59,6 @@ def load_item(corpus, source):
     from mzc import samples
     from mzc.meshes import read_mesh
     from mzc.ops.slicing import slice_surface
-    from mzc.ops.triangulation import grid_to_mesh
 
     if corpus == "faces":
         mesh = read_mesh(source)
@@ -70,7 +69,7 @@ def load_item(corpus, source):
     grid = getattr(samples, source)()
     valid_z = grid.z[grid.valid]
     unit = 10.0 ** round(np.log10(np.ptp(valid_z) / 100))
-    return {"mesh": grid_to_mesh(grid), "grid": grid}, unit, grid.units or "m"
+    return {"mesh": mesh_pair(grid), "grid": grid}, unit, grid.units or "m"
 
 
 # --------------------------------------------------------------------------- measuring

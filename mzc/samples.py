@@ -102,9 +102,9 @@ def tube(around=240, along=200):
 SAMPLES = {"jacksboro": jacksboro, "topobathy": topobathy, "bump": bump, "blob": blob, "tube": tube}
 
 
-def sample_mesh(name):
+def sample_mesh(name: str) -> Mesh:
     """The mesh of sample ``name``: a grid sample through its derived connectivity."""
     from mzc.ops.triangulation import grid_to_mesh
 
     surface = SAMPLES[name]()
-    return surface if isinstance(surface, Mesh) else Mesh(*grid_to_mesh(surface))
+    return surface if isinstance(surface, Mesh) else grid_to_mesh(surface)

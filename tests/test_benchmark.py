@@ -11,7 +11,6 @@ import pytest
 from conftest import REPO, face_path, run_mzc
 from mzc.grid import ZGrid
 from mzc.compare.metrics import heightfield_filters, surface_distance, surface_distance_parts
-from mzc.ops.triangulation import grid_to_mesh
 
 BENCHMARK = REPO / "benchmarks" / "rd.py"
 sys.path.insert(0, str(BENCHMARK.parent))
@@ -23,7 +22,7 @@ import report  # noqa: E402
 
 def flat_mesh(shift=0.0):
     """A 40 x 30 mm flat patch at z = shift (1 mm grid)."""
-    return grid_to_mesh(ZGrid(np.full((31, 41), shift), 1.0, 1.0))
+    return contenders.mesh_pair(ZGrid(np.full((31, 41), shift), 1.0, 1.0))
 
 
 def wall_mesh():
@@ -66,7 +65,7 @@ def test_the_heightfield_part_leaves_out_steep_and_hidden_triangles():
 
 
 def test_parts_equal_separate_surface_distance_calls():
-    mesh_a, mesh_b = flat_mesh(), grid_to_mesh(ZGrid(0.05 * np.random.default_rng(1).random((31, 41)), 1.0, 1.0))
+    mesh_a, mesh_b = flat_mesh(), contenders.mesh_pair(ZGrid(0.05 * np.random.default_rng(1).random((31, 41)), 1.0, 1.0))
     filters = heightfield_filters(*mesh_a)
     parts = surface_distance_parts(mesh_a, mesh_b, {"whole": (None, None), "hf": filters}, samples=3000, seed=4)
     assert parts["whole"] == surface_distance(mesh_a, mesh_b, samples=3000, seed=4)
@@ -103,7 +102,7 @@ def central_grid():
 def node_errors(grid, mesh):
     """Distances between the nodes of ``grid``'s mesh and those of a decoded ``mesh`` (same
     connectivity): for a central grid, the error of each node's value along its ray."""
-    points, triangles = grid_to_mesh(grid)
+    points, triangles = contenders.mesh_pair(grid)
     np.testing.assert_array_equal(mesh[1], triangles)
     return np.linalg.norm(mesh[0] - points, axis=1)
 

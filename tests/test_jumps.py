@@ -41,13 +41,13 @@ def spans_both_levels(points, triangles):
 def test_a_person_in_front_of_a_wall_triangulates_with_no_sheet_between():
     mesh = person_before_wall()
     grid = slice_surface(mesh, d1=1, d2=1, projection="planar")
-    points, triangles = grid_to_mesh(grid)
-    assert not spans_both_levels(points, triangles).any()
-    walled = grid_to_mesh(grid, jump_angle=0)
-    assert spans_both_levels(*walled).sum() > 100          # what the grid joined before
-    rebuilt = surface_distance((mesh.points, mesh.triangles), (points, triangles), samples=20_000)
+    cut, walled = grid_to_mesh(grid), grid_to_mesh(grid, jump_angle=0)
+    assert not spans_both_levels(cut.points, cut.triangles).any()
+    assert spans_both_levels(walled.points, walled.triangles).sum() > 100          # what the grid joined before
+    scene = (mesh.points, mesh.triangles)
+    rebuilt = surface_distance(scene, (cut.points, cut.triangles), samples=20_000)
     assert rebuilt["b_to_a_hausdorff"] < 1e-9               # every triangle lies on the scene
-    assert surface_distance((mesh.points, mesh.triangles), walled, samples=20_000)["b_to_a_hausdorff"] > 10
+    assert surface_distance(scene, (walled.points, walled.triangles), samples=20_000)["b_to_a_hausdorff"] > 10
 
 
 def test_a_layer_above_a_spherical_cap_is_cut_from_it():
@@ -61,20 +61,20 @@ def test_a_layer_above_a_spherical_cap_is_cut_from_it():
     grid = ZGrid(radius, np.radians(0.5) * 100, np.radians(0.5) * 100,
                  origin=(-np.radians(40) * 100, -np.radians(30) * 100), projection="spherical", radius=100)
     assert np.allclose(grid.node_points(), points)
-    rebuilt, triangles = grid_to_mesh(grid)
-    distance = np.linalg.norm(rebuilt[triangles], axis=2)
+    rebuilt = grid_to_mesh(grid)
+    distance = np.linalg.norm(rebuilt.points[rebuilt.triangles], axis=2)
     assert (distance.max(axis=1) - distance.min(axis=1)).max() < 1e-9
-    assert len(grid_to_mesh(grid, jump_angle=0)[1]) > len(triangles)
+    assert len(grid_to_mesh(grid, jump_angle=0).triangles) > len(rebuilt.triangles)
 
 
 def test_steep_real_surface_keeps_every_triangle():
     """A plane leaning 80 degrees from the node lines, a cylinder seen side-on: all of it is surface."""
     u, v = np.meshgrid(np.arange(40.0), np.arange(30.0))
     steep = ZGrid(np.tan(np.radians(80)) * u, 1, 1)
-    assert len(grid_to_mesh(steep)[1]) == len(grid_to_mesh(steep, jump_angle=0)[1]) == 2 * 39 * 29
+    assert len(grid_to_mesh(steep).triangles) == len(grid_to_mesh(steep, jump_angle=0).triangles) == 2 * 39 * 29
     x = np.linspace(-0.99, 0.99, 199) * 50
     side = ZGrid(np.tile(np.sqrt(50 ** 2 - x ** 2), (20, 1)), 1, x[1] - x[0])
-    assert len(grid_to_mesh(side)[1]) == len(grid_to_mesh(side, jump_angle=0)[1])
+    assert len(grid_to_mesh(side).triangles) == len(grid_to_mesh(side, jump_angle=0).triangles)
 
 
 @pytest.mark.parametrize("name", FACE_NAMES or ["f18.ply"])
@@ -93,7 +93,8 @@ def test_densify_inserts_nothing_across_a_jump(method):
     values = dense.z[dense.valid]
     on_a_level = np.minimum(np.abs(values - BACK), np.abs(values - FRONT))
     assert on_a_level.max() < 1e-6
-    assert not spans_both_levels(*grid_to_mesh(dense)).any()
+    rebuilt = grid_to_mesh(dense)
+    assert not spans_both_levels(rebuilt.points, rebuilt.triangles).any()
     assert np.isnan(dense.z).sum() > np.isnan(densify_grid(grid, 3, method, iterations=20_000, tol=1e-12,
                                                              jump_angle=0).z).sum()
 
@@ -121,7 +122,9 @@ def test_rmse_estimate_holds_on_a_scene_with_a_jump():
     grid = slice_surface(Mesh(bumps, mesh.triangles), d1=0.5, d2=0.5, projection="planar")
     for target in (0.05, 0.2):
         decoded = dwt2d.read(dwt2d.write(grid, rmse=target))
-        measured = surface_distance(grid_to_mesh(grid), grid_to_mesh(decoded), samples=50_000)["rms"]
+        before, after = grid_to_mesh(grid), grid_to_mesh(decoded)
+        measured = surface_distance((before.points, before.triangles), (after.points, after.triangles),
+                                    samples=50_000)["rms"]
         assert measured <= 1.1 * target
 
 

@@ -250,3 +250,26 @@ def test_ascii_ply_declaring_no_vertices_is_a_clear_error(tmp_path):
                      b"property float z\nend_header\n")
     with pytest.raises(MzcError):
         read_mesh(str(path))
+
+
+def test_read_surface_gives_an_mzc_file_as_the_mesh_of_its_grid(tmp_path):
+    from mzc.formats import zgrid
+    from mzc.grid import ZGrid
+    from mzc.meshes import read_surface
+
+    path = write(tmp_path, "g.zg", zgrid.write(ZGrid(np.zeros((3, 4)), 1, 1)))
+    surface = read_surface(path)
+    assert surface.grid is not None and surface.grid.shape == (3, 4)
+    assert len(surface.triangles) == 2 * 2 * 3 and not surface.is_point_cloud
+    assert read_surface(write(tmp_path, "cloud.xyz", "0 0 0\n1 0 0\n")).is_point_cloud
+
+
+def test_read_surface_takes_no_mesh_on_stdin(monkeypatch):
+    import io
+    import sys
+
+    from mzc.meshes import read_surface
+
+    monkeypatch.setattr(sys, "stdin", io.TextIOWrapper(io.BytesIO(PLAIN_OBJ.encode())))
+    with pytest.raises(MzcError, match="stdin must carry an mzc file"):
+        read_surface("-")

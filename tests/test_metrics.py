@@ -35,7 +35,8 @@ def test_point_triangle_distance_known_regions():
 
 def plane_mesh(shift=0.0, size=20):
     y, x = np.mgrid[0:size, 0:size].astype(float)
-    return grid_to_mesh(ZGrid(0.1 * x + 0.05 * y + shift, 1, 1))
+    mesh = grid_to_mesh(ZGrid(0.1 * x + 0.05 * y + shift, 1, 1))
+    return mesh.points, mesh.triangles
 
 
 def test_a_mesh_against_itself_is_zero():

@@ -11,8 +11,8 @@ def test_full_cell_gives_the_thesis_triangles_facing_up():
     triangles = grid_triangles(np.ones((2, 2), bool))
     assert sorted(map(sorted, triangles.tolist())) == [[0, 1, 2], [1, 2, 3]]
     grid = ZGrid(np.zeros((2, 2)), 1, 1)
-    points, triangles = grid_to_mesh(grid)
-    a, b, c = (points[triangles[:, i]] for i in range(3))
+    mesh = grid_to_mesh(grid)
+    a, b, c = (mesh.points[mesh.triangles[:, i]] for i in range(3))
     assert (np.cross(b - a, c - a)[:, 2] > 0).all()
 
 
@@ -34,11 +34,11 @@ def test_unused_nodes_are_dropped_and_vertices_land_in_the_input_frame():
     z = np.array([[np.nan, 2.0, 3.0], [4.0, 5.0, 6.0]])
     transform = np.array([[0, -1, 0, 10], [1, 0, 0, 20], [0, 0, 1, 30]], float)
     grid = ZGrid(z, d1=2, d2=0.5, origin=(1, -1), transform=transform)
-    points, triangles = grid_to_mesh(grid)
-    assert triangles.max() < len(points)
+    mesh = grid_to_mesh(grid)
+    assert mesh.triangles.max() < len(mesh.points) and mesh.grid is grid
     # node (1, 2): x = 1 + 2*0.5 = 2, y = -1 + 2 = 1, z = 6 -> R p + t = (-1 + 10, 2 + 20, 36)
-    assert any(np.allclose(p, [9, 22, 36]) for p in points)
-    assert len(points) == 5
+    assert any(np.allclose(p, [9, 22, 36]) for p in mesh.points)
+    assert len(mesh.points) == 5
 
 
 def test_triangulate_cli_writes_mesh_in_the_original_frame(tmp_path, mzc):

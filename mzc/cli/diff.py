@@ -46,12 +46,12 @@ def command(a, b, rmse, max_, mean, r2, percentiles, count, surface, heightfield
     from mzc.compare.sampling import error_grid as compute_error_grid
     from mzc.compare.metrics import grid_error_stats
     from mzc.streams import check_not_input
-    from mzc.compare.surfaces import load_surface
+    from mzc.meshes import read_surface
 
     for output in (error_grid, plot):
         if output:
             check_not_input(output, a, b)
-    first, second = load_surface(a), load_surface(b)
+    first, second = read_surface(a), read_surface(b)
     chosen = [name for name, on in zip(STATISTICS, (rmse, max_, mean, r2, percentiles, count)) if on]
     if first.is_point_cloud or second.is_point_cloud:
         report = cloud_report(first, second, a, b, chosen, error_grid or plot)

@@ -20,10 +20,9 @@ placed back in the input surface's frame. The output format follows the -o exten
               help="Mesh format (default: from the -o extension; obj on stdout).")
 @jump_angle_option
 def command(input, output, file_format, jump_angle):
-    from mzc.meshes import Mesh, write_mesh
+    from mzc.meshes import write_mesh
     from mzc.streams import check_not_input
     from mzc.ops.triangulation import grid_to_mesh
 
     check_not_input(output, input)
-    points, triangles = grid_to_mesh(read_grid(input), jump_angle)
-    write_mesh(output, Mesh(points, triangles), file_format)
+    write_mesh(output, grid_to_mesh(read_grid(input), jump_angle), file_format)

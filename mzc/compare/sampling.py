@@ -15,7 +15,7 @@ DEFAULT_DIVISIONS = 1000
 
 
 def common_grid(a, d1=None, d2=None):
-    """The comparison grid (a ZGrid of A's values) for Surface ``a``."""
+    """The comparison grid (a ZGrid of A's values) for the Mesh ``a`` (``read_surface``)."""
     from mzc.meshes import Mesh
     from mzc.projections import to_nodes
     from mzc.ops.slicing import slice_in_frame

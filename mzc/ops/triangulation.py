@@ -20,10 +20,15 @@ than 19 node spacings across one cell) drops nothing of the default 0.5 mm grids
 """
 
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from mzc import projections
+from mzc.meshes import Mesh
+
+if TYPE_CHECKING:
+    from mzc.grid import ZGrid
 
 JUMP_ANGLE = 3.0   # degrees between an edge and the node line below which the edge is a jump
 
@@ -88,10 +93,10 @@ def grid_triangles(valid, periodic=False, jumps=None):
     return np.concatenate([first, second]).reshape(-1, 3)
 
 
-def grid_to_mesh(grid, jump_angle=None):
-    """(points, triangles) of a ZGrid: valid nodes in the input frame, unused nodes dropped,
-    no triangle across a depth jump of ``jump_angle`` degrees (default JUMP_ANGLE; 0 keeps
-    them all)."""
+def grid_to_mesh(grid: "ZGrid", jump_angle: float | None = None) -> Mesh:
+    """The Mesh of a ZGrid (its ``grid`` set to it): valid nodes in the input frame, unused
+    nodes dropped, no triangle across a depth jump of ``jump_angle`` degrees (default
+    JUMP_ANGLE; 0 keeps them all)."""
     valid = grid.valid
     nodes = grid.node_points()
     triangles = grid_triangles(valid, grid.periodic, jump_edges(grid, jump_angle, nodes))
@@ -100,7 +105,7 @@ def grid_to_mesh(grid, jump_angle=None):
     used = np.zeros(valid.size, dtype=bool)
     used[triangles.ravel()] = True
     new_index = np.cumsum(used) - 1
-    return grid.to_input_frame(points[used]), new_index[triangles]
+    return Mesh(grid.to_input_frame(points[used]), new_index[triangles], grid=grid)
 
 
 def merge_poles(triangles, points, valid, poles):

@@ -1,0 +1,135 @@
+"""VTK, STL and OFF through meshio, and the PLY dialects our own reader refuses.
+
+meshio wants file names, so bytes go through a temporary file here; it is imported only
+when one of these formats is read or written (it takes 0.2 s). Its warnings, log
+messages and prints are silenced (stdout carries data only), and any failure becomes an
+MzcError naming the file.
+"""
+
+import contextlib
+import io
+import logging
+import os
+import re
+import struct
+import tempfile
+import warnings
+from collections.abc import Callable, Iterator
+
+import numpy as np
+
+from mzc.errors import MzcError
+from mzc.meshes import Mesh
+from mzc.meshes.common import fan_triangulate
+
+
+class MeshioFormat:
+    """One format meshio reads and writes, declared like a format module."""
+
+    def __init__(self, name: str, extensions: tuple[str, ...], sniff: Callable[[bytes], bool]):
+        self.NAME = name
+        self.EXTENSIONS = extensions
+        self.sniff = sniff
+
+    def read(self, data: bytes, source: str) -> Mesh:
+        """The mesh in ``data``, read by meshio."""
+        return read_as(self.NAME, data, source)
+
+    def write(self, mesh: Mesh) -> bytes:
+        """The bytes meshio writes for ``mesh``."""
+        return write_as(self.NAME, mesh)
+
+
+def is_binary_stl(data: bytes) -> bool:
+    """True when the size of ``data`` matches the triangle count of a binary STL."""
+    if len(data) < 84:
+        return False
+    count = struct.unpack("<I", data[80:84])[0]
+    return len(data) == 84 + 50 * count
+
+
+VTK = MeshioFormat("vtk", (".vtk",), lambda data: data.startswith(b"# vtk DataFile"))
+OFF = MeshioFormat("off", (".off",), lambda data: bool(re.match(rb"\s*[NCST4]*OFF\b", data[:4096])))
+STL = MeshioFormat("stl", (".stl",), lambda data: data[:4096].lstrip().startswith(b"solid") or is_binary_stl(data))
+
+
+@contextlib.contextmanager
+def quiet() -> Iterator[None]:
+    """Silence meshio's warnings, log messages and prints: stdout carries data only."""
+    logging.disable(logging.CRITICAL)
+    try:
+        with warnings.catch_warnings(), contextlib.redirect_stdout(io.StringIO()):
+            warnings.simplefilter("ignore")
+            yield
+    finally:
+        logging.disable(logging.NOTSET)
+
+
+@contextlib.contextmanager
+def temporary_name(kind: str) -> Iterator[str]:
+    """A file name ``mesh.KIND`` in a fresh temporary directory, removed afterwards."""
+    with tempfile.TemporaryDirectory(prefix="mzc-") as directory:
+        yield os.path.join(directory, f"mesh.{kind}")
+
+
+def read_as(kind: str, data: bytes, source: str) -> Mesh:
+    """Read ``data`` as meshio's ``kind`` format; any failure becomes an MzcError."""
+    import meshio
+
+    if kind == "off" and not off_has_counts_line(data):
+        raise MzcError("OFF file ends before its counts line 'vertices faces edges'", source=source)
+    reader = getattr(meshio, kind).read  # meshio.read would print to stdout and sys.exit on failure
+    try:
+        with temporary_name(kind) as name, quiet():
+            with open(name, "wb") as handle:
+                handle.write(data)
+            result = reader(name)
+    except Exception as error:  # noqa: BLE001 - meshio raises many types on bad data
+        message = str(error).strip().splitlines()[0] if str(error).strip() else type(error).__name__
+        raise MzcError(f"cannot read as {kind.upper()}: {message}", source=source) from None
+    return Mesh(xyz_of(result.points), surface_triangles(result.cells))
+
+
+def off_has_counts_line(data: bytes) -> bool:
+    """True when an OFF file has a line after ``OFF`` that is neither blank nor a comment.
+
+    meshio's OFF reader skips such lines in a loop that never stops at the end of the file.
+    """
+    lines = data.split(b"\n")[1:]
+    return any(line.strip() and not line.strip().startswith(b"#") for line in lines)
+
+
+def xyz_of(points) -> np.ndarray:
+    """(n, 3) coordinates of meshio points: 2D points get z = 0, nothing read gives (0, 3)."""
+    points = np.asarray(points, dtype=np.float64)
+    if points.ndim != 2 or points.size == 0:
+        return np.empty((0, 3))
+    if points.shape[1] < 3:
+        return np.hstack([points, np.zeros((len(points), 3 - points.shape[1]))])
+    return points[:, :3]
+
+
+def surface_triangles(cells) -> np.ndarray:
+    """The triangles of meshio cell blocks: triangles, quads and polygons, fan-triangulated."""
+    pieces = [fan_triangulate(block.data) for block in cells
+              if (block.type in ("triangle", "quad") or block.type.startswith("polygon"))
+              and np.asarray(block.data).ndim == 2 and np.asarray(block.data).shape[1] >= 3]
+    if not pieces:
+        return np.empty((0, 3), dtype=np.int64)
+    return np.concatenate(pieces).astype(np.int64)
+
+
+def write_as(kind: str, mesh: Mesh) -> bytes:
+    """The bytes of ``mesh`` written by meshio as ``kind`` (PLY binary); STL needs triangles."""
+    import meshio
+
+    if kind == "stl" and not len(mesh.triangles):
+        raise MzcError("STL cannot hold a point cloud (no triangles)")
+    # int32 indices: PLY has no 64-bit integers, and meshio would warn on stderr.
+    cells = [("triangle", mesh.triangles.astype(np.int32))] if len(mesh.triangles) else []
+    options = {"binary": True} if kind == "ply" else {}
+    with temporary_name(kind) as name:
+        with quiet():
+            meshio.write(name, meshio.Mesh(mesh.points, cells), file_format=kind, **options)
+        with open(name, "rb") as handle:
+            return handle.read()

@@ -1,0 +1,163 @@
+"""Wavefront OBJ: ``v`` and ``f`` lines in any dialect, read and written without a Python
+loop per vertex or face.
+
+mzc reads OBJ itself rather than through meshio, which misreads negative indices.
+"""
+
+import re
+import warnings
+
+import numpy as np
+
+from mzc.errors import MzcError
+from mzc.meshes import Mesh
+from mzc.meshes.common import fan_triangulate_ragged, is_text
+
+NAME = "obj"
+EXTENSIONS = (".obj",)
+
+OBJ_WHITESPACE = np.frombuffer(b" \t\r\n\v\f", dtype=np.uint8)
+
+
+def sniff(data: bytes) -> bool:
+    """True when a line near the start is a ``v`` statement."""
+    return bool(re.search(rb"(^|\n)\s*v\s", data[:4096]))
+
+
+def read(data: bytes, source: str) -> Mesh:
+    """Read Wavefront OBJ: ``v`` and ``f`` lines in any dialect (v/vt/vn, negative indices,
+    polygons, CRLF, trailing comments); every other statement (vt, vn, o, g, s, usemtl,
+    l, ...) is ignored. Works on whole byte arrays: no Python loop per vertex or face."""
+    if not is_text(data):
+        raise MzcError("binary data where OBJ text was expected", source=source)
+    tokens = ObjTokens(data)
+    vertex_lines, face_lines = tokens.lines_of("v"), tokens.lines_of("f")
+    if len(vertex_lines) == 0:
+        raise MzcError("no 'v' lines: the OBJ file has no vertices", source=source)
+    points = obj_vertices(tokens, vertex_lines, source)
+    triangles = obj_triangles(tokens, face_lines, vertex_lines, source)
+    return Mesh(points, triangles)
+
+
+class ObjTokens:
+    """The whitespace-separated tokens of OBJ bytes: where each starts and ends, and its line.
+
+    Comments (``#`` to the end of the line) are blanked first.
+    """
+
+    def __init__(self, data):
+        text = np.frombuffer(data, dtype=np.uint8)
+        newlines = np.flatnonzero(text == ord("\n"))
+        if b"#" in data:
+            after_hash = last_index(text == ord("#")) > last_index(text == ord("\n"))
+            text = np.where(after_hash, ord(" "), text).astype(np.uint8)
+        self.text = text
+        space = np.isin(text, OBJ_WHITESPACE)
+        begins = ~space
+        begins[1:] &= space[:-1]
+        self.starts = np.flatnonzero(begins)
+        self.ends = np.flatnonzero(~space & np.r_[space[1:], True]) + 1
+        self.token_of_byte = np.cumsum(begins, dtype=np.int32) - 1  # -1 before the first token
+        self.line = np.searchsorted(newlines, self.starts)
+        self.first_on_line = np.r_[True, self.line[1:] != self.line[:-1]]
+
+    def lines_of(self, keyword):
+        """Sorted line indices (0-based) whose first token is the one-letter ``keyword``."""
+        is_keyword = (self.first_on_line & (self.ends - self.starts == 1)
+                      & (self.text[self.starts] == ord(keyword)))
+        return self.line[is_keyword]
+
+    def arguments(self, lines):
+        """Token indices of the arguments (all tokens but the keyword) on ``lines``."""
+        on_lines = np.isin(self.line, lines) & ~self.first_on_line
+        return np.flatnonzero(on_lines)
+
+    def numbers(self, token_indices, dtype, cut_at_slash=False):
+        """Parse the chosen tokens as numbers in one call; None when one does not parse.
+
+        ``cut_at_slash`` keeps only what precedes the first ``/`` of each token (v/vt/vn).
+        """
+        chosen = np.zeros(len(self.starts) + 1, dtype=bool)  # the extra last slot: no token
+        chosen[token_indices] = True
+        keep = chosen[self.token_of_byte]
+        if cut_at_slash:
+            keep &= last_index(self.text == ord("/")) < self.starts[self.token_of_byte]
+        buffer = np.where(keep, self.text, ord(" ")).astype(np.uint8).tobytes()
+        with warnings.catch_warnings():
+            warnings.simplefilter("error")
+            try:
+                values = np.fromstring(buffer, dtype=dtype, sep=" ")
+            except (DeprecationWarning, ValueError):
+                return None
+        return values if len(values) == len(token_indices) else None
+
+    def token_text(self, index):
+        """The text of one token, for error messages."""
+        return self.text[self.starts[index]:self.ends[index]].tobytes().decode("utf-8", "replace")
+
+
+def last_index(mask):
+    """For every position, the index of the latest True at or before it (-1 when none)."""
+    return np.maximum.accumulate(np.where(mask, np.arange(len(mask), dtype=np.int32), np.int32(-1)))
+
+
+def obj_vertices(tokens, vertex_lines, source):
+    """(n, 3) x y z of the ``v`` lines; w and colour columns are ignored."""
+    arguments = tokens.arguments(vertex_lines)
+    line = tokens.line[arguments]
+    position = arguments - np.searchsorted(tokens.line, line)  # 1 = first argument
+    counts = np.bincount(np.searchsorted(vertex_lines, line), minlength=len(vertex_lines))
+    if (counts < 3).any():
+        raise MzcError("a vertex needs x y z", source=source,
+                       line=int(vertex_lines[np.argmax(counts < 3)]) + 1)
+    xyz = arguments[position <= 3]
+    values = tokens.numbers(xyz, np.float64)
+    if values is None:
+        raise first_bad_token(tokens, xyz, float, "not a number", source)
+    return values.reshape(-1, 3)
+
+
+def obj_triangles(tokens, face_lines, vertex_lines, source):
+    """The fan-triangulated ``f`` lines, with 1-based and negative (relative) indices resolved."""
+    if len(face_lines) == 0:
+        return np.empty((0, 3), dtype=np.int64)
+    corners = tokens.arguments(face_lines)
+    corner_line = tokens.line[corners]
+    counts = np.bincount(np.searchsorted(face_lines, corner_line), minlength=len(face_lines))
+    if (counts < 3).any():
+        raise MzcError("a face needs at least 3 vertices", source=source,
+                       line=int(face_lines[np.argmax(counts < 3)]) + 1)
+    flat = tokens.numbers(corners, np.int64, cut_at_slash=True)
+    if flat is None:
+        raise first_bad_token(tokens, corners, int_before_slash, "bad vertex index", source)
+    # A negative index counts back from the vertices defined so far in the file.
+    defined_before = np.searchsorted(vertex_lines, corner_line)
+    flat = np.where(flat < 0, flat + defined_before, flat - 1)
+    invalid = (flat < 0) | (flat >= len(vertex_lines))
+    if invalid.any():
+        raise MzcError(f"face refers to a vertex that does not exist (there are {len(vertex_lines)})",
+                       source=source, line=int(corner_line[np.argmax(invalid)]) + 1)
+    return fan_triangulate_ragged(flat, counts)
+
+
+def int_before_slash(token):
+    """The vertex index of an OBJ face corner such as ``7/3/2``."""
+    return int(token.split("/", 1)[0])
+
+
+def first_bad_token(tokens, indices, convert, message, source):
+    """The MzcError for the first token that ``convert`` refuses (the slow path, errors only)."""
+    for index in indices:
+        text = tokens.token_text(index)
+        try:
+            convert(text)
+        except ValueError:
+            return MzcError(f"{message}: {text[:40]!r}", source=source, line=int(tokens.line[index]) + 1)
+    return MzcError(message, source=source)
+
+
+def write(mesh: Mesh) -> bytes:
+    """OBJ bytes of ``mesh``: one string-format call over the whole arrays, shortest exact floats."""
+    vertices = ("v %r %r %r\n" * len(mesh.points)) % tuple(mesh.points.ravel().tolist())
+    faces = ("f %d %d %d\n" * len(mesh.triangles)) % tuple((mesh.triangles.ravel() + 1).tolist())
+    return (vertices + faces).encode("ascii")

@@ -1,0 +1,34 @@
+"""Point clouds as plain text: one ``x y z`` line per point.
+
+Extra columns (colours, intensities), commas between numbers and ``#`` comments are
+accepted. mzc reads these files but does not write them.
+"""
+
+import re
+
+from mzc.errors import MzcError
+from mzc.meshes import Mesh
+from mzc.meshes.common import decode_text, is_text, numbers_or_error
+
+NAME = "xyz"
+EXTENSIONS = (".xyz", ".txt", ".pts", ".asc")
+write = None   # a point cloud is read, never written
+
+
+def sniff(data: bytes) -> bool:
+    """True for text with a line starting like a number (tried last: most text fits)."""
+    head = data[:4096]
+    return bool(re.search(rb"(^|\n)\s*[-+.\d][^\n]*", head)) and is_text(head)
+
+
+def read(data: bytes, source: str) -> Mesh:
+    """A point cloud from text lines of 3+ numbers (extra columns and ``#`` comments ignored)."""
+    numbered = [(number, line.split("#", 1)[0].replace(",", " ").split())
+                for number, line in enumerate(decode_text(data, source).splitlines(), 1)]
+    numbered = [(number, tokens) for number, tokens in numbered if tokens]
+    short = [number for number, tokens in numbered if len(tokens) < 3]
+    if short:
+        raise MzcError("expected at least 3 numbers (x y z) on the line", source=source, line=short[0])
+    points = numbers_or_error([tokens[:3] for _, tokens in numbered], 3,
+                              [number for number, _ in numbered], source)
+    return Mesh(points)
