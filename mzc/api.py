@@ -111,10 +111,10 @@ def compare(a: Any, b: Any, *, surface: bool = False, heightfield: bool = False,
             seed: int = 0, d1: float | None = None, d2: float | None = None) -> dict[str, Any]:
     """How far surface ``b`` is from ``a`` (``mzc diff``): the statistics of B - A along A's node
     lines, and with ``surface`` the symmetric point-to-surface distance; a dict of name -> value."""
-    from mzc.compare import compare_surfaces
+    from mzc.measure import compare_surfaces
 
     return compare_surfaces(as_surface(a), as_surface(b), surface=surface, heightfield=heightfield,
-                            samples=samples, seed=seed, d1=d1, d2=d2)
+                            samples=samples, seed=seed, d1=d1, d2=d2).report
 
 
 def as_surface(surface: Any) -> Mesh:

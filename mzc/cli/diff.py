@@ -4,8 +4,6 @@ import json
 
 import click
 
-STATISTICS = ("rmse", "max", "mean", "r2", "percentiles", "count")
-
 
 @click.command(help="""Compare two surfaces (meshes or mzc files, any mix).
 
@@ -43,68 +41,26 @@ direction on the first line.""")
 @click.option("--plot", metavar="FILE.png", help="Write the quality plots (error map, residuals, normal probability).")
 def command(a, b, rmse, max_, mean, r2, percentiles, count, surface, heightfield, samples, seed, d1, d2,
             as_json, error_grid, plot):
-    from mzc.compare.sampling import error_grid as compute_error_grid
-    from mzc.compare.metrics import grid_error_stats
-    from mzc.streams import check_not_input
+    from mzc.errors import MzcError
+    from mzc.measure import STATISTICS, compare_surfaces
     from mzc.meshes import read_surface
+    from mzc.streams import check_not_input
 
     for output in (error_grid, plot):
         if output:
             check_not_input(output, a, b)
     first, second = read_surface(a), read_surface(b)
+    if (error_grid or plot) and (first.is_point_cloud or second.is_point_cloud):
+        raise MzcError("--error-grid and --plot need two surfaces, not a point cloud", field="diff")
     chosen = [name for name, on in zip(STATISTICS, (rmse, max_, mean, r2, percentiles, count)) if on]
-    if first.is_point_cloud or second.is_point_cloud:
-        report = cloud_report(first, second, a, b, chosen, error_grid or plot)
-        click.echo(json.dumps(report, indent=2) if as_json else format_report(report))
-        return
-    reference, errors = compute_error_grid(first, second, d1, d2)
-    stats = grid_error_stats(reference.z, reference.z + errors.z)
-    report = select(stats, chosen or STATISTICS)
-    if surface or heightfield or any(side.grid is not None and side.grid.projection != "planar"
-                                     for side in (first, second)):
-        report.update(surface_report(first, second, heightfield, samples, seed))
+    result = compare_surfaces(first, second, chosen, surface, heightfield, samples, seed, d1, d2, names=(a, b))
     if error_grid:
         from mzc.cli.options import write_grid
 
-        write_grid(errors, error_grid)
+        write_grid(result.errors, error_grid)
     if plot:
-        write_plot(plot, reference, errors, stats)
-    click.echo(json.dumps(report, indent=2) if as_json else format_report(report))
-
-
-def cloud_report(first, second, a, b, chosen, grid_output):
-    """The distances of a point cloud's points to the other side's surface, direction stated."""
-    from mzc.errors import MzcError
-    from mzc.compare.metrics import distance_to_mesh, distance_stats
-
-    if first.is_point_cloud and second.is_point_cloud:
-        raise MzcError("both sides are point clouds: give a mesh or an mzc file on one side", field="diff")
-    if grid_output:
-        raise MzcError("--error-grid and --plot need two surfaces, not a point cloud", field="diff")
-    (cloud, cloud_name), (mesh, mesh_name) = ((first, a), (second, b)) if first.is_point_cloud else \
-        ((second, b), (first, a))
-    stats = distance_stats(distance_to_mesh(cloud.points, mesh.points, mesh.triangles))
-    return {"direction": f"points of {cloud_name} to the surface of {mesh_name}",
-            **select(stats, chosen or STATISTICS)}
-
-
-def surface_report(first, second, heightfield, samples, seed):
-    """surface_* entries (and surface_heightfield_* ones) of the point-to-surface distance."""
-    from mzc.compare.metrics import heightfield_filters, surface_distance_parts
-
-    parts = {"surface_": (None, None)}
-    if heightfield:
-        parts["surface_heightfield_"] = heightfield_filters(first.points, first.triangles)
-    distances = surface_distance_parts((first.points, first.triangles), (second.points, second.triangles),
-                                       parts, samples=samples, seed=seed)
-    return {f"{prefix}{k}": v for prefix, summary in distances.items() for k, v in summary.items()}
-
-
-def select(stats, chosen):
-    """The entries of ``stats`` that the chosen statistic names stand for."""
-    names = {"rmse": ["rmse"], "max": ["max"], "mean": ["mean", "bias"], "r2": ["r2"],
-             "percentiles": ["p50", "p95", "p99"], "count": ["count"]}
-    return {key: stats[key] for name in chosen for key in names[name] if key in stats}
+        write_plot(plot, result.reference, result.errors, result.stats)
+    click.echo(json.dumps(result.report, indent=2) if as_json else format_report(result.report))
 
 
 def format_report(report):

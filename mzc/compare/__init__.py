@@ -1,1 +1,0 @@
-"""Comparing surfaces: sampling two on one grid, and the distances between them."""
