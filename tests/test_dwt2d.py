@@ -9,17 +9,17 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
+from codec_contract import spec_examples as contract_examples
 from mzc.codecs.dwt2d.entropy import Decoder, TABLE_BITS
 from mzc.errors import MzcError
 from mzc.codecs import dwt2d
 from mzc.formats import read_any
 from mzc.grid import ZGrid
 from mzc.codecs.dwt2d import wavelet as w2
-from mzc.compare.metrics import surface_distance
+from mzc.measure.metrics import surface_distance
 from mzc.ops.triangulation import grid_to_mesh, jump_edges
 from conftest import FACE_NAMES, face_path
 
-SPEC = Path(__file__).resolve().parents[1] / "spec" / "dwt2d.md"
 
 
 @lru_cache(maxsize=None)
@@ -209,15 +209,8 @@ def test_corrupt_or_truncated_payloads_raise_only_mzc_errors(data):
 
 def spec_examples():
     """(file bytes, expected values) of every worked example in spec/dwt2d.md (2.0, then 3.0)."""
-    text = SPEC.read_text()
-    blocks = re.findall(r"```mzc-example-hex\n(.*?)```", text, re.S)
-    expected = re.findall(r"```expected\n(.*?)```", text, re.S)
-    assert len(blocks) == len(expected) == 2
-    examples = []
-    for block, values in zip(blocks, expected):
-        header, hex_payload = block.split("data\n")
-        grid = np.array([[float(v) for v in line.split()] for line in values.strip().splitlines()])
-        examples.append(((header + "data\n").encode() + bytes.fromhex(hex_payload), grid))
+    examples = [(data, values) for data, values, _id in contract_examples("dwt2d")]
+    assert len(examples) == 2
     return examples
 
 

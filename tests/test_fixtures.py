@@ -15,55 +15,18 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from codec_contract import (EXPECTED, FIXTURE_NAME, FIXTURES, assert_same_grid, expected_grid, fixture_bytes,
+                            fixture_names)
+from mzc.codecs import BUILT_IN, dwt2d, get_codec
 from mzc.errors import MzcError
-from mzc.codecs import dwt2d
 from mzc.codecs.rows import dct, dft, dwt, poly
 from mzc.formats import REGISTRY, module_for, read_any, zgrid
 from mzc.formats.header import split_magic
 from mzc.grid import IDENTITY_TRANSFORM, ZGrid
 
-FIXTURES = Path(__file__).resolve().parent / "fixtures"
-EXPECTED = ".expected.zg"
-EXTENSIONS = {"zgrid": ".zg", "poly": ".mzp", "dft": ".mzf", "dct": ".mzd", "dwt": ".mzw", "dwt2d": ".mzw2"}
-NAME = re.compile(r"^(?P<kind>[a-z0-9]+)-(?P<major>\d+)\.(?P<minor>\d+)(?P<ext>\.[a-z0-9]+)$")
+EXTENSIONS = {"zgrid": ".zg", **{name: get_codec(name).extension for name in BUILT_IN}}
 ROW_CODECS = ("poly", "dft", "dct", "dwt")
-
-
-def fixture_names():
-    """The encoded fixture files (not their expectations, not the folder's notes)."""
-    return sorted(p.name for p in FIXTURES.iterdir()
-                  if p.is_file() and not p.name.endswith(EXPECTED) and NAME.match(p.name))
-
-
-def fixture_bytes(name):
-    return (FIXTURES / name).read_bytes()
-
-
-def expected_grid(name):
-    return read_any((FIXTURES / (name + EXPECTED)).read_bytes(), name + EXPECTED)
-
-
-def bits(value):
-    """The binary64 bytes of a float (so -0.0 and 0.0 differ), or None."""
-    return None if value is None else np.float64(value).tobytes()
-
-
-def assert_same_grid(got, want):
-    """Equal in every field, values to 1e-12, NaN exactly where the expectation has it."""
-    assert got.shape == want.shape
-    got_nan, want_nan = np.isnan(got.z), np.isnan(want.z)
-    assert np.array_equal(got_nan, want_nan), (
-        f"invalid nodes differ at {np.argwhere(got_nan != want_nan).tolist()}")
-    got_values, want_values = got.z[~got_nan], want.z[~want_nan]
-    # The decoders' transforms run in numpy and PyWavelets, whose last bits may change with
-    # their versions or the CPU: the promise is the surface, to one part in 10^12.
-    np.testing.assert_allclose(got_values, want_values, rtol=1e-12, atol=0)
-    assert (bits(got.d1), bits(got.d2)) == (bits(want.d1), bits(want.d2))
-    assert [bits(v) for v in got.origin] == [bits(v) for v in want.origin]
-    assert got.transform.shape == want.transform.shape == (3, 4)
-    assert got.transform.tobytes() == want.transform.tobytes()
-    assert (got.projection, bits(got.radius)) == (want.projection, bits(want.radius))
-    assert (got.units, got.nodata) == (want.units, want.nodata)
+NAME = FIXTURE_NAME
 
 
 # --- the fixtures decode as they always did ---------------------------------------------

@@ -84,7 +84,8 @@ class Codec:
     magic line of its files; ``version`` the newest format version it writes and
     ``oldest_major`` the oldest major version it reads; ``selector`` names the option whose
     value comes with the flag itself (``--poly DEGREE``); ``spec`` is its spec page.
-    ``check_options`` enforces rules between options (dwt2d: exactly one target).
+    ``check_options`` enforces rules between options (dwt2d: exactly one target);
+    ``example`` holds the options of a typical use (the contract tests encode with them).
     """
 
     name: str
@@ -98,6 +99,7 @@ class Codec:
     options: tuple[Option, ...] = ()
     selector: str | None = None
     oldest_major: int = 1
+    example: dict[str, Any] = field(default_factory=dict)
     check_options: Callable[[dict[str, Any]], None] = field(default=lambda options: None)
 
     def __post_init__(self) -> None:

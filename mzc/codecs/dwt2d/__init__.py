@@ -526,7 +526,7 @@ def read(data, source="<bytes>"):
 TARGETS = ("max_error", "rmse", "size")
 CODEC = Codec(
     "dwt2d", encode_grid, read, version=VERSION, oldest_major=OLDEST_MAJOR, extension=".mzw2", spec="spec/dwt2d.md",
-    summary="2D wavelet of the whole grid, entropy coded, error-bounded", check_options=one_target, options=(
+    summary="2D wavelet of the whole grid, entropy coded, error-bounded", check_options=one_target, example={"max_error": 0.05}, options=(
         Option("max_error", float, None, 0, min_open=True, metavar="E",
                help="|decoded - input| <= E at every valid node."),
         Option("rmse", float, None, 0, min_open=True, metavar="E",

@@ -61,7 +61,7 @@ DEGREE = Option("degree", int, None, 0, MAX_DEGREE, metavar="DEGREE", help="Poly
 BASIS = Option("basis", BASES, "chebyshev",
                help="Polynomial basis: chebyshev (stable) or power (the thesis's polyfit).")
 CODEC = rows.codec_of(ROW_CODEC, ".mzp", "Polynomial of DEGREE per row (thesis Ch. 5)", (DEGREE, BASIS, rows.PRECISION),
-                      selector="degree", check_options=check_options)
+                      selector="degree", check_options=check_options, example={"degree": 20})
 read = CODEC.decode
 
 
