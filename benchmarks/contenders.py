@@ -12,14 +12,14 @@ for the DEMs).
 import importlib
 import lzma
 import struct
+from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Callable
 
 import numpy as np
 
 from mzc.grid import ZGrid
-from mzc.projections import PROJECTIONS
 from mzc.ops.triangulation import grid_to_mesh
+from mzc.projections import PROJECTIONS
 
 BOUNDS = (0.02, 0.05, 0.1, 0.2, 0.35, 0.5, 0.75, 1.0, 1.5, 2.0, 3.0, 4.0)   # absolute error bounds, in units
 RMS_TARGETS = (0.01, 0.02, 0.03, 0.04, 0.06, 0.08, 0.11, 0.16, 0.23, 0.32, 0.64)   # dwt2d's --rmse targets
@@ -214,8 +214,8 @@ def read_grid_file(data, extra_size=0):
 
 def mask_bytes(valid):
     """The validity mask coded exactly as mzc's dwt2d codes it (row spans through rANS)."""
-    from mzc.codecs.dwt2d.entropy import Encoder
     from mzc.codecs.dwt2d import encode_mask
+    from mzc.codecs.dwt2d.entropy import Encoder
 
     encoder = Encoder()
     encode_mask(encoder, valid)
@@ -223,8 +223,8 @@ def mask_bytes(valid):
 
 
 def read_mask(data, rows, cols):
-    from mzc.codecs.dwt2d.entropy import Decoder
     from mzc.codecs.dwt2d import decode_mask
+    from mzc.codecs.dwt2d.entropy import Decoder
 
     return decode_mask(Decoder(data, "<mask>"), rows, cols)
 

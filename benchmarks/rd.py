@@ -4,7 +4,7 @@
 
 Every contender of ``contenders.py`` codes each corpus item at every setting of its
 ladder; each file is decoded, turned into a mesh and measured against the original mesh
-with mzc's own symmetric point-to-surface distance (``mzc.compare.metrics.surface_distance_parts``,
+with mzc's own symmetric point-to-surface distance (``mzc.measure.metrics.surface_distance_parts``,
 the code behind ``mzc diff --surface --heightfield``): over the whole surface (every
 triangle; the primary figure) and over its height-field part (the secondary one). Writes
 rd-results.md, rd-results.json and one rd-<corpus>.png per corpus into --out (default:
@@ -22,7 +22,7 @@ from pathlib import Path
 for _name in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
     os.environ.setdefault(_name, "1")  # one core per worker: timings are single-threaded
 
-import numpy as np
+import numpy as np  # noqa: E402 - after the thread settings, which numpy reads on import
 
 HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE))
@@ -77,7 +77,7 @@ def load_item(corpus, source):
 
 def without_degenerate(mesh):
     """The mesh without zero-area triangles (quantisers collapse some; they add no surface)."""
-    from mzc.compare.metrics import triangle_areas
+    from mzc.measure.metrics import triangle_areas
 
     points, triangles = mesh
     return points, triangles[triangle_areas(points, triangles) > 0]
@@ -85,7 +85,7 @@ def without_degenerate(mesh):
 
 def measure(original, decoded, filters, samples):
     """Whole-surface and height-field distances of ``decoded`` to ``original``."""
-    from mzc.compare.metrics import surface_distance_parts
+    from mzc.measure.metrics import surface_distance_parts
 
     return surface_distance_parts(original, without_degenerate(decoded),
                                   {"whole": (None, None), "heightfield": filters}, samples=samples, seed=SEED)
@@ -133,8 +133,8 @@ def prepared_item(corpus, name, source):
     Kept for the worker's next job: jobs go out item by item, so each worker loads each
     item at most once.
     """
+    from mzc.measure.metrics import heightfield_filters
     from mzc.meshes import Mesh
-    from mzc.compare.metrics import heightfield_filters
 
     inputs, unit, units = load_item(corpus, source)
     grid = inputs["grid"]

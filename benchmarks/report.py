@@ -288,7 +288,7 @@ def method_section(settings, results):
     return [
         "## Method",
         "",
-        f"- Corpus: the faces of `shared/data/faces` (mm) and matplotlib's two DEMs (`mzc.samples.jacksboro`, "
+        "- Corpus: the faces of `shared/data/faces` (mm) and matplotlib's two DEMs (`mzc.samples.jacksboro`, "
         "`topobathy`; m), each as a grid and as its mesh (`grid_to_mesh`).",
         f"- Grid contenders code mzc's z-grid of the face sliced at {settings['grid_step']} mm in the default "
         f"projection (`slice_surface(mesh, d1={settings['grid_step']}, d2={settings['grid_step']})`: "
@@ -311,14 +311,14 @@ def method_section(settings, results):
         "quantisation steps in units, OpenJPH having no rate control.",
         f"- Error, identical for every contender: decode, turn into a mesh (grids through `grid_to_mesh`, "
         "zero-area triangles dropped), and measure the symmetric point-to-surface distance to the original mesh "
-        f"with `mzc.compare.metrics.surface_distance_parts` ({settings['samples']:,} area-weighted samples per surface "
+        f"with `mzc.measure.metrics.surface_distance_parts` ({settings['samples']:,} area-weighted samples per surface "
         f"and direction, seed {settings['seed']}): the code of `mzc diff A B --surface --heightfield`. "
         "The primary figure is the distance over the whole surface, every triangle of both meshes; its "
         "Hausdorff is the largest sampled distance, an estimate from below that grows with the sample count "
         "(see the sample-count check of a full run). "
         "The secondary one, the height-field part, keeps original triangles whose normal has z above 0.5 and "
         "that are seen from +z (no other triangle above their centroid), and decoded samples whose nearest "
-        "original triangle is one of those (`mzc.compare.metrics.heightfield_filters`).",
+        "original triangle is one of those (`mzc.measure.metrics.heightfield_filters`).",
         "- Summary ratios: on each item, each contender's Pareto front of (error, bytes) by the table's measure "
         "is interpolated log-log at the target error; mzc's best is the smallest over all mzc contenders there. "
         "An mzc contender whose cheapest setting is already below the target counts at that setting's bytes "

@@ -23,10 +23,10 @@ from pathlib import Path
 
 import numpy as np
 
-from mzc.ops.densify import METHODS, densify_grid
 from mzc.formats import module_for
+from mzc.measure.metrics import grid_error_stats
 from mzc.meshes import read_mesh
-from mzc.compare.metrics import grid_error_stats
+from mzc.ops.densify import METHODS, densify_grid
 from mzc.ops.slicing import slice_surface
 
 HERE = Path(__file__).resolve().parent

@@ -7,6 +7,7 @@ import numpy as np
 import pytest
 
 import mzc
+
 from golden import run
 
 

@@ -8,9 +8,10 @@ import sys
 import numpy as np
 import pytest
 
-from conftest import REPO, face_path, run_mzc
 from mzc.grid import ZGrid
-from mzc.compare.metrics import heightfield_filters, surface_distance, surface_distance_parts
+from mzc.measure.metrics import heightfield_filters, surface_distance, surface_distance_parts
+
+from conftest import REPO, face_path, run_mzc
 
 BENCHMARK = REPO / "benchmarks" / "rd.py"
 sys.path.insert(0, str(BENCHMARK.parent))
@@ -65,7 +66,8 @@ def test_the_heightfield_part_leaves_out_steep_and_hidden_triangles():
 
 
 def test_parts_equal_separate_surface_distance_calls():
-    mesh_a, mesh_b = flat_mesh(), contenders.mesh_pair(ZGrid(0.05 * np.random.default_rng(1).random((31, 41)), 1.0, 1.0))
+    grid = ZGrid(0.05 * np.random.default_rng(1).random((31, 41)), 1.0, 1.0)
+    mesh_a, mesh_b = flat_mesh(), contenders.mesh_pair(grid)
     filters = heightfield_filters(*mesh_a)
     parts = surface_distance_parts(mesh_a, mesh_b, {"whole": (None, None), "hf": filters}, samples=3000, seed=4)
     assert parts["whole"] == surface_distance(mesh_a, mesh_b, samples=3000, seed=4)

@@ -137,7 +137,8 @@ def test_encode_dwt2d_holds_its_max_error_through_the_cli(mzc, tmp_path):
 
 @pytest.mark.parametrize("options", [["--dwt2d"], ["--dwt2d", "--max-error", "1", "--rmse", "1"],
                                      ["--dct", "--max-error", "1"], ["--dct", "--dwt2d", "--size", "100"],
-                                     ["--dct", "--slope-limit", "2"], ["--dwt2d", "--rmse", "1", "--slope-limit", "0.5"]])
+                                     ["--dct", "--slope-limit", "2"],
+                                     ["--dwt2d", "--rmse", "1", "--slope-limit", "0.5"]])
 def test_encode_codec_option_mistakes_are_usage_errors(mzc, options):
     result = mzc("encode", *options, input=b"mzc-zgrid 1.0\nrows 1\ncols 2\nd1 1\nd2 1\ndata\n1 2\n")
     assert result.returncode == 2 and result.stdout == b"" and "Traceback" not in result.stderr.decode()

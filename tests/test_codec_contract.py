@@ -2,8 +2,9 @@
 
 import pytest
 
-from codec_contract import FIXTURE_NAME, REPO, check_codec, fixture_names
 from mzc.codecs import BUILT_IN, codec_names, get_codec
+
+from codec_contract import FIXTURE_NAME, REPO, check_codec, fixture_names
 
 
 @pytest.mark.parametrize("name", codec_names())

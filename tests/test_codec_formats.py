@@ -6,12 +6,14 @@ import warnings
 import numpy as np
 import pytest
 
-from codec_contract import assert_heights, spec_examples
-from mzc.codecs.rows import transforms as T
-from mzc.formats import read_any
-from mzc.codecs.rows.legacy import dwt_kept_mask, read_legacy, thesis_lengths
 from mzc.codecs.rows import spans
+from mzc.codecs.rows import transforms as T
+from mzc.codecs.rows.legacy import dwt_kept_mask, read_legacy, thesis_lengths
+from mzc.formats import read_any
 from mzc.grid import ZGrid
+
+from codec_contract import assert_heights, spec_examples
+
 
 @pytest.mark.parametrize("data, expected", [pytest.param(d, e, id=i) for d, e, i in spec_examples()])
 def test_spec_example_decodes_to_its_expected_grid(data, expected):
@@ -108,7 +110,9 @@ def matlab_file(grid, kind, quality):
 
 def matlab_row(span, kind, quality):
     """The numbers after v1 v2 on one MATLAB row line."""
-    numbers = lambda values: "".join(f"{v:12.4f}\t" for v in values)
+    def numbers(values):
+        return "".join(f"{v:12.4f}\t" for v in values)
+
     if kind == "dct":
         return numbers(T.dct_forward(span)[:math.floor((quality / 100) * span.size)])
     if kind == "dft":

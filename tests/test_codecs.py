@@ -5,11 +5,11 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from mzc.codecs.rows import dct, dft, dwt, poly, spans
 from mzc.codecs.rows import transforms as T
-from mzc.codecs.rows import dct, dft, dwt, poly
 from mzc.formats import read_any
-from mzc.codecs.rows import spans
 from mzc.grid import ZGrid
+
 from conftest import face_path
 
 TRANSFORM_CODECS = [(dct, {}), (dft, {}), (dwt, {}), (dwt, {"wavelet": "db4", "level": 5})]

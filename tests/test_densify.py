@@ -5,9 +5,9 @@ import time
 import numpy as np
 import pytest
 
-from mzc.ops.densify import METHODS, densify, densify_grid
 from mzc.errors import MzcError
 from mzc.grid import ZGrid
+from mzc.ops.densify import METHODS, densify, densify_grid
 
 D1, D2, N = 3.0, 0.25, 3
 STEP = D1 / (N + 1)

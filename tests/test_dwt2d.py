@@ -1,28 +1,26 @@
 """The mzc-dwt2d codec: error bounds on real faces, exact masks, rate targets, hostile input, the spec example."""
 
-import re
-from functools import lru_cache
-from pathlib import Path
+from functools import cache
 
 import numpy as np
 import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from codec_contract import spec_examples as contract_examples
-from mzc.codecs.dwt2d.entropy import Decoder, TABLE_BITS
-from mzc.errors import MzcError
 from mzc.codecs import dwt2d
+from mzc.codecs.dwt2d import wavelet as w2
+from mzc.codecs.dwt2d.entropy import TABLE_BITS, Decoder
+from mzc.errors import MzcError
 from mzc.formats import read_any
 from mzc.grid import ZGrid
-from mzc.codecs.dwt2d import wavelet as w2
 from mzc.measure.metrics import surface_distance
 from mzc.ops.triangulation import grid_to_mesh, jump_edges
+
+from codec_contract import spec_examples as contract_examples
 from conftest import FACE_NAMES, face_path
 
 
-
-@lru_cache(maxsize=None)
+@cache
 def face_grid(name):
     """A face sliced at 0.5 mm (cached: several tests share it)."""
     from mzc.meshes import read_mesh
@@ -179,7 +177,7 @@ def test_random_grids_meet_the_rmse_target(grid, target, limit):
     assert surface_rms(grid, data) <= target if grid.valid.any() else True
 
 
-@lru_cache(maxsize=None)
+@cache
 def fuzz_base():
     """A small encoded grid with holes and two levels, to corrupt."""
     rng = np.random.default_rng(7)

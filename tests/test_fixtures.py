@@ -9,20 +9,26 @@ majors refuse, and the readers' checks of projection, radius, poles and full tur
 """
 
 import hashlib
-import re
-from pathlib import Path
 
 import numpy as np
 import pytest
 
-from codec_contract import (EXPECTED, FIXTURE_NAME, FIXTURES, assert_same_grid, expected_grid, fixture_bytes,
-                            fixture_names)
 from mzc.codecs import BUILT_IN, dwt2d, get_codec
-from mzc.errors import MzcError
 from mzc.codecs.rows import dct, dft, dwt, poly
+from mzc.errors import MzcError
 from mzc.formats import REGISTRY, module_for, read_any, zgrid
 from mzc.formats.header import split_magic
 from mzc.grid import IDENTITY_TRANSFORM, ZGrid
+
+from codec_contract import (
+    EXPECTED,
+    FIXTURE_NAME,
+    FIXTURES,
+    assert_same_grid,
+    expected_grid,
+    fixture_bytes,
+    fixture_names,
+)
 
 EXTENSIONS = {"zgrid": ".zg", **{name: get_codec(name).extension for name in BUILT_IN}}
 ROW_CODECS = ("poly", "dft", "dct", "dwt")

@@ -3,17 +3,18 @@
 import numpy as np
 import pytest
 
-from mzc.ops.densify import densify_grid
 from mzc.codecs import dwt2d
+from mzc.codecs.dwt2d.wavelet import laplace_fill
 from mzc.codecs.rows import dct
 from mzc.formats import read_any, zgrid
+from mzc.measure.metrics import surface_distance
 from mzc.meshes import read_mesh
-from mzc.compare.metrics import surface_distance
+from mzc.ops.densify import densify_grid
 from mzc.ops.slicing import slice_surface
 from mzc.ops.triangulation import grid_to_mesh
-from mzc.codecs.dwt2d.wavelet import laplace_fill
-from conftest import edge_counts
 from mzc.samples import BLOB_CENTRE, blob, tube
+
+from conftest import edge_counts
 
 CODECS = {
     "dwt2d": (dwt2d, {"max_error": 0.02}),

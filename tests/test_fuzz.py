@@ -5,8 +5,8 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from mzc.errors import MzcError
 from mzc.codecs.rows import dct, dft, dwt, poly
+from mzc.errors import MzcError
 from mzc.formats import read_any
 from mzc.grid import ZGrid
 from mzc.meshes import read_mesh

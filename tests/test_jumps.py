@@ -4,15 +4,16 @@
 import numpy as np
 import pytest
 
-from conftest import FACE_NAMES, face_path
-from mzc.ops.densify import densify_grid
 from mzc.codecs import dwt2d
 from mzc.formats import zgrid
 from mzc.grid import ZGrid
+from mzc.measure.metrics import surface_distance
 from mzc.meshes import Mesh
-from mzc.compare.metrics import surface_distance
+from mzc.ops.densify import densify_grid
 from mzc.ops.slicing import slice_surface
 from mzc.ops.triangulation import JUMP_ANGLE, grid_to_mesh, grid_triangles, jump_edges
+
+from conftest import FACE_NAMES, face_path
 
 FRONT, BACK = 60.0, 0.0
 

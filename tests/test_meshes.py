@@ -6,9 +6,10 @@ import meshio
 import numpy as np
 import pytest
 
-from conftest import face_path
 from mzc.errors import MzcError
 from mzc.meshes import Mesh, read_mesh, write_mesh
+
+from conftest import face_path
 
 # A unit square as two triangles, plus an off-square apex: 5 points, 4 triangles (a quad split
 # and a fan of 2 more) - small enough to write by hand in every dialect.
@@ -90,7 +91,7 @@ def test_obj_without_faces_is_a_point_cloud(tmp_path):
 
 
 def ply_header(fmt, vertex_properties, face_property="property list uchar int vertex_indices",
-               faces=len(TRIANGLES)):
+               faces=len(TRIANGLES)):  # noqa: B008 - a constant of this module
     lines = ["ply", f"format {fmt} 1.0", "comment test", f"element vertex {len(POINTS)}",
              *vertex_properties]
     if faces is not None:
@@ -134,9 +135,9 @@ def test_vertex_only_ply_is_a_point_cloud(tmp_path):
 
 
 def test_binary_ply_with_mixed_polygons(tmp_path):
-    header = ("ply\nformat binary_little_endian 1.0\nelement vertex 5\nproperty float x\n"
-              "property float y\nproperty float z\nelement face 2\n"
-              "property list uchar int vertex_indices\nend_header\n").encode()
+    header = (b"ply\nformat binary_little_endian 1.0\nelement vertex 5\nproperty float x\n"
+              b"property float y\nproperty float z\nelement face 2\n"
+              b"property list uchar int vertex_indices\nend_header\n")
     body = b"".join(struct.pack("<fff", *p) for p in POINTS)
     body += struct.pack("<B4i", 4, 0, 1, 2, 3) + struct.pack("<B3i", 3, 1, 4, 2)
     mesh = read_mesh(write(tmp_path, "mixed.ply", header + body))

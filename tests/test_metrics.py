@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from mzc.grid import ZGrid
-from mzc.compare.metrics import grid_error_stats, point_triangle_distance, surface_distance
+from mzc.measure.metrics import grid_error_stats, point_triangle_distance, surface_distance
 from mzc.ops.triangulation import grid_to_mesh
 
 

@@ -5,15 +5,16 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from conftest import FACE_NAMES, face_path
 from mzc import projections, samples
 from mzc.errors import MzcError
+from mzc.measure.metrics import surface_distance, triangle_areas
 from mzc.meshes import Mesh, read_mesh
-from mzc.compare.metrics import surface_distance, triangle_areas
 from mzc.ops.rays import cast
 from mzc.ops.slicing import slice_surface
 from mzc.ops.triangulation import grid_to_mesh
 from mzc.samples import BLOB_CENTRE, blob, tube
+
+from conftest import FACE_NAMES, face_path
 
 CENTRAL = ["cylindrical", "spherical"]
 

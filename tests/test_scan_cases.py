@@ -7,12 +7,12 @@ import json
 import numpy as np
 import pytest
 
-from mzc.errors import MzcError, MzcWarning
 from mzc.codecs import dwt2d
+from mzc.errors import MzcError, MzcWarning
 from mzc.formats import zgrid
 from mzc.grid import ZGrid
+from mzc.measure.metrics import surface_distance
 from mzc.meshes import Mesh, read_mesh
-from mzc.compare.metrics import surface_distance
 from mzc.ops.slicing import slice_surface
 from mzc.ops.triangulation import grid_to_mesh, grid_triangles
 

@@ -6,12 +6,13 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from scipy.spatial import Delaunay
 
-from conftest import FACE_NAMES, face_path
 from mzc.errors import MzcError
 from mzc.formats import zgrid
 from mzc.meshes import Mesh, read_mesh
 from mzc.ops.raster import rasterize
 from mzc.ops.slicing import pca_frame, slice_surface, triangulate_point_cloud
+
+from conftest import FACE_NAMES, face_path
 
 
 def grid_mesh(xs, ys, height):

@@ -11,13 +11,14 @@ import numpy as np
 import pytest
 
 import mzc
-from codec_contract import check_codec, generated_grids
-from golden import run
 from mzc.codecs.base import Codec, Option
 from mzc.errors import MzcError
 from mzc.formats import zgrid
 from mzc.formats.header import grid_header_lines, magic_line, read_grid_fields, read_header
 from mzc.grid import ZGrid
+
+from codec_contract import check_codec, generated_grids
+from golden import run
 
 
 def write_toy(grid, level):

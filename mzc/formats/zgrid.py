@@ -8,8 +8,7 @@ written as the no-data marker.
 import numpy as np
 
 from mzc.errors import MzcError
-from mzc.formats.header import (file_version, format_number, grid_header_lines, magic_line, read_grid_fields,
-                                read_header)
+from mzc.formats.header import file_version, format_number, grid_header_lines, magic_line, read_grid_fields, read_header
 from mzc.grid import ZGrid
 
 KIND = "zgrid"

@@ -17,8 +17,8 @@ DEFAULT_DIVISIONS = 1000
 def common_grid(a, d1=None, d2=None):
     """The comparison grid (a ZGrid of A's values) for the Mesh ``a`` (``read_surface``)."""
     from mzc.meshes import Mesh
-    from mzc.projections import to_nodes
     from mzc.ops.slicing import slice_in_frame
+    from mzc.projections import to_nodes
 
     if a.grid is not None and d1 is None and d2 is None:
         return a.grid

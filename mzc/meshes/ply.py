@@ -11,8 +11,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from mzc.errors import MzcError
-from mzc.meshes import Mesh
-from mzc.meshes import meshio_fallback
+from mzc.meshes import Mesh, meshio_fallback
 from mzc.meshes.common import decode_text, fan_triangulate, fan_triangulate_ragged, numbers_or_error
 
 NAME = "ply"

@@ -48,7 +48,7 @@ def candidate_boxes(corners, projection, radius, u_start):
     box one turn lower, so each side of the seam sees it. A triangle around the axis gets
     every azimuth.
     """
-    x, y, z = corners[..., 0], corners[..., 1], corners[..., 2]
+    x, z = corners[..., 0], corners[..., 2]
     turn = TURN * radius
     u = u_start + np.mod(radius * np.arctan2(x, z) - u_start, turn)
     around = around_axis(x, z)

@@ -11,8 +11,8 @@ Its value is the exact outermost intersection of that line with the surface
 import numpy as np
 
 from mzc.errors import MzcError
-from mzc.limits import MAX_DIMENSION, check_grid_size
 from mzc.grid import ZGrid
+from mzc.limits import MAX_DIMENSION, check_grid_size
 
 DEFAULT_ROWS = 72           # the thesis cuts a face with about 70 horizontal planes (--thesis-grid)
 COLUMN_STEP_RATIO = 10      # and uses about 10x as many vertical planes: d2 = d1/10

@@ -212,23 +212,28 @@ def central_candidate(surface, kind, rotation, center, axis):
         axes = [rotation[:, 1]] if kind == "spherical" else [rotation[:, 1], rotation[:, 0], view]
     best = None
     for direction in axes:
-        def score(centre):
-            return surface.share_from(kind, centre, direction)
-
-        def spread(centre):
-            return surface.spread_from(kind, centre, direction)
-
-        if center is not None:
-            centre = np.asarray(center, dtype=float)
-        else:
-            along_axis = kind == "cylindrical" and abs(direction @ view) > 0.999
-            behind = lambda s: surface.box_centre - s * surface.half_diagonal * view  # noqa: E731
-            centre = behind(0.0 if along_axis else best_offset(lambda s: score(behind(s)),
-                                                               lambda s: spread(behind(s))))
-        candidate = (score(centre), kind, centre, direction)
+        candidate = axis_candidate(surface, kind, view, direction, center)
         if best is None or candidate[0] > best[0]:
             best = candidate
     return best
+
+
+def axis_candidate(surface, kind, view, direction, center):
+    """(score, kind, centre, axis) of the central view of ``kind`` about ``direction``: at ``center``
+    when given, else at the best offset behind the surface's box centre along ``view``."""
+    def score(centre):
+        return surface.share_from(kind, centre, direction)
+
+    def behind(s):
+        return surface.box_centre - s * surface.half_diagonal * view
+
+    if center is not None:
+        centre = np.asarray(center, dtype=float)
+    else:
+        along_axis = kind == "cylindrical" and abs(direction @ view) > 0.999
+        centre = behind(0.0 if along_axis else best_offset(lambda s: score(behind(s)),
+                                                           lambda s: surface.spread_from(kind, behind(s), direction)))
+    return score(centre), kind, centre, direction
 
 
 def best_offset(score, spread):

@@ -14,8 +14,7 @@ from mzc.codecs.base import Codec, Option
 from mzc.codecs.dwt2d import wavelet as w2
 from mzc.codecs.dwt2d.entropy import Decoder, Encoder
 from mzc.errors import MzcError
-from mzc.formats.header import (file_version, format_number, grid_header_lines, magic_line, read_grid_fields,
-                                read_header)
+from mzc.formats.header import file_version, format_number, grid_header_lines, magic_line, read_grid_fields, read_header
 from mzc.grid import ZGrid
 from mzc.ops.triangulation import jump_edges
 
@@ -526,7 +525,8 @@ def read(data, source="<bytes>"):
 TARGETS = ("max_error", "rmse", "size")
 CODEC = Codec(
     "dwt2d", encode_grid, read, version=VERSION, oldest_major=OLDEST_MAJOR, extension=".mzw2", spec="spec/dwt2d.md",
-    summary="2D wavelet of the whole grid, entropy coded, error-bounded", check_options=one_target, example={"max_error": 0.05}, options=(
+    summary="2D wavelet of the whole grid, entropy coded, error-bounded", check_options=one_target,
+    example={"max_error": 0.05}, options=(
         Option("max_error", float, None, 0, min_open=True, metavar="E",
                help="|decoded - input| <= E at every valid node."),
         Option("rmse", float, None, 0, min_open=True, metavar="E",
@@ -534,7 +534,8 @@ CODEC = Codec(
         Option("size", int, None, 1, metavar="BYTES", help="Aim at this file size."),
         Option("wavelet", w2.TRANSFORMS[VERSION[0]].wavelets, DEFAULT_WAVELET,
                help="Wavelet: bior4.4 (CDF 9/7) or bior2.2 (LeGall 5/3)."),
-        Option("level", int, None, 0, w2.MAX_LEVELS, metavar="N", help="Wavelet levels (--dwt2d: from the grid size unless given)."),
+        Option("level", int, None, 0, w2.MAX_LEVELS, metavar="N",
+               help="Wavelet levels (--dwt2d: from the grid size unless given)."),
         Option("slope_limit", float, None, 1, metavar="F",
                help="Steps grow as 1/sqrt(cos lean) up to F times; 1 = equal steps [default: 2 for rmse and size, "
                     "1 for max_error]."),

@@ -319,7 +319,7 @@ class Decoder:
             raise self.error(f"the payload has no model table {int(models.max())}")
         try:
             cls = self.coder.decode(FAMILY, self.weights[int(self.sizes[models[0]])][models]).astype(np.int64)
-        except Exception as exc:  # constriction raises its own types on a corrupt stream
+        except Exception as exc:  # noqa: BLE001 - constriction raises its own types on a corrupt stream
             raise self.error(f"corrupt rANS stream ({exc})") from None
         need = int(cls.sum()) - (0 if signed else int(np.count_nonzero(cls)))
         if self.bit_position + need > len(self.bits):

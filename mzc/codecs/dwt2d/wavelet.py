@@ -13,8 +13,8 @@ periodization, which joined a grid's opposite edges.
 """
 
 import warnings
+from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Callable
 
 import numpy as np
 

@@ -20,12 +20,11 @@ from functools import partial
 import numpy as np
 
 from mzc.codecs.base import Codec, Option
+from mzc.codecs.rows.transforms import fill_holes
 from mzc.errors import MzcError
-from mzc.formats.header import (file_version, format_number, grid_header_lines, magic_line, read_grid_fields,
-                                read_header)
+from mzc.formats.header import file_version, format_number, grid_header_lines, magic_line, read_grid_fields, read_header
 from mzc.formats.zgrid import body_lines
 from mzc.grid import ZGrid
-from mzc.codecs.rows.transforms import fill_holes
 
 DEFAULT_PRECISION = 4
 MAX_PRECISION = 17

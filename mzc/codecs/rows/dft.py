@@ -6,9 +6,9 @@ Each row's valid span is coded by the thesis's sine-cosine series (§6.2.2, Tabl
 
 import numpy as np
 
-from mzc.errors import MzcError
 from mzc.codecs import rows
 from mzc.codecs.rows.transforms import dft_forward, dft_inverse, dft_length, kept
+from mzc.errors import MzcError
 
 KIND = "dft"
 VERSION, PROJECTED_VERSION, OLDEST_MAJOR = rows.VERSION, rows.PROJECTED_VERSION, rows.OLDEST_MAJOR

@@ -8,10 +8,10 @@ first (D_1, then D_2, ...) and never the approximation.
 
 import numpy as np
 
-from mzc.codecs.base import Option
-from mzc.errors import MzcError
 from mzc.codecs import rows
+from mzc.codecs.base import Option
 from mzc.codecs.rows.transforms import DEFAULT_LEVEL, DEFAULT_WAVELET, dwt_forward, dwt_inverse, dwt_lengths, kept
+from mzc.errors import MzcError
 
 KIND = "dwt"
 VERSION, PROJECTED_VERSION, OLDEST_MAJOR = rows.VERSION, rows.PROJECTED_VERSION, rows.OLDEST_MAJOR

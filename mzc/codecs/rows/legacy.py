@@ -13,14 +13,14 @@ import math
 
 import numpy as np
 
-from mzc.errors import MzcError
 from mzc.codecs import rows
-from mzc.codecs.rows import dct, dft, dwt, poly
+from mzc.codecs.rows import dct, dft, poly
+from mzc.codecs.rows.transforms import dft_length, dwt_inverse
+from mzc.errors import MzcError
 from mzc.formats.header import format_number
-from mzc.limits import check_grid_size
 from mzc.formats.zgrid import body_lines
 from mzc.grid import ZGrid
-from mzc.codecs.rows.transforms import dft_length, dwt_inverse
+from mzc.limits import check_grid_size
 
 KINDS = ("poly", "dft", "dct", "dwt")
 LEGACY_WAVELET = "db1"

@@ -6,10 +6,10 @@ There is no quality factor: the degree is the knob. The ``chebyshev`` basis (def
 stable at any degree; ``power`` is the thesis's polyfit on raw x and is unstable past ~40.
 """
 
-from mzc.codecs.base import Option
-from mzc.errors import MzcError
 from mzc.codecs import rows
+from mzc.codecs.base import Option
 from mzc.codecs.rows.transforms import BASES, poly_degree, poly_forward, poly_inverse
+from mzc.errors import MzcError
 
 KIND = "poly"
 VERSION, PROJECTED_VERSION, OLDEST_MAJOR = rows.VERSION, rows.PROJECTED_VERSION, rows.OLDEST_MAJOR
