@@ -10,6 +10,7 @@ import numpy as np
 from mzc.errors import MzcError
 from mzc.formats.header import file_version, format_number, grid_header_lines, magic_line, read_grid_fields, read_header
 from mzc.grid import ZGrid
+from mzc.numbers import floats
 
 KIND = "zgrid"
 VERSION = (1, 0)             # planar grids, byte for byte as before projections
@@ -21,16 +22,7 @@ def parse_values(tokens, nodata, source, line):
     """Turn a row's text tokens into floats; the no-data marker and ``nan`` become NaN."""
     if nodata.lower() != "nan":
         tokens = ["nan" if t == nodata else t for t in tokens]
-    try:
-        values = np.array(tokens, dtype=float)
-    except ValueError:
-        for column, token in enumerate(tokens, 1):
-            try:
-                float(token)
-            except ValueError:
-                raise MzcError(f"value {column} is not a number: {token[:40]!r}",
-                               source=source, line=line) from None
-        raise
+    values = floats(tokens, source, line)
     if np.isinf(values).any():
         column = int(np.flatnonzero(np.isinf(values))[0]) + 1
         raise MzcError(f"value {column} is infinite", source=source, line=line)

@@ -3,6 +3,7 @@
 import numpy as np
 
 from mzc.errors import MzcError
+from mzc.numbers import bad_token
 
 
 def is_text(data: bytes) -> bool:
@@ -24,11 +25,8 @@ def numbers_or_error(rows: list, width: int, line_numbers, source: str) -> np.nd
         return np.array(rows, dtype=np.float64).reshape(len(rows), width)
     except ValueError:
         for row, number in zip(rows, line_numbers):
-            try:
-                [float(token) for token in row]
-            except ValueError:
-                raise MzcError(f"not a number in {' '.join(row)[:60]!r}", source=source,
-                               line=number) from None
+            if bad_token(row) is not None:
+                raise MzcError(f"not a number in {' '.join(row)[:60]!r}", source=source, line=number) from None
         raise
 
 

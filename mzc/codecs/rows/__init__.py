@@ -25,6 +25,7 @@ from mzc.errors import MzcError
 from mzc.formats.header import file_version, format_number, grid_header_lines, magic_line, read_grid_fields, read_header
 from mzc.formats.zgrid import body_lines
 from mzc.grid import ZGrid
+from mzc.numbers import floats
 
 DEFAULT_PRECISION = 4
 MAX_PRECISION = 17
@@ -141,25 +142,13 @@ def write_grid(grid, codec, options):
 
 def parse_numbers(tokens, source, line, allow_nan=False):
     """Floats of ``tokens``; a non-number, inf, or (unless ``allow_nan``) NaN is an error."""
-    try:
-        values = np.array(tokens, dtype=float)
-    except ValueError:
-        bad = next(t for t in tokens if not _is_float(t))
-        raise MzcError(f"not a number: {bad[:40]!r}", source=source, line=line) from None
+    values = floats(tokens, source, line, "number")
     bad = np.isinf(values) if allow_nan else ~np.isfinite(values)
     if bad.any():
         position = int(np.flatnonzero(bad)[0])
         raise MzcError(f"number {position + 1} of the row is {tokens[position]!r}: coefficients must be finite",
                        source=source, line=line)
     return values
-
-
-def _is_float(token):
-    try:
-        float(token)
-    except ValueError:
-        return False
-    return True
 
 
 def integer_field(value, field):
