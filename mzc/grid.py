@@ -40,7 +40,7 @@ class ZGrid:
     projection: str = "planar"
     radius: float | None = None
 
-    def __post_init__(self):
+    def __post_init__(self) -> None:
         self.z = np.asarray(self.z, dtype=float)
         if self.z.ndim != 2:
             raise MzcError("z must be a 2D array")
@@ -56,53 +56,54 @@ class ZGrid:
             raise MzcError(f"a {self.projection} grid needs a positive radius")
         else:
             self.radius = float(self.radius)
-            problem = projections.extent_problem(self.projection, self.radius, *self.z.shape, self.d1, self.d2,
+            rows, cols = self.z.shape
+            problem = projections.extent_problem(self.projection, self.radius, rows, cols, self.d1, self.d2,
                                                  self.origin[1])
             if problem:
                 raise MzcError(f"{problem[0]}: {problem[1]}")
 
     @property
-    def shape(self):
+    def shape(self) -> tuple[int, int]:
         """(rows, cols)."""
         return self.z.shape
 
     @property
-    def valid(self):
+    def valid(self) -> np.ndarray:
         """Boolean mask of the nodes that hold a value."""
         return ~np.isnan(self.z)
 
     @property
-    def periodic(self):
+    def periodic(self) -> bool:
         """True when the columns make a full turn about the axis: column cols-1 neighbours column 0."""
         return projections.full_turn(self.projection, self.radius, self.z.shape[1], self.d2)
 
-    def pole_rows(self):
+    def pole_rows(self) -> np.ndarray:
         """Per row, True where the row lies on a pole of a spherical grid (all its nodes on one ray)."""
         return projections.pole_rows(self.projection, self.radius, self.ys())
 
-    def xs(self):
+    def xs(self) -> np.ndarray:
         """u of every column (grid-frame x for planar grids)."""
         return self.origin[0] + self.d2 * np.arange(self.z.shape[1])
 
-    def ys(self):
+    def ys(self) -> np.ndarray:
         """v of every row (grid-frame y for planar grids)."""
         return self.origin[1] + self.d1 * np.arange(self.z.shape[0])
 
-    def node_points(self):
+    def node_points(self) -> np.ndarray:
         """(rows, cols, 3) grid-frame coordinates of every node (NaN where invalid)."""
         u, v = np.meshgrid(self.xs(), self.ys())
         return projections.to_points(self.projection, self.radius, u, v, self.z)
 
-    def to_input_frame(self, points):
+    def to_input_frame(self, points: np.ndarray) -> np.ndarray:
         """Map (..., 3) grid-frame points to the input surface's frame."""
         rotation, shift = self.transform[:, :3], self.transform[:, 3]
         return points @ rotation.T + shift
 
-    def to_grid_frame(self, points):
+    def to_grid_frame(self, points: np.ndarray) -> np.ndarray:
         """Map (..., 3) input-frame points to the grid frame (inverse of to_input_frame)."""
         rotation, shift = self.transform[:, :3], self.transform[:, 3]
         return (points - shift) @ rotation
 
-    def with_z(self, z, **changes):
+    def with_z(self, z: np.ndarray, **changes) -> "ZGrid":
         """A copy with new values (and any other fields changed)."""
         return replace(self, z=np.asarray(z, dtype=float), **changes)

@@ -32,10 +32,10 @@ across a depth jump (--jump-angle), and never smoothed across one.
               help="Decimal digits of the written heights.")
 @jump_angle_option
 def command(input, output, count, method, iterations, tol, precision, jump_angle):
-    from mzc.ops.densify import densify_grid
+    from mzc.api import densify
     from mzc.streams import check_not_input
 
     check_not_input(output, input)
     grid = read_grid(input)
-    dense = densify_grid(grid, count, method, iterations=iterations, tol=tol, jump_angle=jump_angle)
+    dense = densify(grid, count, method, iterations=iterations, tol=tol, jump_angle=jump_angle)
     write_grid(dense, output, precision=precision)

@@ -38,8 +38,8 @@ def command(input, output, d1, d2, rows, cols, thesis_grid, align, projection, v
     """Cut a mesh (OBJ, PLY, VTK, STL, OFF) or point cloud (x y z text, vertex-only PLY)
     into a z-grid: each node holds the outermost hit of its line with the surface (the
     front-most height of planar grids, the farthest distance along a central ray)."""
+    from mzc.api import slice as slice_surface
     from mzc.meshes import read_mesh
-    from mzc.ops.slicing import slice_surface
     from mzc.streams import check_not_input
 
     if d1 is not None and rows is not None:
