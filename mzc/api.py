@@ -25,7 +25,7 @@ BYTES_SOURCE = "<bytes>"
 
 def as_mesh(surface: Any) -> Mesh:
     """A ``Mesh`` of a surface given as a Mesh, a path, a trimesh-like object, a pair or an array."""
-    from mzc.meshes import Mesh, read_surface
+    from mzc.meshes import Mesh
 
     if isinstance(surface, Mesh):
         return surface
@@ -42,6 +42,25 @@ def as_mesh(surface: Any) -> Mesh:
     except (TypeError, ValueError):
         raise MzcError(f"cannot read a surface from a {type(surface).__name__}: give a path, a Mesh, "
                        "an object with vertices and faces, (points, triangles) or an (n, 3) array") from None
+
+
+def read_surface(path: PathLike | None) -> Mesh:
+    """A surface to compare: a mesh file, or any mzc file (z-grid or compressed) as the mesh
+    of its grid (``grid`` set). stdin may carry an mzc file only: a mesh on stdin could not
+    be told from a mistake, so meshes are given as file names."""
+    from mzc.formats import is_mzc, read_any
+    from mzc.meshes import mesh_from_bytes
+    from mzc.streams import display_name, is_stdio, read_input
+
+    source = display_name(path)
+    data = read_input(path)
+    if is_mzc(data):
+        from mzc.ops.triangulation import grid_to_mesh
+
+        return grid_to_mesh(read_any(data, source))
+    if is_stdio(path):
+        raise MzcError("stdin must carry an mzc file; give meshes as file names", source=source)
+    return mesh_from_bytes(data, source)
 
 
 def as_grid(grid: ZGrid | np.ndarray) -> ZGrid:
@@ -135,8 +154,6 @@ def sample(name: str = "bump") -> Mesh:
 
 def read(path: PathLike) -> ZGrid | Mesh:
     """Read a file: an mzc file (z-grid or compressed) as its ZGrid, a mesh or cloud as a Mesh."""
-    from mzc.meshes import read_surface
-
     mesh = read_surface(os.fspath(path))
     return mesh.grid if mesh.grid is not None else mesh
 

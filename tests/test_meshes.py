@@ -254,9 +254,9 @@ def test_ascii_ply_declaring_no_vertices_is_a_clear_error(tmp_path):
 
 
 def test_read_surface_gives_an_mzc_file_as_the_mesh_of_its_grid(tmp_path):
+    from mzc.api import read_surface
     from mzc.formats import zgrid
     from mzc.grid import ZGrid
-    from mzc.meshes import read_surface
 
     path = write(tmp_path, "g.zg", zgrid.write(ZGrid(np.zeros((3, 4)), 1, 1)))
     surface = read_surface(path)
@@ -269,7 +269,7 @@ def test_read_surface_takes_no_mesh_on_stdin(monkeypatch):
     import io
     import sys
 
-    from mzc.meshes import read_surface
+    from mzc.api import read_surface
 
     monkeypatch.setattr(sys, "stdin", io.TextIOWrapper(io.BytesIO(PLAIN_OBJ.encode())))
     with pytest.raises(MzcError, match="stdin must carry an mzc file"):

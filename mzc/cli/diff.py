@@ -41,9 +41,9 @@ direction on the first line.""")
 @click.option("--plot", metavar="FILE.png", help="Write the quality plots (error map, residuals, normal probability).")
 def command(a, b, rmse, max_, mean, r2, percentiles, count, surface, heightfield, samples, seed, d1, d2,
             as_json, error_grid, plot):
+    from mzc.api import read_surface
     from mzc.errors import MzcError
     from mzc.measure import STATISTICS, compare_surfaces
-    from mzc.meshes import read_surface
     from mzc.streams import check_not_input
 
     for output in (error_grid, plot):

@@ -74,23 +74,6 @@ def mesh_from_bytes(data: bytes, source: str = "<bytes>", file_format: str | Non
     return checked(registry.format_named(name).read(data, source), source)
 
 
-def read_surface(path: str | os.PathLike | None) -> Mesh:
-    """A surface to compare: a mesh file, or any mzc file (z-grid or compressed) as the mesh
-    of its grid (``grid`` set). stdin may carry an mzc file only: a mesh on stdin could not
-    be told from a mistake, so meshes are given as file names."""
-    from mzc.formats import is_mzc, read_any
-
-    source = display_name(path)
-    data = read_input(path)
-    if is_mzc(data):
-        from mzc.ops.triangulation import grid_to_mesh
-
-        return grid_to_mesh(read_any(data, source))
-    if is_stdio(path):
-        raise MzcError("stdin must carry an mzc file; give meshes as file names", source=source)
-    return mesh_from_bytes(data, source)
-
-
 def checked(mesh: Mesh, source: str) -> Mesh:
     """Refuse a mesh with no points, non-finite coordinates or face indices out of range."""
     if len(mesh.points) == 0:
