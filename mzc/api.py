@@ -24,7 +24,7 @@ BYTES_SOURCE = "<bytes>"
 
 
 def as_mesh(surface: Any) -> Mesh:
-    """A ``Mesh`` of a surface given as a Mesh, a path, a trimesh-like object, a pair or an array."""
+    """A ``Mesh`` of a surface given as a Mesh, a ZGrid, a path, a trimesh-like object, a pair or an array."""
     from mzc.meshes import Mesh
 
     if isinstance(surface, Mesh):
@@ -35,8 +35,10 @@ def as_mesh(surface: Any) -> Mesh:
         return Mesh(surface.vertices, surface.faces)
     if isinstance(surface, tuple) and len(surface) == 2:
         return Mesh(*surface)
-    if hasattr(surface, "z") and hasattr(surface, "transform"):
-        return triangulate(surface)
+    from mzc.grid import ZGrid
+
+    if isinstance(surface, ZGrid):
+        return triangulate(surface)   # a Mesh that keeps its grid: compared at the grid's own nodes
     try:
         return Mesh(surface)
     except (TypeError, ValueError):
@@ -132,15 +134,8 @@ def compare(a: Any, b: Any, *, surface: bool = False, heightfield: bool = False,
     lines, and with ``surface`` the symmetric point-to-surface distance; a dict of name -> value."""
     from mzc.measure import compare_surfaces
 
-    return compare_surfaces(as_surface(a), as_surface(b), surface=surface, heightfield=heightfield,
+    return compare_surfaces(as_mesh(a), as_mesh(b), surface=surface, heightfield=heightfield,
                             samples=samples, seed=seed, d1=d1, d2=d2).report
-
-
-def as_surface(surface: Any) -> Mesh:
-    """A Mesh that keeps its z-grid when ``surface`` is one (compared at its own nodes)."""
-    from mzc.grid import ZGrid
-
-    return triangulate(surface) if isinstance(surface, ZGrid) else as_mesh(surface)
 
 
 def sample(name: str = "bump") -> Mesh:

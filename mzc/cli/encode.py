@@ -123,7 +123,6 @@ def build_command():
     def run(input, output, **values):
         from mzc.streams import check_not_input, write_output
 
-        values = {name: (None if value is False else value) for name, value in values.items()}
         codec = chosen_codec(codecs, values)
         options = codec_options(codec, values)
         check_not_input(output, input)

@@ -43,6 +43,7 @@ GEOGRAPHIC_STEP = 0.1
 SLOPE_LIMIT = 2.0          # steps grow as 1/sqrt(cos(lean)) up to 2x (76 degrees); 1 = equal steps
 APPROXIMATION_GAIN = 0.7   # band 0's step over the finest detail step (measured: 0.5-3% smaller files)
 LEVEL_RATIO = 0.9          # each coarser detail level's step over the next finer one's (measured: 0.4-3.6%)
+TARGETS = ("max_error", "rmse", "size")   # exactly one of them says what the encoder aims at
 DEADZONE = 0.6             # encoder-only rounding offset; the decoder never sees it
 
 # model ids (the order of first use in the payload)
@@ -522,7 +523,6 @@ def read(data, source="<bytes>"):
     return ZGrid(z=z, **fields)
 
 
-TARGETS = ("max_error", "rmse", "size")
 CODEC = Codec(
     "dwt2d", encode_grid, read, version=VERSION, oldest_major=OLDEST_MAJOR, extension=".mzw2", spec="spec/dwt2d.md",
     summary="2D wavelet of the whole grid, entropy coded, error-bounded", check_options=one_target,
