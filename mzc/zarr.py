@@ -1,16 +1,31 @@
 """A numcodecs codec for 2D arrays in Zarr stores: mzc's ``--dwt2d`` with a max-error bound.
 
 ``Dwt2d(max_error=E)`` stores each 2D chunk (float32 or float64; NaN = no data) as one
-``mzc-dwt2d`` file behind a one-byte dtype code, so that every valid value comes back
-within E (for float32, within E plus the rounding to float32) and no-data stays NaN. It
-is registered under the codec id ``mzc_dwt2d`` through the ``numcodecs.codecs`` entry
-point, so ``numcodecs.get_codec({"id": "mzc_dwt2d", "max_error": 0.01})`` finds it and a
-Zarr store that names it opens wherever mzc is installed.
+``mzc-dwt2d`` file behind a one-byte code of its dtype and byte order, so that every
+valid value comes back within E (for float32, within E plus the rounding to float32)
+and no-data stays NaN. It is registered under the codec id ``mzc_dwt2d`` through the
+``numcodecs.codecs`` entry point, so ``numcodecs.get_codec({"id": "mzc_dwt2d",
+"max_error": 0.01})`` finds it and a Zarr store that names it opens wherever mzc is
+installed.
+
+Why a dtype byte and not a config field: the mzc-dwt2d header already holds the rows and
+columns, so the chunk's shape comes back from the file; the byte makes every chunk decode
+on its own, whatever codec configuration reads it. Values are coded as float64, so the
+bound holds exactly for float64 chunks and, for float32 ones, up to the rounding of the
+decoded values to float32 (half a float32 unit in the last place of each value).
 
 Zarr's version-2 format hands a compressor the chunk as an array, which this codec needs
-(it codes the grid, not a byte string): use it as the ``compressor`` of a ``zarr_format=2``
-array. The version-3 format passes compressors bytes only and takes third-party numcodecs
-codecs through its own wrappers, which this codec does not provide yet.
+(it codes the grid, not a byte string): use ``Dwt2d`` as the ``compressors`` of a
+``zarr_format=2`` array. The version-3 format passes its compressors bytes only, so there
+the codec must be the array's ``serializer`` (array to bytes), and zarr-python takes
+numcodecs codecs only through its own wrapper classes: ``Dwt2dV3`` (zarr-python >= 3.1.3)
+is such a wrapper, named ``numcodecs.mzc_dwt2d`` in the array's metadata and registered
+through the ``zarr.codecs`` entry point, so ``serializer=Dwt2dV3(max_error=E)`` works and
+the store reopens. Version-3 metadata naming ``numcodecs.*`` codecs is zarr-python's own
+extension, not the Zarr specification: other Zarr implementations will not read it (zarr
+warns so when the wrapper is made). ``Dwt2dV3`` builds on zarr-python's underscored base
+class ``zarr.codecs.numcodecs._NumcodecsArrayBytesCodec``, which may change; it is made on
+first use, so importing this module imports neither zarr nor its base class.
 """
 
 from __future__ import annotations
@@ -23,13 +38,20 @@ from numcodecs.compat import ensure_bytes, ndarray_copy
 
 from mzc.errors import MzcError
 
-# the one-byte prefix of a chunk -> its dtype
-DTYPES: dict[bytes, np.dtype] = {b"f": np.dtype("<f4"), b"d": np.dtype("<f8")}
+# the one-byte prefix of a chunk -> its dtype; the byte order is kept, since zarr's version-2
+# format reads a decoded chunk's memory as the array's dtype
+DTYPES: dict[bytes, np.dtype] = {b"f": np.dtype("<f4"), b"d": np.dtype("<f8"),
+                                 b"F": np.dtype(">f4"), b"D": np.dtype(">f8")}
 CODES = {dtype: code for code, dtype in DTYPES.items()}
 
 
 class Dwt2d(Codec):
-    """mzc's 2D wavelet codec with a bound on the error of every value (``max_error``)."""
+    """mzc's 2D wavelet codec with a bound on the error of every value.
+
+    Config: ``max_error`` (required, > 0, in the array's units), ``wavelet`` (one of
+    mzc-dwt2d's, default bior4.4) and ``level`` (wavelet levels, default: from the chunk's
+    size), the options of ``mzc encode --dwt2d`` of the same names.
+    """
 
     codec_id = "mzc_dwt2d"
 
@@ -48,9 +70,11 @@ class Dwt2d(Codec):
         import mzc
 
         array = np.asarray(buf)
-        if array.ndim != 2 or array.dtype.newbyteorder("<") not in CODES:
+        if array.ndim != 2 or array.dtype not in CODES:
             raise MzcError(f"mzc_dwt2d codes 2D float32 or float64 chunks, not {array.ndim}D {array.dtype}")
-        return CODES[array.dtype.newbyteorder("<")] + mzc.encode(array.astype(np.float64), "dwt2d", **self.options())
+        if array.size == 0:   # the file format has at least one row and column
+            raise MzcError(f"mzc_dwt2d cannot code an empty {array.shape[0]} x {array.shape[1]} chunk")
+        return CODES[array.dtype] + mzc.encode(array.astype(np.float64), "dwt2d", **self.options())
 
     def decode(self, buf: Any, out: Any = None) -> np.ndarray:
         """The chunk back, in its dtype, into ``out`` when given."""
@@ -61,3 +85,30 @@ class Dwt2d(Codec):
             raise MzcError("not an mzc_dwt2d chunk (no dtype code)")
         values = mzc.decode(data[1:]).z.astype(DTYPES[data[:1]], order="C")   # zarr flattens in memory order
         return ndarray_copy(values, out)
+
+
+def _zarr3_codec() -> type:
+    """The zarr-python 3 serializer (array to bytes) that runs ``Dwt2d`` in version-3 arrays."""
+    from zarr.codecs.numcodecs import _NumcodecsArrayBytesCodec
+
+    class Dwt2dV3(_NumcodecsArrayBytesCodec, codec_name=Dwt2d.codec_id):
+        """``Dwt2d`` as a Zarr version-3 serializer: ``serializer=Dwt2dV3(max_error=E)``.
+
+        The configuration is checked and completed with the defaults when made (the metadata
+        then names every option), rather than at the first chunk.
+        """
+
+        def __init__(self, **codec_config: Any) -> None:
+            codec_config.pop("id", None)
+            super().__init__(**Dwt2d(**codec_config).get_config())
+
+    Dwt2dV3.__module__, Dwt2dV3.__qualname__ = __name__, "Dwt2dV3"   # pickled as mzc.zarr.Dwt2dV3 (dask)
+    return Dwt2dV3
+
+
+def __getattr__(name: str) -> Any:
+    """``Dwt2dV3`` is made on first use, so that importing this module does not import zarr."""
+    if name == "Dwt2dV3":
+        globals()[name] = _zarr3_codec()
+        return globals()[name]
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
