@@ -53,6 +53,19 @@ def test_usage_errors_exit_2(mzc):
     assert result.returncode == 2 and "Traceback" not in result.stderr.decode()
 
 
+@pytest.mark.parametrize("arguments, problem", [
+    (["encode", "--dwt", "--level", "0"], "mzc encode: --level: 0 is outside 1..32"),
+    (["diff", "only-one"], "mzc diff: Missing argument 'B'."),
+    (["densify", "-n", "x"], "mzc densify: Invalid value for '-n'"),
+    (["nonsense"], "mzc: No such command 'nonsense'."),
+])
+def test_a_usage_error_is_one_line_that_starts_with_the_problem(mzc, arguments, problem):
+    result = mzc(*arguments, input=b"")
+    lines = result.stderr.decode().splitlines()
+    assert result.returncode == 2 and len(lines) == 1 and lines[0].startswith(problem), lines
+    assert lines[0].endswith("--help')")
+
+
 def test_failure_leaves_an_existing_output_untouched_and_no_temp_files(mzc, tmp_path):
     out = tmp_path / "out.obj"
     out.write_text("precious")

@@ -69,7 +69,7 @@ def main():
     except click.exceptions.Exit as done:
         sys.exit(done.exit_code)
     except click.ClickException as usage:
-        usage.show()
+        click.echo(one_line(usage), err=True)
         sys.exit(usage.exit_code)
     except click.exceptions.Abort:
         click.echo("mzc: aborted", err=True)
@@ -91,6 +91,14 @@ def main():
         click.echo(f"mzc: internal error: {type(error).__name__}: {error} "
                    "(set MZC_DEBUG=1 for a traceback)", err=True)
         sys.exit(3)
+
+
+def one_line(problem):
+    """A click usage error as one line that starts with the command and the problem, then says
+    where help is: ``mzc encode: --level: 0 is outside 1..32 (see 'mzc encode --help')``."""
+    context = getattr(problem, "ctx", None)
+    path = context.command_path if context is not None else "mzc"
+    return f"{path}: {problem.format_message()} (see '{path} --help')"
 
 
 def show_warning(message, category, filename, lineno, file=None, line=None):
