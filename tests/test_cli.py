@@ -48,6 +48,16 @@ def test_bad_grid_names_file_and_line(mzc, tmp_path):
     assert_one_line_error(mzc("info", bad), "bad.zg:8", "oops")
 
 
+def test_encode_imports_only_what_its_codec_uses(tmp_path):
+    """mzc encode builds its options from every codec; --dct must not load dwt2d's entropy coder."""
+    grid = tmp_path / "g.zg"
+    grid.write_bytes(b"mzc-zgrid 1.0\nrows 2\ncols 2\nd1 1\nd2 1\ndata\n1 2\n3 4\n")
+    result = subprocess.run([sys.executable, "-X", "importtime", "-m", "mzc", "encode", "--dct", str(grid)],
+                            capture_output=True, text=True)
+    imported = {line.split("|")[-1].strip() for line in result.stderr.splitlines()}
+    assert result.returncode == 0 and not imported & {"constriction", "pywt", "meshio", "matplotlib"}
+
+
 def test_usage_errors_exit_2(mzc):
     result = mzc("diff", "only-one")
     assert result.returncode == 2 and "Traceback" not in result.stderr.decode()

@@ -12,11 +12,9 @@ import numpy as np
 
 from mzc.codecs.base import Codec, Option
 from mzc.codecs.dwt2d import wavelet as w2
-from mzc.codecs.dwt2d.entropy import Decoder, Encoder
 from mzc.errors import MzcError
 from mzc.formats.header import file_version, format_number, grid_header_lines, magic_line, read_grid_fields, read_header
 from mzc.grid import ZGrid
-from mzc.ops.triangulation import jump_edges
 
 KIND = "dwt2d"
 VERSION = (3, 0)             # every grid; 2.0 (planar, periodised transform) is still read
@@ -323,6 +321,8 @@ class Prepared:
         periodic = self.geometry.periodic
         self.bands = w2.flatten(self.transform.forward(self.filled, wavelet, self.levels, periodic))
         self.relevant = w2.flatten(self.transform.relevance(self.valid, wavelet, self.levels, periodic))
+        from mzc.ops.triangulation import jump_edges
+
         lean, metric = w2.node_areas(self.filled, self.geometry, jump_edges(grid))
         self.lean, self.metric = lean[self.valid], metric[self.valid]
 
@@ -340,6 +340,8 @@ class Prepared:
 
     def encode(self, step, max_error=None):
         """File bytes for one detail step; with ``max_error`` a correction layer bounds every valid node."""
+        from mzc.codecs.dwt2d.entropy import Encoder  # here, not at the top: `mzc encode` builds this
+                                                       # module's CODEC whatever codec it runs
         qflat, decoded = self.decoded(step)
         encoder = Encoder(same_size=SAME_SIZE)
         encode_mask(encoder, self.valid)
@@ -507,6 +509,8 @@ def read(data, source="<bytes>"):
     wavelet, levels, steps, slope_limit, correction = read_codec_fields(header, (rows, cols), transform)
     geometry = w2.Geometry.of(fields["d1"], fields["d2"], fields["origin"], (rows, cols),
                               fields.get("projection", "planar"), fields.get("radius"))
+    from mzc.codecs.dwt2d.entropy import Decoder
+
     decoder = Decoder(body, source, SAME_SIZE)
     valid = decode_mask(decoder, rows, cols)
     relevant = w2.flatten(transform.relevance(valid, wavelet, levels, geometry.periodic))
