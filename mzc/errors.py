@@ -1,6 +1,8 @@
 """The exception type that the command line turns into a one-line error message, and the
 warning it prints as one line."""
 
+import contextlib
+
 
 class MzcError(ValueError):
     """Bad input or an impossible request (a ValueError, so callers may catch either).
@@ -36,6 +38,19 @@ class MzcError(ValueError):
             where = f"line {self.line}: "
         field = f"{self.field}: " if self.field else ""
         return f"{where}{field}{self.message}"
+
+
+@contextlib.contextmanager
+def about(source, step):
+    """Let an MzcError raised inside name ``source`` (a file name) when it names none: a
+    problem found in the data read from a file is reported as that file's. Running out of
+    memory there becomes an MzcError naming the file and the ``step`` (``decoding it``)."""
+    try:
+        yield
+    except MzcError as error:
+        raise error.located(source=source) from None
+    except MemoryError:
+        raise MzcError(f"out of memory while {step}", source=source) from None
 
 
 class MzcWarning(UserWarning):

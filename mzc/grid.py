@@ -8,6 +8,7 @@ node's ray. Row r is one "horizontal" cutting surface of the thesis; a rigid tra
 the grid frame back to the frame of the input surface.
 """
 
+import re
 from dataclasses import dataclass, field, replace
 
 import numpy as np
@@ -16,6 +17,23 @@ from mzc import projections
 from mzc.errors import MzcError
 
 IDENTITY_TRANSFORM = np.hstack([np.eye(3), np.zeros((3, 1))])
+TOKEN = re.compile(r"[^\s\x00-\x1f\x7f]{1,64}")   # one header token: no space, no control character
+
+
+def check_token(value, name):
+    """Refuse a ``units`` or ``nodata`` value that the header cannot hold as the one token it
+    reads back (spaces or a newline would add header lines; bytes that are not UTF-8 would
+    make the file unreadable)."""
+    if value is None:
+        return
+    if not isinstance(value, str) or not TOKEN.fullmatch(value):
+        raise MzcError(f"{value!r} is not one word of at most 64 printable characters", field=name)
+    try:
+        value.encode("utf-8")
+    except UnicodeEncodeError:
+        raise MzcError(f"{value!r} is not valid UTF-8 text", field=name) from None
+    if name == "nodata" and value.lower().lstrip("+-") in ("inf", "infinity"):
+        raise MzcError("the no-data marker cannot be infinite", field=name)
 
 
 @dataclass
@@ -48,6 +66,8 @@ class ZGrid:
         self.origin = (float(self.origin[0]), float(self.origin[1]))
         self.d1 = float(self.d1)
         self.d2 = float(self.d2)
+        for name in ("units", "nodata"):
+            check_token(getattr(self, name), name)
         if self.projection not in projections.PROJECTIONS:
             raise MzcError(f"unknown projection {self.projection!r}")
         if self.projection == "planar":

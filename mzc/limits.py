@@ -1,14 +1,23 @@
-"""The largest grid this mzc reads, writes or builds: one home for the limit and its message.
+"""The largest grid and the largest numbers this mzc reads, writes or builds: one home for
+each limit and its message.
 
-Declared sizes are checked against it before anything is allocated, so a file or a request
+Declared sizes are checked against them before anything is allocated, so a file or a request
 that asks for an absurd grid is refused at once, wherever it comes from (a header, a thesis
-file, the slicer's spacings, densify's n).
+file, the slicer's spacings, densify's n). Heights and coordinates are bounded too: the
+transforms, fits and PCA square and sum them, and past MAX_MAGNITUDE binary64 overflows, so
+a finite 1e308 would be written as inf or NaN that no reader takes back.
 """
+
+import math
 
 from mzc.errors import MzcError
 
 MAX_DIMENSION = 1_000_000     # rows or columns
 MAX_NODES = 100_000_000       # rows x columns
+MAX_MAGNITUDE = 1e100         # |height| or |coordinate|: squares and sums of 10^8 of them stay finite
+MAX_INSERTED = 20             # densify's n: rows 21 times denser (a biharmonic -n 50 took 78 s on a thesis grid)
+MAX_ITERATIONS = 100_000      # sweeps of the thesis's Jacobi densify (100 by default)
+MAX_SAMPLES = 2_000_000       # diff --surface samples per surface (10^7 ran out of 8 GB)
 
 
 def check_grid_size(rows: int, cols: int, advice: str = "", **where) -> None:
@@ -18,3 +27,13 @@ def check_grid_size(rows: int, cols: int, advice: str = "", **where) -> None:
         return
     raise MzcError(f"{rows} x {cols} nodes is too large: this mzc accepts 1..{MAX_DIMENSION} per side and "
                    f"at most {MAX_NODES} nodes{'; ' + advice if advice else ''}", **where)
+
+
+def check_magnitude(values, what: str, **where) -> None:
+    """Refuse ``values`` (a numpy array; NaN ignored) holding a magnitude above MAX_MAGNITUDE."""
+    import numpy as np
+
+    largest = float(np.nanmax(np.abs(values), initial=0.0))
+    if largest > MAX_MAGNITUDE or math.isinf(largest):
+        raise MzcError(f"{what} reach {largest:.3g}: mzc computes with {what} up to {MAX_MAGNITUDE:.0e} in "
+                       f"magnitude (beyond that its transforms overflow); rescale or change the unit", **where)

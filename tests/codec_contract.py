@@ -13,6 +13,7 @@ import numpy as np
 
 from mzc.errors import MzcError
 from mzc.formats import read_any
+from mzc.formats.header import with_checksum
 from mzc.grid import ZGrid
 
 REPO = Path(__file__).resolve().parents[1]
@@ -23,6 +24,8 @@ FIXTURE_NAME = re.compile(r"^(?P<kind>[a-z0-9]+)-(?P<major>\d+)\.(?P<minor>\d+)(
 # a worked example: the file as text (or as its header then the payload in hex), then, after any
 # prose, the values it decodes to
 EXAMPLE_BLOCK = re.compile(r"```mzc-example(-hex)?\n(.*?)```.*?```expected\n(.*?)```", re.S)
+
+CHECKSUM_LINE = re.compile(rb"(?m)^crc32 [0-9a-f]{8}\n")
 
 
 def generated_grids():
@@ -103,13 +106,23 @@ def damaged(data):
 
 
 def check_hostile_input(codec, data):
-    """Every damaged variant of ``data`` decodes to a grid or raises MzcError, nothing else."""
+    """Every damaged variant of ``data`` decodes to a grid or raises MzcError, nothing else; a
+    file that carries a checksum (mzc.formats.header) is never decoded once damaged."""
+    checksummed = CHECKSUM_LINE.search(data.split(b"\ndata\n")[0]) is not None
     for variant in damaged(data):
         try:
             grid = codec.decode(variant, "hostile")
         except MzcError:
             continue
+        assert not checksummed, f"a damaged file decoded: {variant[:60]!r}..."
         assert isinstance(grid, ZGrid)
+
+
+def rechecksummed(data):
+    """``data``, edited on purpose, with its crc32 line made right again (none if it had none):
+    tests of the readers' other checks use it to get past the checksum."""
+    stripped, found = CHECKSUM_LINE.subn(b"", data, count=1)
+    return with_checksum(stripped) if found else data
 
 
 def fixture_names(kind=None):

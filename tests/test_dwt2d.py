@@ -206,9 +206,9 @@ def test_corrupt_or_truncated_payloads_raise_only_mzc_errors(data):
 
 
 def spec_examples():
-    """(file bytes, expected values) of every worked example in spec/dwt2d.md (2.0, then 3.0)."""
+    """(file bytes, expected values) of every worked example in spec/dwt2d.md (2.0, 3.0, then 3.1)."""
     examples = [(data, values) for data, values, _id in contract_examples("dwt2d")]
-    assert len(examples) == 2
+    assert len(examples) == 3
     return examples
 
 
@@ -217,7 +217,7 @@ def spec_example():
     return spec_examples()[0]
 
 
-@pytest.mark.parametrize("data, expected", spec_examples(), ids=["2.0", "3.0"])
+@pytest.mark.parametrize("data, expected", spec_examples(), ids=["2.0", "3.0", "3.1"])
 def test_spec_examples_decode_to_the_expected_values(data, expected):
     decoded = dwt2d.read(data, "spec")
     assert np.array_equal(np.isnan(decoded.z), np.isnan(expected))
@@ -225,7 +225,7 @@ def test_spec_examples_decode_to_the_expected_values(data, expected):
 
 
 def test_spec_example_of_3_0_is_the_2_0_grid_on_a_sphere_and_still_within_its_bound():
-    (planar, heights), (central, distances) = spec_examples()
+    (planar, heights), (central, distances), _checksummed = spec_examples()
     grid = dwt2d.read(central, "spec")
     assert (grid.projection, grid.radius, grid.origin) == ("spherical", 10.0, (-1.25, -0.75))
     input_values = np.array([[10, 10.5, 11, 11.2, 11.1, 10.8], [10.2, 10.9, 11.6, 11.9, 11.7, 11],

@@ -28,6 +28,7 @@ from codec_contract import (
     expected_grid,
     fixture_bytes,
     fixture_names,
+    rechecksummed,
 )
 
 EXTENSIONS = {"zgrid": ".zg", **{name: get_codec(name).extension for name in BUILT_IN}}
@@ -52,14 +53,21 @@ def test_fixture_name_states_its_magic_line_and_extension(name):
 
 
 def readable_versions():
-    """Every (kind, major) the registry reads: each format's OLDEST_MAJOR up to its newest, the
-    one that holds central projections (mzc.formats.header)."""
-    return {(kind, major) for kind in REGISTRY
-            for major in range(module_for(kind).OLDEST_MAJOR, module_for(kind).PROJECTED_VERSION[0] + 1)}
+    """Every (kind, major, minor) the registry reads: each format's OLDEST_MAJOR up to its newest
+    (the one that holds central projections, mzc.formats.header), and within each major every
+    minor up to the one its writer writes (minor 0 alone for a major no longer written)."""
+    versions = set()
+    for kind in REGISTRY:
+        module = module_for(kind)
+        written = {module.VERSION, module.PROJECTED_VERSION}
+        for major in range(module.OLDEST_MAJOR, module.PROJECTED_VERSION[0] + 1):
+            newest = max((minor for m, minor in written if m == major), default=0)
+            versions |= {(kind, major, minor) for minor in range(newest + 1)}
+    return versions
 
 
 def test_every_readable_version_has_exactly_one_fixture():
-    found = [split_magic(fixture_bytes(name), name)[:2] for name in fixture_names()]
+    found = [split_magic(fixture_bytes(name), name) for name in fixture_names()]
     assert len(found) == len(set(found)), "two fixtures of one version"
     missing, extra = readable_versions() - set(found), set(found) - readable_versions()
     assert not missing, f"readable versions without a fixture: {sorted(missing)}"
@@ -183,7 +191,7 @@ def test_a_projection_line_in_an_old_major_zgrid_is_refused():
 def test_every_planar_major_refuses_a_projection_line(name):
     """Inserted into each real planar fixture (text header, even before dwt2d's binary payload)."""
     first, rest = fixture_bytes(name).split(b"\n", 1)
-    error = refusal(first + b"\nprojection cylindrical\nradius 40\n" + rest, name)
+    error = refusal(rechecksummed(first + b"\nprojection cylindrical\nradius 40\n" + rest), name)
     assert (error.field, error.line) == ("projection", 2)
     assert "newer major version" in error.message
 
@@ -258,9 +266,9 @@ def test_writers_take_the_projected_version_for_central_grids_only(kind, source,
     write, options = WRITERS[kind]
     grid = expected_grid(source)
     module = module_for(kind)
-    major = (module.PROJECTED_VERSION if projected else module.VERSION)[0]
+    major, minor = module.PROJECTED_VERSION if projected else module.VERSION
     data = write(grid, **options)
-    assert data.startswith(f"mzc-{kind} {major}.0\n".encode())
+    assert data.startswith(f"mzc-{kind} {major}.{minor}\n".encode())
     assert (b"\nprojection " in data.split(b"\ndata\n")[0]) == projected
     assert read_any(data, kind).projection == grid.projection
 

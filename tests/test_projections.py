@@ -225,8 +225,8 @@ def read_any_grid(data):
 @pytest.mark.parametrize("args, message", [
     (("--projection", "planar", "--center", "0", "0", "0"), "central projection"),
     (("--projection", "spherical", "--axis", "0", "0", "0"), "axis: must be a non-zero 3-vector"),
-    (("--projection", "conical"), "Invalid value for '--projection'"),
-    (("--center", "0", "nan-ish", "0"), "Invalid value for '--center'"),
+    (("--projection", "conical"), "--projection: 'conical' is not one of"),
+    (("--center", "0", "nan-ish", "0"), "--center: 'nan-ish' is not a valid float"),
 ])
 def test_cli_bad_projection_options_are_one_line_errors(mzc, tmp_path, args, message):
     obj = write_obj(tmp_path / "tube.obj", tube(around=48, along=20))

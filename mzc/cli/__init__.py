@@ -7,6 +7,7 @@ usage errors exit 2.
 
 import importlib
 import os
+import re
 import sys
 import warnings
 
@@ -62,6 +63,9 @@ def group():
 
 def main():
     """Entry point: run the group, turning MzcError and other failures into one line on stderr."""
+    # numpy's RuntimeWarnings and the libraries' own warnings are not for the user: mzc checks its
+    # results itself (non-finite heights and coefficients are errors); only its own warnings show
+    warnings.simplefilter("ignore")
     warnings.simplefilter("once", MzcWarning)
     warnings.showwarning = show_warning
     try:
@@ -83,7 +87,8 @@ def main():
         os.dup2(devnull, sys.stdout.fileno())
         sys.exit(1)
     except MemoryError:
-        click.echo("mzc: out of memory", err=True)
+        click.echo(f"mzc: {' '.join(sys.argv[1:])[:200]}: out of memory (the grid, densify's n or diff's "
+                   "--samples asks for more than this machine has)", err=True)
         sys.exit(1)
     except Exception as error:  # noqa: BLE001 - the promise is one line, never a traceback
         if os.environ.get("MZC_DEBUG"):
@@ -98,12 +103,17 @@ def one_line(problem):
     where help is: ``mzc encode: --level: 0 is outside 1..32 (see 'mzc encode --help')``."""
     context = getattr(problem, "ctx", None)
     path = context.command_path if context is not None else "mzc"
-    return f"{path}: {problem.format_message()} (see '{path} --help')"
+    message = problem.format_message()
+    if isinstance(problem, click.BadParameter) and not isinstance(problem, click.MissingParameter) \
+            and problem.param is not None:
+        # click's "Invalid value for '-q': 0 is not in the range 1<=x<=100." as "-q: 0 is not in 1..100"
+        hint = problem.param_hint or "/".join(getattr(problem.param, "opts", None) or [problem.param.name or ""])
+        message = f"{hint}: {problem.message}"
+        message = re.sub(r"is not in the range (\S+)<=x<=(\S+?)\.?$", r"is not in \1..\2", message)
+        message = re.sub(r"is not in the range x([<>]=?)(\S+?)\.?$", r"must be \1 \2", message).rstrip(".")
+    return f"{path}: {message} (see '{path} --help')"
 
 
 def show_warning(message, category, filename, lineno, file=None, line=None):
-    """Warnings as one line on stderr: ``mzc: warning: ...`` for mzc's own, Python's form for others."""
-    if issubclass(category, MzcWarning):
-        click.echo(f"mzc: warning: {message}", err=True)
-    else:
-        sys.stderr.write(warnings.formatwarning(message, category, filename, lineno, line))
+    """mzc's warnings (the only ones not ignored) as one line on stderr: ``mzc: warning: ...``."""
+    click.echo(f"mzc: warning: {message}", err=True)

@@ -3,6 +3,7 @@
 import click
 
 from mzc.cli.options import input_argument, jump_angle_option, output_option, read_grid, write_grid
+from mzc.limits import MAX_INSERTED, MAX_ITERATIONS
 
 METHODS = ("thesis", "laplace", "biharmonic")
 DEFAULT_METHOD = "biharmonic"   # lowest error on the shared faces (see mzc.ops.densify)
@@ -20,11 +21,11 @@ across a depth jump (--jump-angle), and never smoothed across one.
   thesis      the thesis's Jacobi iteration (equal steps, --iterations sweeps)""")
 @input_argument
 @output_option
-@click.option("-n", "count", required=True, type=click.IntRange(min=0), metavar="N",
+@click.option("-n", "count", required=True, type=click.IntRange(0, MAX_INSERTED), metavar="N",
               help="Rows to insert between each pair of rows (0 copies the grid).")
 @click.option("--method", type=click.Choice(METHODS), default=DEFAULT_METHOD, show_default=True,
               help="How to fill the inserted rows.")
-@click.option("--iterations", type=click.IntRange(min=0), default=100, show_default=True, metavar="K",
+@click.option("--iterations", type=click.IntRange(0, MAX_ITERATIONS), default=100, show_default=True, metavar="K",
               help="Jacobi sweeps of --method thesis.")
 @click.option("--tol", type=click.FloatRange(min=0, min_open=True), metavar="T",
               help="Stop the thesis sweeps once no node moves by T or more.")
@@ -33,9 +34,11 @@ across a depth jump (--jump-angle), and never smoothed across one.
 @jump_angle_option
 def command(input, output, count, method, iterations, tol, precision, jump_angle):
     from mzc.api import densify
-    from mzc.streams import check_not_input
+    from mzc.errors import about
+    from mzc.streams import check_not_input, display_name
 
     check_not_input(output, input)
     grid = read_grid(input)
-    dense = densify(grid, count, method, iterations=iterations, tol=tol, jump_angle=jump_angle)
+    with about(display_name(input), f"densifying it ({method}, n = {count})"):
+        dense = densify(grid, count, method, iterations=iterations, tol=tol, jump_angle=jump_angle)
     write_grid(dense, output, precision=precision)

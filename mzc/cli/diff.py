@@ -4,6 +4,8 @@ import json
 
 import click
 
+from mzc.limits import MAX_SAMPLES
+
 
 @click.command(help="""Compare two surfaces (meshes or mzc files, any mix).
 
@@ -31,9 +33,10 @@ direction on the first line.""")
 @click.option("--surface", is_flag=True, help="Also the symmetric point-to-surface distance.")
 @click.option("--heightfield", is_flag=True,
               help="Also the point-to-surface distance over A's height-field part (implies --surface).")
-@click.option("--samples", default=100_000, show_default=True, type=click.IntRange(100, 10_000_000),
+@click.option("--samples", default=100_000, show_default=True, type=click.IntRange(100, MAX_SAMPLES),
               help="Samples per surface for --surface.")
-@click.option("--seed", default=0, show_default=True, help="Random seed of the --surface samples.")
+@click.option("--seed", default=0, show_default=True, type=click.IntRange(0, 2**63 - 1),
+              help="Random seed of the --surface samples.")
 @click.option("--d1", type=click.FloatRange(min=0, min_open=True), help="Row spacing of the common grid.")
 @click.option("--d2", type=click.FloatRange(min=0, min_open=True), help="Column spacing of the common grid.")
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON object instead of text lines.")
@@ -42,7 +45,7 @@ direction on the first line.""")
 def command(a, b, rmse, max_, mean, r2, percentiles, count, surface, heightfield, samples, seed, d1, d2,
             as_json, error_grid, plot):
     from mzc.api import read_surface
-    from mzc.errors import MzcError
+    from mzc.errors import MzcError, about
     from mzc.measure import STATISTICS, compare_surfaces
     from mzc.streams import check_not_input
 
@@ -53,7 +56,8 @@ def command(a, b, rmse, max_, mean, r2, percentiles, count, surface, heightfield
     if (error_grid or plot) and (first.is_point_cloud or second.is_point_cloud):
         raise MzcError("--error-grid and --plot need two surfaces, not a point cloud", field="diff")
     chosen = [name for name, on in zip(STATISTICS, (rmse, max_, mean, r2, percentiles, count)) if on]
-    result = compare_surfaces(first, second, chosen, surface, heightfield, samples, seed, d1, d2, names=(a, b))
+    with about(f"{a} vs {b}", f"comparing them ({samples} samples per surface)" if surface else "comparing them"):
+        result = compare_surfaces(first, second, chosen, surface, heightfield, samples, seed, d1, d2, names=(a, b))
     if error_grid:
         from mzc.cli.options import write_grid
 

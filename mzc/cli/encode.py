@@ -121,12 +121,16 @@ def build_command():
     codecs = [get_codec(name) for name in codec_names()]
 
     def run(input, output, **values):
-        from mzc.streams import check_not_input, write_output
+        from mzc.errors import about
+        from mzc.streams import check_not_input, display_name, write_output
 
         codec = chosen_codec(codecs, values)
         options = codec_options(codec, values)
         check_not_input(output, input)
-        write_output(output, codec.writer(read_grid(input), **options))
+        grid = read_grid(input)
+        with about(display_name(input), f"encoding it with {codec.name}"):
+            data = codec.encode(grid, **options)
+        write_output(output, data)
 
     command = click.Command("encode", callback=run, help=HELP,
                             params=[*[codec_flag(c) for c in codecs], *tuning_options(codecs)])

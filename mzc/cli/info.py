@@ -5,36 +5,48 @@ import click
 from mzc.cli.options import input_argument
 
 
-@click.command(help="""Describe any mzc file: format, version, grid size, spacings, valid nodes, bytes.
+@click.command(help="""Describe any mzc file: format, version, grid size, spacings, bytes, header lines.
 
-Every header line is shown as written; the file is decoded to count its valid nodes.""")
+Reads the header only (and checks the file's checksum), so it is quick on any file;
+--decode also decodes the file to count its valid nodes and give their range.""")
 @input_argument
-def command(input):
-    from mzc.formats import read_any
-    from mzc.formats.header import read_header, split_magic
+@click.option("--decode", "decode", is_flag=True, help="Decode the file: valid nodes, value range, bits per node.")
+def command(input, decode):
+    import numpy as np
+
+    from mzc.formats import projected_major, read_any
+    from mzc.formats.header import read_grid_fields, read_header, split_magic
+    from mzc.grid import ZGrid
     from mzc.streams import display_name, read_input
 
     data = read_input(input)
     source = display_name(input)
     kind, major, minor = split_magic(data, source)
-    header, _body, _line = read_header(data, source, kind, major)
-    grid = read_any(data, source)
-    valid = int(grid.valid.sum())
-    rows, cols = grid.shape
+    header, _body, _line = read_header(data, source, kind, major, projected_major=projected_major(kind, source))
+    fields, rows, cols = read_grid_fields(header)
+    grid = read_any(data, source) if decode else ZGrid(z=np.broadcast_to(np.nan, (rows, cols)), **fields)
     lines = [
         f"file      {source}",
         f"format    mzc-{kind} {major}.{minor}",
         f"bytes     {len(data)}",
         f"grid      {rows} rows x {cols} cols, d1 {grid.d1:g} d2 {grid.d2:g}{' ' + grid.units if grid.units else ''}",
         f"cut by    {cutting_surfaces(grid)}",
-        f"valid     {valid} of {grid.z.size} nodes ({100 * valid / grid.z.size:.1f}%)",
     ]
-    if valid:
-        lines.append(f"z range   {float(grid.z[grid.valid].min()):g} .. {float(grid.z[grid.valid].max()):g}")
-        lines.append(f"bits/node {8 * len(data) / valid:.3f} (per valid node)")
+    if decode:
+        lines += decoded_lines(grid, len(data))
     lines.append("header")
     lines += [f"  {keyword} {' '.join(values)}" for keyword, (values, _) in header.fields.items()]
     click.echo("\n".join(lines))
+
+
+def decoded_lines(grid, size):
+    """Valid nodes, their value range and the bits each costs."""
+    valid = int(grid.valid.sum())
+    lines = [f"valid     {valid} of {grid.z.size} nodes ({100 * valid / grid.z.size:.1f}%)"]
+    if valid:
+        lines.append(f"z range   {float(grid.z[grid.valid].min()):g} .. {float(grid.z[grid.valid].max()):g}")
+        lines.append(f"bits/node {8 * size / valid:.3f} (per valid node)")
+    return lines
 
 
 def cutting_surfaces(grid):

@@ -6,7 +6,7 @@ writes through ``mzc.streams`` so output is atomic.
 
 import click
 
-from mzc.errors import MzcError
+from mzc.errors import MzcError, about
 from mzc.streams import display_name, read_input
 
 input_argument = click.argument("input", required=False, default="-", metavar="[INPUT]")
@@ -28,7 +28,8 @@ def read_grid(path):
         raise MzcError("empty input: expected an mzc z-grid", source=source)
     if not is_mzc(data):
         raise MzcError("not an mzc file (expected a z-grid, e.g. from 'mzc slice')", source=source, line=1)
-    return read_any(data, source)
+    with about(source, "decoding it"):
+        return read_any(data, source)
 
 
 def write_grid(grid, path, precision=None):

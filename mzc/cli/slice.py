@@ -5,6 +5,18 @@ import click
 from mzc.cli.options import input_argument, output_option, write_grid
 
 
+def one_word(value):
+    """``--units`` as the one header token it must be (mzc.grid.check_token), or a usage error."""
+    from mzc.errors import MzcError
+    from mzc.grid import check_token
+
+    try:
+        check_token(value, "units")
+    except MzcError as error:
+        raise click.BadParameter(error.message) from None
+    return value
+
+
 @click.command("slice")
 @input_argument
 @output_option
@@ -30,7 +42,8 @@ from mzc.cli.options import input_argument, output_option, write_grid
               help="Centre of a central projection (a point of a cylinder's axis) [default: chosen].")
 @click.option("--axis", type=float, nargs=3, metavar="X Y Z",
               help="Axis direction of a central projection [default: chosen].")
-@click.option("--units", metavar="TEXT", help="Length unit to record, e.g. mm.")
+@click.option("--units", metavar="TEXT", callback=lambda ctx, param, value: one_word(value),
+              help="Length unit to record, e.g. mm (one word).")
 @click.option("--precision", type=click.IntRange(0, 17), metavar="DIGITS",
               help="Decimal digits of the written heights.")
 def command(input, output, d1, d2, rows, cols, thesis_grid, align, projection, view, center, axis, units,
@@ -39,8 +52,9 @@ def command(input, output, d1, d2, rows, cols, thesis_grid, align, projection, v
     into a z-grid: each node holds the outermost hit of its line with the surface (the
     front-most height of planar grids, the farthest distance along a central ray)."""
     from mzc.api import slice as slice_surface
+    from mzc.errors import about
     from mzc.meshes import read_mesh
-    from mzc.streams import check_not_input
+    from mzc.streams import check_not_input, display_name
 
     if d1 is not None and rows is not None:
         raise click.UsageError("--d1 and --rows both set the rows: give one")
@@ -48,7 +62,8 @@ def command(input, output, d1, d2, rows, cols, thesis_grid, align, projection, v
         raise click.UsageError("--d2 and --cols both set the columns: give one")
     check_not_input(output, input)
     mesh = read_mesh(input)
-    grid = slice_surface(mesh, d1=d1, d2=d2, rows=rows, cols=cols, align=align, units=units,
-                         projection=projection, center=center, axis=axis, view=view,
-                         thesis_grid=thesis_grid)
+    with about(display_name(input), "slicing it"):
+        grid = slice_surface(mesh, d1=d1, d2=d2, rows=rows, cols=cols, align=align, units=units,
+                             projection=projection, center=center, axis=axis, view=view,
+                             thesis_grid=thesis_grid)
     write_grid(grid, output, precision=precision)

@@ -123,7 +123,11 @@ class Codec:
         return {name: value for name, value in values.items() if value is not None}
 
     def encode(self, grid: ZGrid, **options: Any) -> bytes:
-        """The bytes of ``grid`` coded with ``options`` (checked; defaults filled in)."""
+        """The bytes of ``grid`` coded with ``options`` (checked; defaults filled in); heights too
+        large to code are refused (mzc.limits) rather than written as numbers no reader takes back."""
+        from mzc.limits import check_magnitude
+
+        check_magnitude(grid.z, "heights", field="z")
         return self.writer(grid, **self.checked(options))
 
     def decode(self, data: bytes, source: str = "<bytes>") -> ZGrid:

@@ -26,13 +26,26 @@ def reader_for(data, source):
     kind, _major, _minor = split_magic(data, source)
     if kind == "zgrid":
         return module_for(kind).read
+    return known_codec(kind, source).decode
+
+
+def projected_major(kind, source):
+    """The first major version of ``kind`` whose files may hold a central projection (the newest
+    one: a codec's files of projected grids take the major version it writes)."""
+    if kind == "zgrid":
+        return module_for(kind).PROJECTED_VERSION[0]
+    return known_codec(kind, source).version[0]
+
+
+def known_codec(kind, source):
+    """The registered codec of ``kind``, or a one-line error listing the known kinds."""
     codec = codec_for_kind(kind)
     if codec is None:
         from mzc.codecs import codec_names
 
         raise MzcError(f"unknown mzc format 'mzc-{kind}' (known: {', '.join(sorted(['zgrid', *codec_names()]))})",
                        source=source, line=1)
-    return codec.decode
+    return codec
 
 
 def is_mzc(data):

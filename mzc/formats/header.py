@@ -14,10 +14,18 @@ surface, and the major version makes it refuse the file instead. Each format mod
 the version its writer gives planar grids (``VERSION``: the older one where the bytes did
 not change, so older readers keep reading them), the one it gives projected grids
 (``PROJECTED_VERSION``) and the oldest major it reads (``OLDEST_MAJOR``).
+
+The integrity rule: a compressed format's file carries a ``crc32`` header line, the CRC-32
+of every byte of the file but that line (``with_checksum``); ``read_header`` checks it
+before anything reads the body, whatever the version, and refuses a file of a version that
+must carry it (``CHECKSUM_SINCE`` of each format module: major -> first minor) without it.
+So a flipped bit, a cut, appended bytes or line ends converted to CRLF anywhere in the file
+are refused instead of decoding to a wrong surface.
 """
 
 import math
 import re
+import zlib
 
 import numpy as np
 
@@ -27,6 +35,7 @@ from mzc.grid import IDENTITY_TRANSFORM
 from mzc.limits import MAX_DIMENSION, check_grid_size
 
 RIGID_TOLERANCE = 1e-6
+CHECKSUM = "crc32"   # the header keyword of a file's checksum
 
 
 def split_magic(data, source):
@@ -51,6 +60,14 @@ def file_version(grid, planar, projected):
 def magic_line(kind, version):
     """The first line of an mzc file: ``mzc-KIND MAJOR.MINOR``."""
     return f"mzc-{kind} {version[0]}.{version[1]}"
+
+
+INTEGER = re.compile(r"[+-]?[0-9]{1,18}")   # ASCII digits only: int() also takes '١٢', '1_0' and others
+
+
+def parse_int(token):
+    """``token`` as an int when it is one written in ASCII decimal digits (at most 18), else None."""
+    return int(token) if INTEGER.fullmatch(token) else None
 
 
 class Header:
@@ -95,10 +112,9 @@ class Header:
         values = self.tokens(keyword, 1, required)
         if values is None:
             return default
-        try:
-            value = int(values[0])
-        except ValueError:
-            raise self.error(keyword, f"not an integer: {values[0]!r}") from None
+        value = parse_int(values[0])
+        if value is None:
+            raise self.error(keyword, f"not an integer: {values[0][:40]!r}")
         if (low is not None and value < low) or (high is not None and value > high):
             raise self.error(keyword, f"{value} is outside {low}..{high}")
         return value
@@ -135,14 +151,16 @@ class Header:
         return values[0]
 
 
-def read_header(data, source, kind, supported_major, oldest_major=1, projected_major=None):
+def read_header(data, source, kind, supported_major, oldest_major=1, projected_major=None, checksum_since=None):
     """Parse magic and header lines of ``data``; return (Header, body bytes, first body line number).
 
     Majors above ``supported_major`` are refused (upgrade mzc), and so are majors below
     ``oldest_major``, drafts of a format that this mzc no longer reads. From
-    ``projected_major`` on, the grid header may hold a central projection.
+    ``projected_major`` on, the grid header may hold a central projection. A ``crc32`` line
+    is checked against the whole file; from ``checksum_since[major]`` (a minor version) on
+    it is required.
     """
-    found, major, _minor = split_magic(data, source)
+    found, major, minor = split_magic(data, source)
     if found != kind:
         raise MzcError(f"expected an mzc-{kind} file, found mzc-{found}", source=source, line=1)
     if major > supported_major:
@@ -154,6 +172,7 @@ def read_header(data, source, kind, supported_major, oldest_major=1, projected_m
     header = Header(source, major, projected=projected_major is not None and major >= projected_major)
     position = data.index(b"\n") + 1 if b"\n" in data else len(data)
     line_number = 1
+    checksum_line = None
     while True:
         if position >= len(data):
             raise MzcError("header ends without a 'data' line", source=source, line=line_number)
@@ -164,13 +183,45 @@ def read_header(data, source, kind, supported_major, oldest_major=1, projected_m
             text = data[position:end].decode("utf-8").strip()
         except UnicodeDecodeError:
             raise MzcError("header line is not UTF-8 text", source=source, line=line_number) from None
-        position = end + 1
+        line_start, position = position, end + 1
         if not text or text.startswith("#"):
             continue
         if text == "data":
+            since = (checksum_since or {}).get(major)
+            check_checksum(data, header, checksum_line, required=since is not None and minor >= since)
             return header, data[position:], line_number + 1
         keyword, *values = text.split()
         header.add(keyword, values, line_number)
+        if keyword == CHECKSUM:
+            checksum_line = (line_start, position)
+
+
+
+def with_checksum(data):
+    """The bytes of a whole file, ``data``, with its ``crc32`` line added just before the
+    ``data`` line: the CRC-32 (as zlib, gzip and PNG compute it) of ``data`` itself."""
+    at = data.index(b"\ndata\n") + 1
+    return data[:at] + f"{CHECKSUM} {zlib.crc32(data):08x}\n".encode("ascii") + data[at:]
+
+
+def check_checksum(data, header, span, required):
+    """Refuse ``data`` when its ``crc32`` line (bytes ``span``) does not match the rest of the
+    file, or when it has none and ``required``."""
+    if span is None:
+        if required:
+            raise MzcError("required header line missing (the file's checksum)", source=header.source,
+                           field=CHECKSUM)
+        return
+    stated = header.word(CHECKSUM)
+    if not re.fullmatch(r"[0-9a-f]{8}", stated):
+        raise header.error(CHECKSUM, f"expected 8 lowercase hexadecimal digits, found {stated[:20]!r}")
+    view = memoryview(data)
+    found = zlib.crc32(view[span[1]:], zlib.crc32(view[:span[0]]))
+    if found != int(stated, 16):
+        hint = (" (its line ends were changed to CRLF: copy mzc files as binary, not as text)"
+                if b"\r\n" in data[:span[1]] else " (damaged, cut short or with bytes added)")
+        raise MzcError(f"checksum mismatch: the file is corrupt{hint}", source=header.source,
+                       line=header.fields[CHECKSUM][1], field=CHECKSUM)
 
 
 def read_grid_fields(header):

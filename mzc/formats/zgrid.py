@@ -64,7 +64,22 @@ def format_rows(z, nodata, precision=None):
     """Text lines for the rows of ``z``: shortest round-trip numbers, rounded when ``precision`` is given."""
     if precision is not None:
         z = np.round(z, precision) + 0.0  # + 0.0 turns -0.0 into 0.0
+    check_marker_unused(z, nodata)
     return [" ".join(nodata if v != v else format_number(v) for v in row.tolist()) for row in z]
+
+
+def check_marker_unused(z, nodata):
+    """Refuse to write a valid value as the no-data marker's very token, which would read back as
+    invalid (``nodata 0`` with ``--precision 0`` once turned every height under 0.5 into a hole)."""
+    try:
+        marker = float(nodata)
+    except ValueError:
+        return   # a word such as NA: no number is written as it
+    same = z == marker
+    if same.any() and format_number(marker) == nodata:
+        r, c = (int(i) for i in np.argwhere(same)[0])
+        raise MzcError(f"the valid value at row {r + 1}, column {c + 1} would be written as {nodata}, the no-data "
+                       f"marker, and read back as invalid: choose another marker or more precision", field="nodata")
 
 
 def write(grid, precision=None):

@@ -12,6 +12,7 @@ from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
 from mzc.errors import MzcError
+from mzc.limits import MAX_SAMPLES
 
 if TYPE_CHECKING:
     from mzc.grid import ZGrid
@@ -42,10 +43,15 @@ def compare_surfaces(first: Mesh, second: Mesh, chosen: tuple[str, ...] | list[s
     from mzc.measure.metrics import grid_error_stats
     from mzc.measure.sampling import error_grid
 
+    if not 100 <= samples <= MAX_SAMPLES:
+        raise MzcError(f"must be 100..{MAX_SAMPLES}, not {samples}", field="samples")
     if first.is_point_cloud or second.is_point_cloud:
         return Comparison(cloud_report(first, second, names, chosen))
     reference, errors = error_grid(first, second, d1, d2)
     stats = grid_error_stats(reference.z, reference.z + errors.z)
+    if stats["count"] == 0 and list(chosen) != ["count"]:
+        raise MzcError(f"no node of the common grid is valid in both {names[0]} and {names[1]}: the surfaces do not "
+                       "overlap, so there is nothing to compare", field="diff")
     report = select(stats, chosen or STATISTICS)
     if surface or heightfield or any(side.grid is not None and side.grid.projection != "planar"
                                      for side in (first, second)):

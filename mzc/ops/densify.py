@@ -47,7 +47,7 @@ of the padding's far edge decays below 1e-12 (it decays as exp(-pi x / d1) along
 import numpy as np
 
 from mzc.errors import MzcError
-from mzc.limits import check_grid_size
+from mzc.limits import MAX_INSERTED, MAX_ITERATIONS, check_grid_size
 
 METHODS = ("thesis", "laplace", "biharmonic")
 DEFAULT_METHOD = "biharmonic"
@@ -113,15 +113,15 @@ def check_request(z, n, d1, d2, method, iterations, tol):
     """Refuse impossible requests before allocating the dense grid."""
     if z.ndim != 2:
         raise MzcError("heights must be a 2D grid")
-    if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 0:
-        raise MzcError(f"must be a whole number >= 0, not {n!r}", field="n")
+    if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or not 0 <= n <= MAX_INSERTED:
+        raise MzcError(f"must be a whole number 0..{MAX_INSERTED}, not {n!r}", field="n")
     if method not in METHODS:
         raise MzcError(f"unknown method {method!r} (choose {', '.join(METHODS)})", field="method")
     for name, value in (("d1", d1), ("d2", d2)):
         if not (np.isfinite(value) and value > 0):
             raise MzcError(f"spacing must be a positive number, not {value}", field=name)
-    if iterations < 0:
-        raise MzcError(f"must be >= 0, not {iterations}", field="iterations")
+    if not 0 <= iterations <= MAX_ITERATIONS:
+        raise MzcError(f"must be 0..{MAX_ITERATIONS}, not {iterations}", field="iterations")
     if tol is not None and not tol > 0:
         raise MzcError(f"must be a positive number, not {tol}", field="tol")
     check_grid_size((z.shape[0] - 1) * (n + 1) + 1, z.shape[1], "use a smaller n", field="n")

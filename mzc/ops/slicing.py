@@ -101,8 +101,10 @@ def slice_surface(mesh, d1=None, d2=None, rows=None, cols=None, align="none", un
     thesis's ~70 planes, and d2 = d1/10. Warns (MzcWarning) when the grid's lines meet less
     than SEEN_WARNING of the area well.
     """
+    from mzc.limits import check_magnitude
     from mzc.ops.views import SEEN_WARNING, choose_view
 
+    check_magnitude(mesh.points, "coordinates")
     chosen = choose_view(mesh, frame_for(mesh, align), projection, center, axis, view)
     grid = slice_in_frame(mesh, chosen.rotation, chosen.shift, d1=d1, d2=d2, rows=rows, cols=cols, units=units,
                           projection=chosen.projection, radius=chosen.radius, full_turn=chosen.full_turn,

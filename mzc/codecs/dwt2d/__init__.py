@@ -13,13 +13,22 @@ import numpy as np
 from mzc.codecs.base import Codec, Option
 from mzc.codecs.dwt2d import wavelet as w2
 from mzc.errors import MzcError
-from mzc.formats.header import file_version, format_number, grid_header_lines, magic_line, read_grid_fields, read_header
+from mzc.formats.header import (
+    file_version,
+    format_number,
+    grid_header_lines,
+    magic_line,
+    read_grid_fields,
+    read_header,
+    with_checksum,
+)
 from mzc.grid import ZGrid
 
 KIND = "dwt2d"
-VERSION = (3, 0)             # every grid; 2.0 (planar, periodised transform) is still read
-PROJECTED_VERSION = (3, 0)
+VERSION = (3, 1)             # every grid; 3.0 (no crc32 line) and 2.0 (planar, periodised transform) are still read
+PROJECTED_VERSION = (3, 1)
 OLDEST_MAJOR = 2             # 1.x were drafts
+CHECKSUM_SINCE = {3: 1}      # the crc32 line is required from 3.1 on
 CODER = "rans-signs-2"     # 2.0 names it on a required line; in 3.0 the version implies it
 # detail contexts, shared by every detail band: activity of parent, siblings, two rows above
 THRESHOLDS = (0.5, 1.0, 1.5, 3.0, 5.0, 8.0, 14.0, 24.0, 40.0, 70.0)
@@ -352,7 +361,7 @@ class Prepared:
             k = np.zeros(self.valid.shape, dtype=np.int64)
             k[self.valid] = w2.corrections(self.grid.z, decoded, self.valid, correction)
             encode_corrections(encoder, k, self.valid)
-        return self.header(step, correction, max_error) + encoder.finish()
+        return with_checksum(self.header(step, correction, max_error) + encoder.finish())
 
     def header(self, step, correction, max_error):
         """The text header up to and including the ``data`` line."""
@@ -469,7 +478,7 @@ def check_shared_unit(grid, field):
     ratio = float(np.ptp(z)) / width
     geographic = np.abs(xs).max() <= 180 and np.abs(ys).max() <= 90 and max(grid.d1, grid.d2) < GEOGRAPHIC_STEP
     if ratio > UNIT_RATIO or (geographic and ratio > GEOGRAPHIC_RATIO):
-        raise MzcError(f"the heights span {ratio:.0f} times the grid's width, so x, y and z cannot share one unit "
+        raise MzcError(f"the heights span {ratio:.3g} times the grid's width, so x, y and z cannot share one unit "
                        f"(lon/lat degrees with heights in metres?) and a surface error means nothing: project "
                        f"the grid to a metric frame, or use --max-error, which bounds the heights alone",
                        field=field)
@@ -503,7 +512,10 @@ def read(data, source="<bytes>"):
     """Decode dwt2d bytes (3.0, or 2.0 with its periodised transform) into a ZGrid; any bad input
     raises MzcError."""
     header, body, _first = read_header(data, source, KIND, VERSION[0], oldest_major=OLDEST_MAJOR,
-                                       projected_major=PROJECTED_VERSION[0])
+                                       projected_major=PROJECTED_VERSION[0], checksum_since=CHECKSUM_SINCE)
+    if b"\r\n" in data[:len(data) - len(body)]:
+        raise MzcError("the header's line ends are CRLF: the file was copied as text, which changes its binary "
+                       "payload; copy mzc files as binary", source=source, line=1)
     fields, rows, cols = read_grid_fields(header)
     transform = w2.TRANSFORMS[header.major]
     wavelet, levels, steps, slope_limit, correction = read_codec_fields(header, (rows, cols), transform)
@@ -521,6 +533,7 @@ def read(data, source="<bytes>"):
         if correction > 0:
             k = decode_rows(decoder, valid, np.zeros(valid.shape), CORRECTION_THRESHOLDS, correction_model)
             z[valid] += correction * k[valid]
+    decoder.check_end()
     if not np.isfinite(z[valid]).all():
         raise MzcError("decoded heights are not finite (corrupt steps or payload)", source=source, field="data")
     z[~valid] = np.nan

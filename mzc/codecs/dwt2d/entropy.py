@@ -267,6 +267,14 @@ class Decoder:
     def error(self, message):
         return MzcError(message, source=self.source, field="data")
 
+    def check_end(self):
+        """Refuse a payload with data left once everything it declares is decoded: rANS words
+        not consumed, or a byte or more of raw bits past the last one read."""
+        extra = (len(self.bits) - self.bit_position) // 8
+        if extra or not self.coder.is_empty():
+            raise self.error(f"{extra} byte(s) after the end of the payload" if extra
+                             else "rANS words left over after the last symbol")
+
     def read_varint(self):
         """One LEB128 integer (at most 5 bytes)."""
         value = 0

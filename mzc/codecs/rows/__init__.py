@@ -22,16 +22,26 @@ import numpy as np
 from mzc.codecs.base import Codec, Option
 from mzc.codecs.rows.transforms import fill_holes
 from mzc.errors import MzcError
-from mzc.formats.header import file_version, format_number, grid_header_lines, magic_line, read_grid_fields, read_header
+from mzc.formats.header import (
+    file_version,
+    format_number,
+    grid_header_lines,
+    magic_line,
+    parse_int,
+    read_grid_fields,
+    read_header,
+    with_checksum,
+)
 from mzc.formats.zgrid import body_lines
 from mzc.grid import ZGrid
 from mzc.numbers import floats
 
 DEFAULT_PRECISION = 4
 MAX_PRECISION = 17
-VERSION = (1, 0)             # every row codec: planar grids, byte for byte as before projections
-PROJECTED_VERSION = (2, 0)   # 1.0 with the projection lines (mzc.formats.header)
+VERSION = (1, 1)             # every row codec: planar grids (1.0 without the crc32 line)
+PROJECTED_VERSION = (2, 1)   # 1.1 with the projection lines (mzc.formats.header)
 OLDEST_MAJOR = 1
+CHECKSUM_SINCE = {1: 1, 2: 1}   # 1.0 and 2.0 files have no crc32 line; from 1.1 and 2.1 on it is required
 QUALITY = Option("quality", int, 100, 1, 100, metavar="Q",
                  help="Percentage of coefficients kept, 1..100.")
 PRECISION = Option("precision", int, DEFAULT_PRECISION, 0, MAX_PRECISION, metavar="DIGITS",
@@ -135,7 +145,7 @@ def write_grid(grid, codec, options):
     rows, holes = encode_rows(grid, codec, options)
     lines = [magic_line(codec.kind, file_version(grid, VERSION, PROJECTED_VERSION)), *codec.header_lines(options),
              *grid_header_lines(grid), "data", *rows, *holes]
-    return ("\n".join(lines) + "\n").encode("utf-8")
+    return with_checksum(("\n".join(lines) + "\n").encode("utf-8"))
 
 
 # --- reading ----------------------------------------------------------------------------
@@ -160,11 +170,11 @@ def integer_field(value, field):
 
 def parse_span(v1, v2, cols, source, line):
     """Check a row's 1-based (v1, v2); return (0-based first, length), or None for ``0 0``."""
-    try:
-        v1, v2 = int(v1), int(v2)
-    except ValueError:
+    first, last = parse_int(v1), parse_int(v2)
+    if first is None or last is None:
         raise MzcError(f"v1 v2 must be integers, found {v1[:20]!r} {v2[:20]!r}", source=source,
-                       line=line, field="v1") from None
+                       line=line, field="v1")
+    v1, v2 = first, last
     if v1 == 0 and v2 == 0:
         return None
     if not 1 <= v1 <= cols:
@@ -219,9 +229,9 @@ def apply_holes(z, lines, source):
         return
     number, text = lines[0]
     keyword, *count = text.split()
-    if keyword != "holes" or len(count) != 1 or not count[0].isdigit():
+    if keyword != "holes" or len(count) != 1 or parse_int(count[0]) is None:
         raise MzcError("expected 'holes COUNT' after the row lines", source=source, line=number, field="holes")
-    if int(count[0]) != len(lines) - 1:
+    if parse_int(count[0]) != len(lines) - 1:
         raise MzcError(f"says {count[0]} hole line(s) but {len(lines) - 1} follow", source=source,
                        line=number, field="holes")
     for number, text in lines[1:]:
@@ -230,11 +240,10 @@ def apply_holes(z, lines, source):
 
 def _apply_hole_line(z, tokens, source, line):
     """One ``r c1 c2 [c1 c2 ...]`` line: runs strictly inside row r's span, in increasing order."""
-    try:
-        r, *columns = (int(t) for t in tokens)
-    except ValueError:
-        raise MzcError("hole lines hold integers 'row start end ...'", source=source, line=line,
-                       field="holes") from None
+    numbers = [parse_int(t) for t in tokens]
+    if None in numbers or not numbers:
+        raise MzcError("hole lines hold integers 'row start end ...'", source=source, line=line, field="holes")
+    r, *columns = numbers
     if not 1 <= r <= z.shape[0] or not columns or len(columns) % 2:
         raise MzcError("expected 'row start end [start end ...]' with a row in 1..rows", source=source,
                        line=line, field="holes")
@@ -252,7 +261,7 @@ def _apply_hole_line(z, tokens, source, line):
 def read_grid(data, source, codec):
     """Decode the bytes of a ``codec`` file into a ZGrid."""
     header, body, first_line = read_header(data, source, codec.kind, PROJECTED_VERSION[0],
-                                           projected_major=PROJECTED_VERSION[0])
+                                           projected_major=PROJECTED_VERSION[0], checksum_since=CHECKSUM_SINCE)
     fields, rows, cols = read_grid_fields(header)
     options = codec.read_options(header)
     lines = body_lines(body, first_line, source)

@@ -8,7 +8,8 @@ from mzc.codecs import rows
 from mzc.codecs.rows.transforms import dct_forward, dct_inverse, kept
 
 KIND = "dct"
-VERSION, PROJECTED_VERSION, OLDEST_MAJOR = rows.VERSION, rows.PROJECTED_VERSION, rows.OLDEST_MAJOR
+VERSION, PROJECTED_VERSION, OLDEST_MAJOR, CHECKSUM_SINCE = (rows.VERSION, rows.PROJECTED_VERSION, rows.OLDEST_MAJOR,
+                                                       rows.CHECKSUM_SINCE)
 
 
 def encode(spans, firsts, d2, options):

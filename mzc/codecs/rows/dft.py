@@ -11,7 +11,8 @@ from mzc.codecs.rows.transforms import dft_forward, dft_inverse, dft_length, kep
 from mzc.errors import MzcError
 
 KIND = "dft"
-VERSION, PROJECTED_VERSION, OLDEST_MAJOR = rows.VERSION, rows.PROJECTED_VERSION, rows.OLDEST_MAJOR
+VERSION, PROJECTED_VERSION, OLDEST_MAJOR, CHECKSUM_SINCE = (rows.VERSION, rows.PROJECTED_VERSION, rows.OLDEST_MAJOR,
+                                                       rows.CHECKSUM_SINCE)
 
 
 def encode(spans, firsts, d2, options):

@@ -14,7 +14,8 @@ from mzc.codecs.rows.transforms import DEFAULT_LEVEL, DEFAULT_WAVELET, dwt_forwa
 from mzc.errors import MzcError
 
 KIND = "dwt"
-VERSION, PROJECTED_VERSION, OLDEST_MAJOR = rows.VERSION, rows.PROJECTED_VERSION, rows.OLDEST_MAJOR
+VERSION, PROJECTED_VERSION, OLDEST_MAJOR, CHECKSUM_SINCE = (rows.VERSION, rows.PROJECTED_VERSION, rows.OLDEST_MAJOR,
+                                                       rows.CHECKSUM_SINCE)
 MAX_LEVEL = 32
 
 

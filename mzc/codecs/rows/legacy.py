@@ -20,7 +20,7 @@ from mzc.errors import MzcError
 from mzc.formats.header import format_number
 from mzc.formats.zgrid import body_lines
 from mzc.grid import ZGrid
-from mzc.limits import check_grid_size
+from mzc.limits import MAX_DIMENSION, check_grid_size
 
 KINDS = ("poly", "dft", "dct", "dwt")
 LEGACY_WAVELET = "db1"
@@ -109,6 +109,11 @@ ROW_READERS = {"dft": (dft_row, dft.decode), "dct": (dct_row, dct.decode), "dwt"
 
 # --- headers ------------------------------------------------------------------------------
 
+def size_field(k1):
+    """The field to blame for a grid too large: k1 when it alone is out of range, else k2."""
+    return "k1" if not 1 <= k1 <= MAX_DIMENSION else "k2"
+
+
 def transform_header(lines, source):
     """(d1, d2, k1, k2, Q) from the line ``D1 D2 k1 k2 Q``."""
     number, text = lines[0]
@@ -125,7 +130,7 @@ def transform_header(lines, source):
     for name, value in (("D1", d1), ("D2", d2)):
         if value <= 0:
             raise MzcError(f"must be > 0, found {value}", source=source, line=number, field=name)
-    check_grid_size(k1, k2, source=source, line=number, field="k1")
+    check_grid_size(k1, k2, source=source, line=number, field=size_field(k1))
     if not 1 <= quality <= 100:
         raise MzcError(f"{quality} is outside 1..100", source=source, line=number, field="Q")
     return d1, d2, k1, k2, quality
@@ -146,7 +151,9 @@ def poly_header(lines, source):
     if len(values) < 4:
         raise MzcError("the polynomial header needs the lines k1, k2, D1, D2", source=source,
                        line=len(lines) + 1, field=("k1", "k2", "D1", "D2")[len(values)])
-    check_grid_size(int(values["k1"]), int(values["k2"]), source=source, line=lines[1][0], field="k2")
+    k1 = int(values["k1"])
+    check_grid_size(k1, int(values["k2"]), source=source, line=lines[0 if size_field(k1) == "k1" else 1][0],
+                    field=size_field(k1))
     return values["D1"], values["D2"], int(values["k1"]), int(values["k2"])
 
 

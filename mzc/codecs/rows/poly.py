@@ -12,7 +12,8 @@ from mzc.codecs.rows.transforms import BASES, poly_degree, poly_forward, poly_in
 from mzc.errors import MzcError
 
 KIND = "poly"
-VERSION, PROJECTED_VERSION, OLDEST_MAJOR = rows.VERSION, rows.PROJECTED_VERSION, rows.OLDEST_MAJOR
+VERSION, PROJECTED_VERSION, OLDEST_MAJOR, CHECKSUM_SINCE = (rows.VERSION, rows.PROJECTED_VERSION, rows.OLDEST_MAJOR,
+                                                       rows.CHECKSUM_SINCE)
 MAX_DEGREE = 10_000
 
 

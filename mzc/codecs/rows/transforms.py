@@ -9,6 +9,8 @@ is simply a zero. See METHOD.md §3 and spec/{poly,dft,dct,dwt}.md.
 
 import numpy as np
 
+from mzc.errors import MzcError
+
 DEFAULT_WAVELET = "db1"
 DEFAULT_LEVEL = 3
 # pywt's 'symmetric' extension is MATLAB's default 'sym' mode, so lengths (and legacy
@@ -40,6 +42,10 @@ def fill_holes(span):
 
 # --- polynomial (Ch. 5) -------------------------------------------------------------
 
+VANDER_BUDGET = 1 << 22   # basis values evaluated at once when decoding (32 MB)
+FIT_BUDGET = 1 << 26      # basis values of one least-squares fit when encoding (512 MB)
+
+
 def chebyshev_points(length):
     """The span's samples mapped to [-1, 1] (0 for a one-sample span)."""
     return np.linspace(-1.0, 1.0, length) if length > 1 else np.zeros(1)
@@ -70,6 +76,9 @@ def poly_forward(spans, degree, basis="chebyshev", first=1, step=1.0):
     spans = np.asarray(spans, dtype=float)
     length = spans.shape[-1]
     n = poly_degree(degree, length)
+    if length * (n + 1) > FIT_BUDGET:
+        raise MzcError(f"a degree-{n} fit of rows of {length} samples needs {8 * length * (n + 1) / 1e9:.1f} GB "
+                       f"(at most {8 * FIT_BUDGET / 1e9:.1f}): use a lower degree", field="degree")
     if basis == "chebyshev":
         vander = np.polynomial.chebyshev.chebvander(chebyshev_points(length), n)
         return np.linalg.lstsq(vander, spans.T, rcond=None)[0].T
@@ -80,21 +89,43 @@ def poly_forward(spans, degree, basis="chebyshev", first=1, step=1.0):
 
 
 def _power_fit(x, row, n):
-    """``polyfit`` of one row; rank warnings are the documented instability, not news."""
+    """``polyfit`` of one row; rank warnings are the documented instability, not news. A degree
+    whose powers of x overflow cannot be fitted at all: that is an error, not a row of NaN."""
     import warnings
 
-    with warnings.catch_warnings():
+    with warnings.catch_warnings(), np.errstate(all="ignore"):
         warnings.simplefilter("ignore", np.exceptions.RankWarning)
-        return np.polyfit(x, row, n)
+        if not np.isfinite(x.max() ** (2 * n)):
+            raise MzcError(f"the power basis cannot fit degree {n} on columns up to x = {x.max():g} (x^{2 * n} "
+                           "overflows; the thesis's basis is unstable past degree ~40): use --basis chebyshev or "
+                           "a lower degree", field="degree")
+        try:
+            fit = np.polyfit(x, row, n)
+        except np.linalg.LinAlgError:
+            fit = np.full(n + 1, np.nan)
+    if not np.isfinite(fit).all():
+        raise MzcError(f"the power basis fit of degree {n} failed (its Vandermonde matrix is singular in binary64): "
+                       "use --basis chebyshev or a lower degree", field="degree")
+    return fit
 
 
 def poly_inverse(coefficients, length, basis="chebyshev", first=1, step=1.0):
-    """Evaluate the polynomials of ``poly_forward`` at the span's samples."""
+    """Evaluate the polynomials of ``poly_forward`` at the span's samples, in pieces of at most
+    VANDER_BUDGET basis values, so memory stays bounded whatever degree and length a file declares."""
     coefficients = np.asarray(coefficients, dtype=float)
+    piece = max(1, VANDER_BUDGET // coefficients.shape[-1])
+    if length <= piece:
+        return poly_values(coefficients, 0, length, length, basis, first, step)
+    return np.concatenate([poly_values(coefficients, start, min(start + piece, length), length, basis, first, step)
+                           for start in range(0, length, piece)], axis=-1)
+
+
+def poly_values(coefficients, start, stop, length, basis, first, step):
+    """The polynomials at samples start..stop-1 of a span of ``length``."""
     if basis == "chebyshev":
-        vander = np.polynomial.chebyshev.chebvander(chebyshev_points(length), coefficients.shape[-1] - 1)
+        vander = np.polynomial.chebyshev.chebvander(chebyshev_points(length)[start:stop], coefficients.shape[-1] - 1)
         return coefficients @ vander.T
-    x = power_points(first, length, step)
+    x = power_points(first, length, step)[..., start:stop]
     powers = np.arange(coefficients.shape[-1])[::-1]
     with np.errstate(over="ignore", invalid="ignore"):
         return np.einsum("...mn,...n->...m", x[..., None] ** powers, coefficients)
