@@ -278,7 +278,7 @@ class Replaced:
             if info is not None:
                 keep_mode_and_owner(self.fd, info)
             os.fsync(self.fd)
-        except OSError:
+        except BaseException:   # KeyboardInterrupt too: the named temporary must go
             self.close()
             raise
 
