@@ -8,13 +8,13 @@ output name gets:
 
 - A name that is not a regular file (a device such as /dev/null or /dev/full, a
   terminal, a FIFO) or that names an open descriptor (/dev/stdout, /dev/fd/N, which lead
-  into /proc) is written through, opened for writing as ``>`` would; it is never replaced
-  by a regular file.
+  into /proc) is written through: opened for writing (appending, so ``-o /dev/stdout >>
+  log`` adds to the log) and never replaced by a regular file.
 - A symlink is followed (os.path.realpath) and the file it points to is replaced; the
   link stays a link. A dangling link makes the file it names, when that file's directory
   exists.
-- An existing regular file is replaced by a new file with its mode (and owner, when we
-  are root). A file we may not write is refused, as ``>`` would refuse it.
+- An existing regular file is replaced by a new file with its mode (and owner and group,
+  where we may set them). A file we may not write is refused, as ``>`` would refuse it.
 - A file with several hard links, or one in a directory we may not write, is written in
   place, so every link sees the new content: space for the data is reserved first
   (posix_fallocate), so a full disk leaves the file untouched, then the data is written
@@ -108,9 +108,9 @@ def destination(path):
     if name.endswith(os.sep) or (os.altsep and name.endswith(os.altsep)):
         raise MzcError("is a directory name", source=name)
     info = stat_or_none(name, name)
-    target = os.path.realpath(name)
-    if info is not None and (not stat.S_ISREG(info.st_mode) or target.startswith("/proc/")):
+    if info is not None and (not stat.S_ISREG(info.st_mode) or names_a_descriptor(name)):
         return "through", name, info
+    target = os.path.realpath(name)
     directory = os.path.dirname(target)
     if not os.path.isdir(directory):
         raise MzcError("directory does not exist", source=name)
@@ -123,6 +123,20 @@ def destination(path):
     return "replace", target, info
 
 
+def names_a_descriptor(name):
+    """True when ``name``, or a symlink on the way to its file, lies in /proc (/dev/stdout,
+    /dev/fd/N): it is an open descriptor of some process, to be written through."""
+    path = os.path.abspath(name)
+    for _ in range(40):   # the kernel's limit on symlinks followed
+        folder = os.path.realpath(os.path.dirname(path))
+        if folder == "/proc" or folder.startswith("/proc/"):
+            return True
+        if not os.path.islink(path):
+            return False
+        path = os.path.join(os.path.dirname(path), os.readlink(path))
+    return False
+
+
 def check_not_input(output, *inputs):
     """Refuse, before any work, an output that cannot be written or that is one of the
     command's inputs; an input ``-``/None is stdin, compared when stdin is a regular file."""
@@ -133,15 +147,24 @@ def check_not_input(output, *inputs):
         return
     for path in inputs:
         if is_stdio(path):
-            if sys.stdin is not None and same_file(os.fstat(sys.stdin.fileno()), info):
+            if sys.stdin is not None and same_file(stdin_stat(), info):
                 raise MzcError("output would overwrite the input read from stdin", source=output)
         elif os.path.exists(path) and same_file(os.stat(path), info):
             raise MzcError("output would overwrite an input file", source=output)
 
 
+def stdin_stat():
+    """os.fstat of file descriptor 0, None when it is closed."""
+    try:
+        return os.fstat(0)
+    except OSError:
+        return None
+
+
 def same_file(first, second):
-    """True when two os.stat results are one regular file."""
-    return stat.S_ISREG(first.st_mode) and (first.st_dev, first.st_ino) == (second.st_dev, second.st_ino)
+    """True when two os.stat results (``first`` may be None) are one regular file."""
+    return (first is not None and stat.S_ISREG(first.st_mode)
+            and (first.st_dev, first.st_ino) == (second.st_dev, second.st_ino))
 
 
 def check_distinct(outputs):
@@ -218,7 +241,7 @@ class Through:
 
     def __init__(self, path, target, info, data):
         self.path, self.data = path, data
-        self.fd = os.open(target, os.O_WRONLY | os.O_TRUNC | os.O_CLOEXEC)
+        self.fd = os.open(target, os.O_WRONLY | os.O_APPEND | os.O_CLOEXEC)
 
     def publish(self):
         """Write the data to the open file."""
@@ -271,8 +294,8 @@ class Replaced:
     ORDER = 3
 
     def __init__(self, path, target, info, data):
-        self.path, self.target, self.temp = path, target, None
-        self.fd = new_file(target, self)
+        self.path, self.target = path, target
+        self.fd, self.temp = new_file(os.path.dirname(target))
         try:
             write_all(self.fd, data)
             if info is not None:
@@ -305,21 +328,20 @@ class Replaced:
             self.temp = None
 
 
-def new_file(target, output):
-    """An open file descriptor for a new file in ``target``'s directory with the umask's mode:
-    unnamed (O_TMPFILE) where the system can, else a named hidden temporary set as ``output.temp``."""
-    directory = os.path.dirname(target)
+def new_file(directory):
+    """(descriptor, name) of a new file in ``directory`` with the umask's mode: unnamed (name
+    None, O_TMPFILE) where the system can, else a named hidden temporary, removed by signals."""
     mode = 0o666
     if hasattr(os, "O_TMPFILE"):
         try:
-            return os.open(directory, os.O_TMPFILE | os.O_WRONLY | os.O_CLOEXEC, mode)
+            return os.open(directory, os.O_TMPFILE | os.O_WRONLY | os.O_CLOEXEC, mode), None
         except OSError as error:
             if error.errno not in NO_TMPFILE:
                 raise
-    fd, output.temp = tempfile.mkstemp(prefix=HIDDEN_PREFIX, dir=directory)
-    remember(output.temp)
+    fd, name = tempfile.mkstemp(prefix=HIDDEN_PREFIX, dir=directory)
+    remember(name)
     os.fchmod(fd, mode & ~current_umask())   # mkstemp makes it 0600; a new file should follow the umask
-    return fd
+    return fd, name
 
 
 def hidden_link(fd, directory):
@@ -344,14 +366,13 @@ def hidden_link(fd, directory):
 
 
 def keep_mode_and_owner(fd, info):
-    """Give the new file the replaced file's mode, and its owner when we may (root)."""
+    """Give the new file the replaced file's owner and group where we may (root may set both,
+    others their own groups), then its mode (fchown clears the set-user-ID bits)."""
+    try:
+        os.fchown(fd, info.st_uid, info.st_gid)
+    except OSError:
+        pass
     os.fchmod(fd, info.st_mode & 0o7777)
-    if hasattr(os, "geteuid") and os.geteuid() == 0:
-        try:
-            os.fchown(fd, info.st_uid, info.st_gid)
-            os.fchmod(fd, info.st_mode & 0o7777)   # fchown clears set-user-ID and set-group-ID bits
-        except OSError:
-            pass
 
 
 def write_all(fd, data, offset=None):

@@ -66,6 +66,15 @@ def test_a_fifo_is_written_through(mzc, grid, encoded, tmp_path):
     assert received == [encoded] and stat.S_ISFIFO(os.lstat(fifo).st_mode)
 
 
+def test_dev_stdout_is_written_through_and_appends(grid, encoded, tmp_path):
+    """-o /dev/stdout writes the descriptor's file (a pipe, or a log opened with >>), never replaces it."""
+    assert shell(f'"$PY" -m mzc encode --dct -q 5 -o /dev/stdout {grid}').stdout == encoded
+    log = tmp_path / "log"
+    log.write_bytes(b"head\n")
+    assert shell(f'"$PY" -m mzc encode --dct -q 5 -o /dev/stdout {grid} >> {log}').returncode == 0
+    assert log.read_bytes() == b"head\n" + encoded
+
+
 def test_a_symlink_stays_and_its_target_is_updated(mzc, grid, encoded, tmp_path):
     """-o LINK replaces the file the link points to; the link stays a link to it."""
     target, link = tmp_path / "target.mzd", tmp_path / "link.mzd"
