@@ -266,11 +266,12 @@ class InPlace:
     def __init__(self, path, target, info, data):
         self.path, self.data = path, data
         self.fd = os.open(target, os.O_WRONLY | os.O_CLOEXEC)
+        size = os.fstat(self.fd).st_size
         if data:
             try:
                 os.posix_fallocate(self.fd, 0, len(data))
             except OSError:
-                os.ftruncate(self.fd, info.st_size)
+                os.ftruncate(self.fd, size)   # a failed reservation may have made the file longer
                 os.close(self.fd)
                 raise
 
