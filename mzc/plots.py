@@ -4,9 +4,11 @@ matplotlib runs headless (Agg) and is imported only here, so commands that do no
 stay fast.
 """
 
+import io
+
 import numpy as np
 
-from mzc.streams import atomic_path
+from mzc.streams import write_output
 
 SCATTER_POINTS = 30_000   # residual panels subsample to this many points: fast, same picture
 DPI = 110
@@ -14,7 +16,12 @@ COLOUR_PERCENTILE = 99.5
 
 
 def error_plot(path, error, predicted, xs, ys, stats, units=None):
-    """Write the three quality panels of B - A to ``path`` (PNG) atomically.
+    """Write the three quality panels of B - A (``error_png``) to ``path`` whole or not at all."""
+    write_output(path, error_png(error, predicted, xs, ys, stats, units))
+
+
+def error_png(error, predicted, xs, ys, stats, units=None):
+    """The bytes of a PNG of the three quality panels of B - A.
 
     ``error`` and ``predicted`` are (rows, cols) grids (NaN = invalid) of B - A and of B;
     ``xs``/``ys`` are the column/row coordinates in model units; ``stats`` holds the
@@ -22,14 +29,15 @@ def error_plot(path, error, predicted, xs, ys, stats, units=None):
     """
     figure = error_figure(error, predicted, xs, ys, stats, units)
     try:
-        with atomic_path(path) as temp:
-            figure.savefig(temp, format="png", dpi=DPI)
+        buffer = io.BytesIO()
+        figure.savefig(buffer, format="png", dpi=DPI)
+        return buffer.getvalue()
     finally:
         headless_pyplot().close(figure)
 
 
 def error_figure(error, predicted, xs, ys, stats, units=None):
-    """The matplotlib figure behind ``error_plot``: three axes plus the error map's colour bar."""
+    """The matplotlib figure behind ``error_png``: three axes plus the error map's colour bar."""
     pyplot = headless_pyplot()
     error, predicted = np.asarray(error, dtype=float), np.asarray(predicted, dtype=float)
     unit = f" ({units})" if units else ""

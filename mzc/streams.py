@@ -1,19 +1,54 @@
-"""Input from a file or stdin, and output that is written whole or not at all.
+"""Input from a file or stdin, and output that is written whole or not at all and never
+destroys what it names.
 
 Every command reads ``-``/no argument as stdin and writes ``-o FILE`` or stdout. Output
-is produced completely in memory or in a temporary file and only then published: a
-failing command leaves no partial file, keeps an existing file untouched, and writes
-nothing to stdout.
+is produced completely in memory and only then published: a failing command leaves no
+partial file, keeps an existing file untouched, and writes nothing to stdout. What an
+output name gets:
+
+- A name that is not a regular file (a device such as /dev/null or /dev/full, a
+  terminal, a FIFO) or that names an open descriptor (/dev/stdout, /dev/fd/N, which lead
+  into /proc) is written through: opened for writing (appending, so ``-o /dev/stdout >>
+  log`` adds to the log) and never replaced by a regular file.
+- A symlink is followed (os.path.realpath) and the file it points to is replaced; the
+  link stays a link. A dangling link makes the file it names, when that file's directory
+  exists.
+- An existing regular file is replaced by a new file with its mode (and owner and group,
+  where we may set them). A file we may not write is refused, as ``>`` would refuse it.
+- A file with several hard links, or one in a directory we may not write, is written in
+  place, so every link sees the new content: space for the data is reserved first
+  (posix_fallocate), so a full disk leaves the file untouched, then the data is written
+  and the file cut to its length. A crash during that write leaves mixed content.
+- Any other file is written and synced as an unnamed O_TMPFILE in the target's directory
+  (Linux), then linked to a hidden ``.mzc-*`` name there and renamed over the target; a
+  SIGTERM, SIGHUP, SIGINT or SIGPIPE in that short step removes the hidden name, and a
+  SIGKILL can only hit that step. Where O_TMPFILE is refused, the data goes to a named
+  hidden temporary (mkstemp) with the same signal cleanup; SIGKILL, which cannot be
+  caught, can then leave a ``.mzc-*`` file behind.
+- A command with several outputs stages them all (written and synced beside their
+  targets) before it publishes any (write_outputs); check_not_input and check_distinct
+  refuse bad names, outputs that are inputs (or stdin, when stdin is read) and two outputs
+  that are one file before any work is done.
 """
 
-import contextlib
+import errno
 import os
+import secrets
+import signal
+import stat
 import sys
 import tempfile
 
 from mzc.errors import MzcError
 
 STDIN_NAME = "<stdin>"
+STDOUT_NAME = "<stdout>"
+HIDDEN_PREFIX = ".mzc-"
+NO_TMPFILE = (errno.EOPNOTSUPP, errno.EISDIR, errno.EINVAL)
+CLEANUP_SIGNALS = tuple(getattr(signal, name) for name in ("SIGTERM", "SIGHUP", "SIGINT", "SIGPIPE")
+                        if hasattr(signal, name))
+pending: set[str] = set()   # named temporaries a signal must remove
+saved_handlers: dict = {}   # signal number -> the handler it had
 
 
 def is_stdio(path):
@@ -29,6 +64,8 @@ def display_name(path):
 def read_input(path):
     """Return the bytes of ``path``, or of stdin when ``path`` is ``-`` or None."""
     if is_stdio(path):
+        if sys.stdin is None:
+            raise MzcError("stdin is closed", source=STDIN_NAME)
         return sys.stdin.buffer.read()
     try:
         with open(path, "rb") as handle:
@@ -41,37 +78,344 @@ def read_input(path):
         raise MzcError("permission denied", source=path) from None
 
 
+def failure(error, path):
+    """An OSError met while writing ``path`` as a one-line MzcError (``no space left on device``)."""
+    message = error.strerror or type(error).__name__
+    return MzcError(message[:1].lower() + message[1:], source=path)
+
+
+def stat_or_none(path, source):
+    """os.stat of ``path`` (following links), None when there is no such file."""
+    try:
+        return os.stat(path)
+    except FileNotFoundError:
+        return None
+    except OSError as error:
+        raise failure(error, source) from None
+
+
+def destination(path):
+    """How ``path`` is written, as (how, target, info): how is ``through``, ``in place`` or
+    ``replace``, target the file written, info its os.stat (None when it is new).
+
+    Refuses, as a one-line MzcError, a name that cannot be written.
+    """
+    name = os.fspath(path)
+    if name == "":
+        raise MzcError("empty file name", source="''")
+    if os.path.isdir(name):
+        raise MzcError("is a directory", source=name)
+    if name.endswith(os.sep) or (os.altsep and name.endswith(os.altsep)):
+        raise MzcError("is a directory name", source=name)
+    info = stat_or_none(name, name)
+    if info is not None and (not stat.S_ISREG(info.st_mode) or names_a_descriptor(name)):
+        return "through", name, info
+    target = os.path.realpath(name)
+    directory = os.path.dirname(target)
+    if not os.path.isdir(directory):
+        raise MzcError("directory does not exist", source=name)
+    if info is not None and not os.access(target, os.W_OK):
+        raise MzcError("permission denied (the file is read-only)", source=name)
+    if info is not None and (info.st_nlink > 1 or not os.access(directory, os.W_OK | os.X_OK)):
+        return "in place", target, info
+    if not os.access(directory, os.W_OK | os.X_OK):
+        raise MzcError("permission denied (cannot create a file in its directory)", source=name)
+    return "replace", target, info
+
+
+def names_a_descriptor(name):
+    """True when ``name``, or a symlink on the way to its file, lies in /proc (/dev/stdout,
+    /dev/fd/N): it is an open descriptor of some process, to be written through."""
+    path = os.path.abspath(name)
+    for _ in range(40):   # the kernel's limit on symlinks followed
+        folder = os.path.realpath(os.path.dirname(path))
+        if folder == "/proc" or folder.startswith("/proc/"):
+            return True
+        if not os.path.islink(path):
+            return False
+        path = os.path.join(os.path.dirname(path), os.readlink(path))
+    return False
+
+
 def check_not_input(output, *inputs):
-    """Refuse to write ``output`` over one of the command's own input files."""
-    if is_stdio(output) or not os.path.exists(output):
+    """Refuse, before any work, an output that cannot be written or that is one of the
+    command's inputs; an input ``-``/None is stdin, compared when stdin is a regular file."""
+    if is_stdio(output):
+        return
+    _, _, info = destination(output)
+    if info is None or not stat.S_ISREG(info.st_mode):
         return
     for path in inputs:
-        if not is_stdio(path) and os.path.exists(path) and os.path.samefile(path, output):
+        if is_stdio(path):
+            if sys.stdin is not None and same_file(stdin_stat(), info):
+                raise MzcError("output would overwrite the input read from stdin", source=output)
+        elif os.path.exists(path) and same_file(os.stat(path), info):
             raise MzcError("output would overwrite an input file", source=output)
 
 
-@contextlib.contextmanager
-def atomic_path(output):
-    """Yield a temporary path beside ``output``; rename it to ``output`` on success.
+def stdin_stat():
+    """os.fstat of file descriptor 0, None when it is closed."""
+    try:
+        return os.fstat(0)
+    except OSError:
+        return None
 
-    Used where a library (meshio, matplotlib) wants a file name to write to.
-    """
-    directory = os.path.dirname(os.path.abspath(output))
-    suffix = os.path.splitext(output)[1]
+
+def same_file(first, second):
+    """True when two os.stat results (``first`` may be None) are one regular file."""
+    return (first is not None and stat.S_ISREG(first.st_mode)
+            and (first.st_dev, first.st_ino) == (second.st_dev, second.st_ino))
+
+
+def check_distinct(outputs):
+    """Refuse two outputs that are one file; ``outputs`` maps each option's name to its path."""
+    seen = {}
+    for option, path in outputs.items():
+        if not path or is_stdio(path):
+            continue
+        target = os.path.realpath(path)
+        if target in seen:
+            raise MzcError(f"the {seen[target]} and {option} outputs are the same file", source=path)
+        seen[target] = option
+
+
+def write_output(path, data):
+    """Write ``data`` (bytes) to ``path`` whole or not at all, or to stdout when ``path`` is ``-``/None."""
+    write_outputs((path, data))
+
+
+def write_outputs(*outputs):
+    """Write each (path, data) of ``outputs``: every one is checked and staged before any is
+    published, so a failure writes none of them (short of one while publishing the last)."""
+    staged = []
     try:
-        handle, temp = tempfile.mkstemp(prefix=".mzc-", suffix=suffix, dir=directory)
-    except FileNotFoundError:
-        raise MzcError("directory does not exist", source=output) from None
-    except PermissionError:
-        raise MzcError("permission denied", source=output) from None
-    os.close(handle)
-    os.chmod(temp, 0o666 & ~current_umask())  # mkstemp makes it 0600; a new file should follow the umask
-    try:
-        yield temp
-        os.replace(temp, output)
+        for path, data in outputs:
+            staged.append(stage(path, data))
+        for output in sorted(staged, key=lambda each: each.ORDER):
+            output.publish()
     finally:
-        if os.path.exists(temp):
-            os.unlink(temp)
+        for output in staged:
+            output.close()
+
+
+def stage(path, data):
+    """The output object that will write ``data`` to ``path``, prepared as far as it can be."""
+    if is_stdio(path):
+        return Stdout(data)
+    how, target, info = destination(path)
+    kind = {"through": Through, "in place": InPlace, "replace": Replaced}[how]
+    try:
+        return kind(path, target, info, data)
+    except OSError as error:
+        raise failure(error, path) from None
+
+
+class Stdout:
+    """Data for stdout, written when published."""
+
+    ORDER = 2
+
+    def __init__(self, data):
+        if sys.stdout is None:
+            raise MzcError("stdout is closed", source=STDOUT_NAME)
+        self.data = data
+
+    def publish(self):
+        """Write the data to stdout; a reader that went away stays a BrokenPipeError."""
+        try:
+            sys.stdout.buffer.write(self.data)
+            sys.stdout.buffer.flush()
+        except BrokenPipeError:
+            raise
+        except OSError as error:
+            raise failure(error, STDOUT_NAME) from None
+
+    def close(self):
+        """Nothing to release."""
+
+
+class Through:
+    """A device, FIFO or descriptor name, opened now and written through when published."""
+
+    ORDER = 0
+
+    def __init__(self, path, target, info, data):
+        self.path, self.data = path, data
+        self.fd = os.open(target, os.O_WRONLY | os.O_APPEND | os.O_CLOEXEC)
+
+    def publish(self):
+        """Write the data to the open file."""
+        try:
+            write_all(self.fd, self.data)
+        except BrokenPipeError:
+            raise
+        except OSError as error:
+            raise failure(error, self.path) from None
+
+    def close(self):
+        """Close the file."""
+        os.close(self.fd)
+
+
+class InPlace:
+    """An existing file written in its own inode (hard links, a read-only directory): space is
+    reserved now, the data written when published."""
+
+    ORDER = 1
+
+    def __init__(self, path, target, info, data):
+        self.path, self.data = path, data
+        self.fd = os.open(target, os.O_WRONLY | os.O_CLOEXEC)
+        size = os.fstat(self.fd).st_size
+        if data:
+            try:
+                os.posix_fallocate(self.fd, 0, len(data))
+            except OSError:
+                os.ftruncate(self.fd, size)   # a failed reservation may have made the file longer
+                os.close(self.fd)
+                raise
+
+    def publish(self):
+        """Overwrite the file with the data, cut it to the data's length and sync it."""
+        try:
+            write_all(self.fd, self.data, offset=0)
+            os.ftruncate(self.fd, len(self.data))
+            os.fsync(self.fd)
+        except OSError as error:
+            raise failure(error, self.path) from None
+
+    def close(self):
+        """Close the file."""
+        os.close(self.fd)
+
+
+class Replaced:
+    """A new file written and synced beside the target now, renamed over it when published."""
+
+    ORDER = 3
+
+    def __init__(self, path, target, info, data):
+        self.path, self.target = path, target
+        self.fd, self.temp = new_file(os.path.dirname(target))
+        try:
+            write_all(self.fd, data)
+            if info is not None:
+                keep_mode_and_owner(self.fd, info)
+            os.fsync(self.fd)
+        except BaseException:   # KeyboardInterrupt too: the named temporary must go
+            self.close()
+            raise
+
+    def publish(self):
+        """Give the file a hidden name beside the target (unless it has one) and rename it over the target."""
+        try:
+            if self.temp is None:
+                self.temp = hidden_link(self.fd, os.path.dirname(self.target))
+            os.replace(self.temp, self.target)
+            forget(self.temp)
+            self.temp = None
+        except OSError as error:
+            raise failure(error, self.path) from None
+
+    def close(self):
+        """Close the file and remove its hidden name if it was not published."""
+        os.close(self.fd)
+        if self.temp is not None:
+            try:
+                os.unlink(self.temp)
+            except FileNotFoundError:
+                pass
+            forget(self.temp)
+            self.temp = None
+
+
+def new_file(directory):
+    """(descriptor, name) of a new file in ``directory`` with the umask's mode: unnamed (name
+    None, O_TMPFILE) where the system can, else a named hidden temporary, removed by signals."""
+    mode = 0o666
+    if hasattr(os, "O_TMPFILE"):
+        try:
+            return os.open(directory, os.O_TMPFILE | os.O_WRONLY | os.O_CLOEXEC, mode), None
+        except OSError as error:
+            if error.errno not in NO_TMPFILE:
+                raise
+    fd, name = tempfile.mkstemp(prefix=HIDDEN_PREFIX, dir=directory)
+    remember(name)
+    os.fchmod(fd, mode & ~current_umask())   # mkstemp makes it 0600; a new file should follow the umask
+    return fd, name
+
+
+def hidden_link(fd, directory):
+    """Link the unnamed file ``fd`` to a fresh hidden name in ``directory`` (remembered for signal
+    cleanup) and return that name; /proc/self/fd lets an unprivileged process link it."""
+    folder = os.open(directory, os.O_PATH | os.O_DIRECTORY | os.O_CLOEXEC)   # a dir_fd makes os.link follow
+    try:
+        while True:
+            base = HIDDEN_PREFIX + secrets.token_hex(6)
+            name = os.path.join(directory, base)
+            remember(name)
+            try:
+                os.link(f"/proc/self/fd/{fd}", base, dst_dir_fd=folder)
+                return name
+            except FileExistsError:
+                forget(name)
+            except OSError:
+                forget(name)
+                raise
+    finally:
+        os.close(folder)
+
+
+def keep_mode_and_owner(fd, info):
+    """Give the new file the replaced file's owner and group where we may (root may set both,
+    others their own groups), then its mode (fchown clears the set-user-ID bits)."""
+    try:
+        os.fchown(fd, info.st_uid, info.st_gid)
+    except OSError:
+        pass
+    os.fchmod(fd, info.st_mode & 0o7777)
+
+
+def write_all(fd, data, offset=None):
+    """Write all of ``data`` to ``fd`` (at ``offset`` onwards when given)."""
+    view, done = memoryview(data), 0
+    while done < len(view):
+        if offset is None:
+            done += os.write(fd, view[done:])
+        else:
+            done += os.pwrite(fd, view[done:], offset + done)
+
+
+def remember(name):
+    """Add ``name`` to the temporaries a signal removes, installing the handlers for the first."""
+    if not pending:
+        for number in CLEANUP_SIGNALS:
+            try:
+                if signal.getsignal(number) == signal.SIG_DFL:
+                    saved_handlers[number] = signal.signal(number, remove_and_die)
+            except ValueError:   # not the main thread: signals cannot be handled here
+                break
+    pending.add(name)
+
+
+def forget(name):
+    """Remove ``name`` from the temporaries a signal removes, restoring the handlers after the last."""
+    pending.discard(name)
+    if not pending:
+        for number, handler in saved_handlers.items():
+            signal.signal(number, handler)
+        saved_handlers.clear()
+
+
+def remove_and_die(number, frame):
+    """Signal handler: remove the pending temporaries, then die of the signal as we would have."""
+    for name in list(pending):
+        try:
+            os.unlink(name)
+        except OSError:
+            pass
+    signal.signal(number, signal.SIG_DFL)
+    os.kill(os.getpid(), number)
 
 
 def current_umask():
@@ -79,14 +423,3 @@ def current_umask():
     mask = os.umask(0)
     os.umask(mask)
     return mask
-
-
-def write_output(path, data):
-    """Write ``data`` (bytes) to ``path`` atomically, or to stdout when ``path`` is ``-``/None."""
-    if is_stdio(path):
-        sys.stdout.buffer.write(data)
-        sys.stdout.buffer.flush()
-        return
-    with atomic_path(path) as temp:
-        with open(temp, "wb") as handle:
-            handle.write(data)

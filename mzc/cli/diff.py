@@ -47,8 +47,9 @@ def command(a, b, rmse, max_, mean, r2, percentiles, count, surface, heightfield
     from mzc.api import read_surface
     from mzc.errors import MzcError, about
     from mzc.measure import STATISTICS, compare_surfaces
-    from mzc.streams import check_not_input
+    from mzc.streams import check_distinct, check_not_input
 
+    check_distinct({"--error-grid": error_grid, "--plot": plot})
     for output in (error_grid, plot):
         if output:
             check_not_input(output, a, b)
@@ -58,12 +59,7 @@ def command(a, b, rmse, max_, mean, r2, percentiles, count, surface, heightfield
     chosen = [name for name, on in zip(STATISTICS, (rmse, max_, mean, r2, percentiles, count)) if on]
     with about(f"{a} vs {b}", f"comparing them ({samples} samples per surface)" if surface else "comparing them"):
         result = compare_surfaces(first, second, chosen, surface, heightfield, samples, seed, d1, d2, names=(a, b))
-    if error_grid:
-        from mzc.cli.options import write_grid
-
-        write_grid(result.errors, error_grid)
-    if plot:
-        write_plot(plot, result.reference, result.errors, result.stats)
+    write_results(result, error_grid, plot)
     click.echo(json.dumps(result.report, indent=2) if as_json else format_report(result.report))
 
 
@@ -73,9 +69,22 @@ def format_report(report):
                      for name, value in report.items())
 
 
-def write_plot(path, reference, errors, stats):
-    """The three quality panels of the thesis (§6.4) for this comparison."""
-    from mzc.plots import error_plot
+def write_results(result, error_grid, plot):
+    """Write the error grid and the quality plots that were asked for: both are made in memory
+    and staged before either is published, so a failing one leaves neither."""
+    from mzc.formats import zgrid
+    from mzc.streams import write_outputs
 
-    error_plot(path, errors.z, reference.z + errors.z, reference.xs(), reference.ys(), stats,
-               units=reference.units)
+    outputs = []
+    if error_grid:
+        outputs.append((error_grid, zgrid.write(result.errors)))
+    if plot:
+        outputs.append((plot, plot_png(result.reference, result.errors, result.stats)))
+    write_outputs(*outputs)
+
+
+def plot_png(reference, errors, stats):
+    """The PNG of the three quality panels of the thesis (§6.4) for this comparison."""
+    from mzc.plots import error_png
+
+    return error_png(errors.z, reference.z + errors.z, reference.xs(), reference.ys(), stats, units=reference.units)

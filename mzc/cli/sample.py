@@ -17,5 +17,7 @@ across and tube an open, fluted tube 200 mm long (mm), surfaces that go all the 
 def command(name, output, file_format):
     from mzc.meshes import write_mesh
     from mzc.samples import sample_mesh
+    from mzc.streams import check_not_input
 
+    check_not_input(output)
     write_mesh(output, sample_mesh(name), file_format)

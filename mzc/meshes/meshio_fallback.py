@@ -1,7 +1,8 @@
 """VTK, STL and OFF through meshio, and the PLY dialects our own reader refuses.
 
-meshio wants file names, so bytes go through a temporary file here; it is imported only
-when one of these formats is read or written (it takes 0.2 s). Its warnings, log
+meshio wants file names, so bytes go through an in-memory file (a memfd on Linux, which
+not even SIGKILL leaves on disk; a temporary file elsewhere); meshio is imported only when
+one of these formats is read or written (it takes 0.2 s). Its warnings, log
 messages and prints are silenced (stdout carries data only), and any failure becomes an
 MzcError naming the file.
 """
@@ -67,7 +68,16 @@ def quiet() -> Iterator[None]:
 
 @contextlib.contextmanager
 def temporary_name(kind: str) -> Iterator[str]:
-    """A file name ``mesh.KIND`` in a fresh temporary directory, removed afterwards."""
+    """A file name for meshio: an in-memory file (``/proc/self/fd/N`` of a memfd) where Linux
+    has one, so nothing is left on disk even by SIGKILL, else ``mesh.KIND`` in a fresh
+    temporary directory; removed afterwards."""
+    if hasattr(os, "memfd_create") and os.path.isdir("/proc/self/fd"):
+        fd = os.memfd_create("mzc-mesh", os.MFD_CLOEXEC)
+        try:
+            yield f"/proc/self/fd/{fd}"
+        finally:
+            os.close(fd)
+        return
     with tempfile.TemporaryDirectory(prefix="mzc-") as directory:
         yield os.path.join(directory, f"mesh.{kind}")
 
