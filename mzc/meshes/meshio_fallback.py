@@ -1,4 +1,4 @@
-"""VTK, STL and OFF through meshio, and the PLY dialects our own reader refuses.
+"""VTK and OFF through meshio, and the writers of PLY and STL.
 
 meshio wants file names, so bytes go through a temporary file here; it is imported only
 when one of these formats is read or written (it takes 0.2 s). Its warnings, log
@@ -11,7 +11,6 @@ import io
 import logging
 import os
 import re
-import struct
 import tempfile
 import warnings
 from collections.abc import Callable, Iterator
@@ -40,17 +39,8 @@ class MeshioFormat:
         return write_as(self.NAME, mesh)
 
 
-def is_binary_stl(data: bytes) -> bool:
-    """True when the size of ``data`` matches the triangle count of a binary STL."""
-    if len(data) < 84:
-        return False
-    count = struct.unpack("<I", data[80:84])[0]
-    return len(data) == 84 + 50 * count
-
-
 VTK = MeshioFormat("vtk", (".vtk",), lambda data: data.startswith(b"# vtk DataFile"))
 OFF = MeshioFormat("off", (".off",), lambda data: bool(re.match(rb"\s*[NCST4]*OFF\b", data[:4096])))
-STL = MeshioFormat("stl", (".stl",), lambda data: data[:4096].lstrip().startswith(b"solid") or is_binary_stl(data))
 
 
 @contextlib.contextmanager
