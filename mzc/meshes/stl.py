@@ -72,7 +72,7 @@ def read_ascii(text: str, source: str) -> Mesh:
                        line=text.count("\n") + 1)
     facets_before = np.searchsorted(end_facet, vertex)    # the facet each vertex belongs to
     complete = len(vertex) == 3 * len(end_facet) and (facets_before == np.arange(len(vertex)) // 3).all()
-    if not complete or vertex[-1:] + 3 >= len(words):
+    if not complete or (len(vertex) and vertex[-1] + 3 >= len(words)):
         raise MzcError("ascii STL facets must each hold 3 vertices of 3 coordinates", source=source)
     tokens = words[vertex[:, None] + np.arange(1, 4)].ravel().tolist()
     try:
