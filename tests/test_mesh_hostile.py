@@ -422,3 +422,17 @@ def test_the_command_line_refuses_a_hostile_file_in_one_line(mzc, tmp_path, name
     result = mzc("slice", path)
     assert_one_line_error(result, fragment)
     assert b"internal error" not in result.stderr
+
+
+def test_meshio_prints_nothing_on_stderr(capfd):
+    """A VTK file whose cells meshio does not know makes meshio print 'Warning: ...' on its
+    rich console; mzc keeps stderr for its own one-line messages."""
+    from mzc.meshes import Mesh, mesh_to_bytes
+
+    data = mesh_to_bytes(Mesh(POINTS, TRIANGLES), "vtk")
+    data = data.replace(b"CELL_TYPES 2\n\0\0\0\x05", b"CELL_TYPES 2\n\0\0\0\x04")
+    try:
+        read(data, "odd.vtk")
+    except MzcError:
+        pass
+    assert capfd.readouterr().err == ""

@@ -2,8 +2,8 @@
 
 meshio wants file names, so bytes go through a temporary file here; it is imported only
 when one of these formats is read or written (it takes 0.2 s). Its warnings, log
-messages and prints are silenced (stdout carries data only), and any failure becomes an
-MzcError naming the file.
+messages and prints are silenced (stdout carries data only, stderr mzc's own messages),
+and any failure becomes an MzcError naming the file.
 """
 
 import contextlib
@@ -45,10 +45,12 @@ OFF = MeshioFormat("off", (".off",), lambda data: bool(re.match(rb"\s*[NCST4]*OF
 
 @contextlib.contextmanager
 def quiet() -> Iterator[None]:
-    """Silence meshio's warnings, log messages and prints: stdout carries data only."""
+    """Silence meshio's warnings, log messages and prints (to stdout, which carries data only,
+    and to stderr, where its rich console writes 'Warning: ...')."""
     logging.disable(logging.CRITICAL)
     try:
-        with warnings.catch_warnings(), contextlib.redirect_stdout(io.StringIO()):
+        with warnings.catch_warnings(), contextlib.redirect_stdout(io.StringIO()), \
+                contextlib.redirect_stderr(io.StringIO()):
             warnings.simplefilter("ignore")
             yield
     finally:
