@@ -172,12 +172,12 @@ def test_a_binary_stl_with_a_lying_triangle_count_is_refused(declared, triangles
                        f"binary STL declares {declared} triangles but holds {50 * triangles} bytes for {triangles}")
 
 
-@pytest.mark.parametrize("cut", [0.1, 0.5, 0.9])
-def test_a_shared_face_cut_inside_its_faces_is_truncated(cut):
-    """f18.ply cut at 10, 50 and 90 % names the face count it declares and the count it holds."""
+@pytest.mark.parametrize("cut,declared", [(0.1, "vertex declares 30204 vertices"),
+                                         (0.5, "face declares 59697 faces"), (0.9, "face declares 59697 faces")])
+def test_a_shared_face_cut_short_is_truncated(cut, declared):
+    """f18.ply cut at 10 % (in its vertices), 50 and 90 % (in its faces) names the element and its count."""
     data = face_path("f18.ply").read_bytes()
-    assert_refused(data[:int(len(data) * cut)], "f18.ply", "element face declares 59697 faces" if cut > 0.5 else
-                   "truncated: element")
+    assert_refused(data[:int(len(data) * cut)], "f18.ply", f"truncated: element {declared}, the file holds ")
 
 
 # --- counts and numbers -------------------------------------------------------------------
@@ -227,7 +227,7 @@ def test_a_number_that_is_not_ascii_is_refused_with_its_line(fmt, line, digit):
 @pytest.mark.parametrize("digit", ["²", "٣", "+-1", "1.5", "nan", "99999999999999999999"])
 def test_an_obj_face_index_that_is_not_an_ascii_integer_is_refused(digit):
     """OBJ face corners take ASCII integers only, named with their line."""
-    assert assert_refused(obj().replace(b"f 1 3 4", f"f 1 3 {digit}".encode()), "m.obj").line in (6, None)
+    assert assert_refused(obj().replace(b"f 1 3 4", f"f 1 3 {digit}".encode()), "m.obj").line == 6
 
 
 @pytest.mark.parametrize("index", ["4", "-1", "nan", "inf", "2.5", "1e30", "-1e30", "²"])
@@ -265,8 +265,8 @@ HOSTILE = {
     "vertex 10**12 binary": ("m.ply", binary_ply(vertices=10**12), "declares 1000000000000 vertices, the file holds"),
     "vertex 10**12 ascii": ("m.ply", ascii_ply(vertices=10**12), "declares 1000000000000 vertices"),
     "face 10**12 binary": ("m.ply", binary_ply(faces=10**12), "declares 1000000000000 faces, the file holds 2"),
-    "vertex count ²": ("m.ply", ascii_ply(vertices="²"), "bad PLY header line"),
-    "vertex count ٤": ("m.ply", ascii_ply(vertices="٤"), "bad PLY header line"),
+    "vertex count ²": ("m.ply", ascii_ply(vertices="²"), "bad PLY header line 'element vertex ²'"),
+    "vertex count ٤": ("m.ply", ascii_ply(vertices="٤"), "bad PLY header line 'element vertex ٤'"),
     "vertex count -4": ("m.ply", ascii_ply(vertices=-4), "bad PLY header line"),
     "duplicate element": ("m.ply", ascii_ply(extra=("element vertex 4",)), "bad PLY header line"),
     "duplicate format": ("m.ply", ascii_ply(extra=("format ascii 1.0",)), "bad PLY header line"),
@@ -298,7 +298,7 @@ HOSTILE = {
     "list longer than declared": ("m.ply", ascii_ply().replace(b"3 0 1 2", b"3 0 1 2 3"), "values after"),
     "list shorter than declared": ("m.ply", ascii_ply().replace(b"3 0 1 2", b"4 0 1 2"), "ends inside property"),
     "index past the vertices": ("m.ply", ascii_ply().replace(b"3 0 1 2", b"3 0 1 4"), "only 4 vertices"),
-    "negative index": ("m.ply", ascii_ply().replace(b"3 0 1 2", b"3 0 1 -5"), "refers to vertex -4"),
+    "negative index": ("m.ply", ascii_ply().replace(b"3 0 1 2", b"3 0 1 -5"), "negative vertex index (-5)"),
     "OBJ index past the vertices": ("m.obj", obj().replace(b"f 1 3 4", b"f 1 3 5"), "does not exist"),
     "OBJ negative index before the first": ("m.obj", obj().replace(b"f 1 3 4", b"f 1 3 -5"), "does not exist"),
     "OBJ index 0": ("m.obj", obj().replace(b"f 1 3 4", b"f 1 3 0"), "does not exist"),

@@ -88,6 +88,8 @@ def checked(mesh: Mesh, source: str) -> Mesh:
         if bad.any():
             face = int(np.flatnonzero(bad.any(axis=1))[0])
             index = int(mesh.triangles[face][bad[face]][0])
+            if index < 0:
+                raise MzcError(f"triangle {face + 1} has a negative vertex index ({index})", source=source)
             raise MzcError(f"triangle {face + 1} refers to vertex {index + 1}, but there are only "
                            f"{len(mesh.points)} vertices", source=source)
     return mesh

@@ -91,7 +91,7 @@ def parse_ply_header(data, source):
     match = re.search(rb"\rend_header[ \t]*\r" if cr_only else rb"\nend_header[ \t]*\r?\n", data)
     if not magic or not match:
         raise MzcError("not a PLY file: missing 'ply' or 'end_header'", source=source, line=1)
-    header_lines = data[:match.start()].decode("ascii", "replace").splitlines()
+    header_lines = data[:match.start()].decode("utf-8", "replace").splitlines()
     elements, body_format = [], None
     for number, line in enumerate(header_lines, 1):
         words = line.split()
