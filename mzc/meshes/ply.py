@@ -152,9 +152,18 @@ def read_ply_ascii(elements, body, first_line, source):
 def ascii_element(element, records, source):
     """{property: values} of one ascii element: a column per scalar, Lists per list property.
 
-    Each record is walked to find where its lists end (a Python loop over the lines' word
+    An element of scalars only (vertices) is one table converted in a single call. One with
+    lists has each record walked to find where its lists end (a loop over the lines' word
     lists only); all the numbers are then converted in one call per property.
     """
+    numbers = [number for number, _ in records]
+    if not any(isinstance(kind, tuple) for _, kind in element.properties):
+        width = len(element.properties)
+        wrong = next((number for number, words in records if len(words) != width), None)
+        if wrong is not None:
+            raise MzcError(f"element {element.name}: expected {width} values on the line", source=source, line=wrong)
+        table = flat_numbers([words for _, words in records], numbers, source).reshape(-1, width)
+        return {name: table[:, i] for i, (name, _) in enumerate(element.properties)}
     tokens = {name: [] for name, _ in element.properties}
     counts = {name: [] for name, kind in element.properties if isinstance(kind, tuple)}
     for number, words in records:
@@ -177,7 +186,6 @@ def ascii_element(element, records, source):
         if position != len(words):
             raise MzcError(f"element {element.name}: {len(words) - position} values after the last property",
                            source=source, line=number)
-    numbers = [number for number, _ in records]
     columns = {}
     for name, kind in element.properties:
         if isinstance(kind, tuple):
