@@ -1,30 +1,57 @@
 """Numbers from text tokens, with errors that name the bad token: one home for every reader.
 
+A number is ASCII: Python's ``float`` and ``int`` also take other scripts' digits
+(``'٣'``, ``'３'``) and ``_`` separators, which numpy's byte parsers refuse, so those are
+refused everywhere rather than read by some readers only (and ``'²'``, which
+``str.isdigit`` calls a digit, is refused by all of them anyway).
+
 numpy converts a whole row of tokens at once; only when that fails is the row searched for
 the first token that is not a number, so the common case stays vectorised.
 """
 
+import re
 from collections.abc import Sequence
 
 import numpy as np
 
 from mzc.errors import MzcError
 
+WHOLE_NUMBER = re.compile(r"[0-9]+")
+
+
+def is_number(token: str) -> bool:
+    """True when ``token`` is a number in ASCII (``nan`` and ``inf`` included)."""
+    if not token.isascii() or "_" in token:
+        return False
+    try:
+        float(token)
+    except ValueError:
+        return False
+    return True
+
+
+def is_count(token: str) -> bool:
+    """True when ``token`` is a whole number >= 0 written in ASCII digits only."""
+    return WHOLE_NUMBER.fullmatch(token) is not None
+
 
 def bad_token(tokens: Sequence[str]) -> int | None:
     """The index of the first token that is not a number, or None."""
-    for index, token in enumerate(tokens):
-        try:
-            float(token)
-        except ValueError:
-            return index
-    return None
+    return next((index for index, token in enumerate(tokens) if not is_number(token)), None)
+
+
+def to_floats(tokens: Sequence[str]) -> np.ndarray:
+    """The tokens as a float64 array in one call; a ValueError when one is not a number."""
+    joined = "".join(tokens)
+    if not joined.isascii() or "_" in joined:
+        raise ValueError("not an ASCII number")
+    return np.array(tokens, dtype=np.float64)
 
 
 def floats(tokens: Sequence[str], source: str, line: int, what: str = "value") -> np.ndarray:
     """The tokens as floats, or an MzcError naming the first bad one (``what`` N is not a number)."""
     try:
-        return np.array(tokens, dtype=float)
+        return to_floats(tokens)
     except ValueError:
         index = bad_token(tokens)
         if index is None:

@@ -2,12 +2,13 @@
 and writing mesh files.
 
 ``read_mesh`` accepts OBJ, PLY (ascii and binary), VTK, STL and OFF, and point clouds (a
-PLY with vertices only, or ``x y z`` text). Real files come in many dialects, so OBJ and
-PLY are read by mzc's own vectorised readers (meshio misreads negative OBJ indices and
-refuses valid PLY files: vertex-only, ``vertex_index``, extra properties); meshio reads
-the rest and what our PLY reader refuses. Polygons are fan-triangulated; other cell
-types are ignored. Every problem becomes an MzcError naming the file, and the line where
-it is known.
+PLY with vertices only, or ``x y z`` text). Real files come in many dialects, so OBJ,
+PLY and STL are read by mzc's own vectorised readers (meshio misreads negative OBJ
+indices, refuses valid PLY files: vertex-only, ``vertex_index``, extra properties, and
+reads truncated PLY and STL files as if complete); meshio reads VTK and OFF. Polygons are
+fan-triangulated; other cell types are ignored. Every problem becomes an MzcError naming
+the file, and the line where it is known: a file that breaks the counts it declares, or
+holds anything but numbers where numbers belong, is refused, never read in part.
 
 Each format is one module of this package, listed in ``registry``; the format modules
 see bytes only, and paths, stdin/stdout and atomic output are ``mzc.streams``'s.
@@ -87,6 +88,8 @@ def checked(mesh: Mesh, source: str) -> Mesh:
         if bad.any():
             face = int(np.flatnonzero(bad.any(axis=1))[0])
             index = int(mesh.triangles[face][bad[face]][0])
+            if index < 0:
+                raise MzcError(f"triangle {face + 1} has a negative vertex index ({index})", source=source)
             raise MzcError(f"triangle {face + 1} refers to vertex {index + 1}, but there are only "
                            f"{len(mesh.points)} vertices", source=source)
     return mesh

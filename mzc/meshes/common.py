@@ -1,9 +1,15 @@
-"""Helpers the mesh format modules share: text checks, number parsing, fan triangulation."""
+"""Helpers the mesh format modules share: text checks, number and index parsing, fan
+triangulation."""
+
+from itertools import chain
 
 import numpy as np
 
 from mzc.errors import MzcError
-from mzc.numbers import bad_token
+from mzc.numbers import bad_token, to_floats
+
+# Indices beyond this are no vertex of any mesh (and would not survive a cast to int64).
+LARGEST_INDEX = 2.0 ** 53
 
 
 def is_text(data: bytes) -> bool:
@@ -18,16 +24,32 @@ def decode_text(data: bytes, source: str) -> str:
     return data.decode("utf-8", "replace")
 
 
-def numbers_or_error(rows: list, width: int, line_numbers, source: str) -> np.ndarray:
-    """Convert rows of ``width`` number tokens to a (len(rows), width) float array (also when
-    there are no rows), naming the first bad line on failure."""
+def flat_numbers(rows: list, line_numbers, source: str) -> np.ndarray:
+    """All the number tokens of ``rows`` (lists of tokens, any lengths) as one float array,
+    converted in one call; on failure the first bad line is named."""
     try:
-        return np.array(rows, dtype=np.float64).reshape(len(rows), width)
+        return to_floats(list(chain.from_iterable(rows)))
     except ValueError:
         for row, number in zip(rows, line_numbers):
             if bad_token(row) is not None:
-                raise MzcError(f"not a number in {' '.join(row)[:60]!r}", source=source, line=number) from None
+                raise MzcError(f"not a number in {' '.join(row)[:60]!r}", source=source, line=int(number)) from None
         raise
+
+
+def numbers_or_error(rows: list, width: int, line_numbers, source: str) -> np.ndarray:
+    """Convert rows of ``width`` number tokens to a (len(rows), width) float array (also when
+    there are no rows), naming the first bad line on failure."""
+    return flat_numbers(rows, line_numbers, source).reshape(len(rows), width)
+
+
+def as_indices(values: np.ndarray, what: str, source: str) -> np.ndarray:
+    """Vertex indices read as ``values`` (integers, or floats from text) as int64; a NaN,
+    infinite, fractional or huge one is refused, naming ``what`` holds it."""
+    if values.dtype.kind == "f":
+        bad = ~(np.abs(values) <= LARGEST_INDEX) | (values != np.round(values))
+        if bad.any():
+            raise MzcError(f"{what} vertex index {values[bad][0]!r} is not a whole number", source=source)
+    return values.astype(np.int64)
 
 
 def fan_triangulate(polygons) -> np.ndarray:

@@ -1,10 +1,10 @@
-"""VTK, STL and OFF through meshio, and the PLY dialects our own reader refuses.
+"""VTK and OFF through meshio, and the writers of PLY and STL.
 
 meshio wants file names, so bytes go through an in-memory file (a memfd on Linux, which
 not even SIGKILL leaves on disk; a temporary file elsewhere); meshio is imported only when
-one of these formats is read or written (it takes 0.2 s). Its warnings, log
-messages and prints are silenced (stdout carries data only), and any failure becomes an
-MzcError naming the file.
+one of these formats is read or written (it takes 0.2 s). Its warnings, log messages and
+prints are silenced (stdout carries data only, stderr mzc's own messages), and any failure
+becomes an MzcError naming the file.
 """
 
 import contextlib
@@ -12,7 +12,6 @@ import io
 import logging
 import os
 import re
-import struct
 import tempfile
 import warnings
 from collections.abc import Callable, Iterator
@@ -41,25 +40,18 @@ class MeshioFormat:
         return write_as(self.NAME, mesh)
 
 
-def is_binary_stl(data: bytes) -> bool:
-    """True when the size of ``data`` matches the triangle count of a binary STL."""
-    if len(data) < 84:
-        return False
-    count = struct.unpack("<I", data[80:84])[0]
-    return len(data) == 84 + 50 * count
-
-
 VTK = MeshioFormat("vtk", (".vtk",), lambda data: data.startswith(b"# vtk DataFile"))
 OFF = MeshioFormat("off", (".off",), lambda data: bool(re.match(rb"\s*[NCST4]*OFF\b", data[:4096])))
-STL = MeshioFormat("stl", (".stl",), lambda data: data[:4096].lstrip().startswith(b"solid") or is_binary_stl(data))
 
 
 @contextlib.contextmanager
 def quiet() -> Iterator[None]:
-    """Silence meshio's warnings, log messages and prints: stdout carries data only."""
+    """Silence meshio's warnings, log messages and prints (to stdout, which carries data only,
+    and to stderr, where its rich console writes 'Warning: ...')."""
     logging.disable(logging.CRITICAL)
     try:
-        with warnings.catch_warnings(), contextlib.redirect_stdout(io.StringIO()):
+        with warnings.catch_warnings(), contextlib.redirect_stdout(io.StringIO()), \
+                contextlib.redirect_stderr(io.StringIO()):
             warnings.simplefilter("ignore")
             yield
     finally:

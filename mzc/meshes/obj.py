@@ -1,7 +1,9 @@
 """Wavefront OBJ: ``v`` and ``f`` lines in any dialect, read and written without a Python
 loop per vertex or face.
 
-mzc reads OBJ itself rather than through meshio, which misreads negative indices.
+mzc reads OBJ itself rather than through meshio, which misreads negative indices. Lines
+end with ``\n``, ``\r\n`` or a lone ``\r`` (old Mac files); a positive face index may
+name a vertex defined further down, a negative one counts back from the vertices so far.
 """
 
 import re
@@ -12,6 +14,7 @@ import numpy as np
 from mzc.errors import MzcError
 from mzc.meshes import Mesh
 from mzc.meshes.common import fan_triangulate_ragged, is_text
+from mzc.numbers import is_number
 
 NAME = "obj"
 EXTENSIONS = (".obj",)
@@ -21,12 +24,12 @@ OBJ_WHITESPACE = np.frombuffer(b" \t\r\n\v\f", dtype=np.uint8)
 
 def sniff(data: bytes) -> bool:
     """True when a line near the start is a ``v`` statement."""
-    return bool(re.search(rb"(^|\n)\s*v\s", data[:4096]))
+    return bool(re.search(rb"(^|[\r\n])\s*v\s", data[:4096]))
 
 
 def read(data: bytes, source: str) -> Mesh:
     """Read Wavefront OBJ: ``v`` and ``f`` lines in any dialect (v/vt/vn, negative indices,
-    polygons, CRLF, trailing comments); every other statement (vt, vn, o, g, s, usemtl,
+    polygons, CRLF or CR line ends, trailing comments); every other statement (vt, vn, o, g, s, usemtl,
     l, ...) is ignored. Works on whole byte arrays: no Python loop per vertex or face."""
     if not is_text(data):
         raise MzcError("binary data where OBJ text was expected", source=source)
@@ -42,14 +45,16 @@ def read(data: bytes, source: str) -> Mesh:
 class ObjTokens:
     """The whitespace-separated tokens of OBJ bytes: where each starts and ends, and its line.
 
-    Comments (``#`` to the end of the line) are blanked first.
+    Comments (``#`` to the end of the line) are blanked first. A line ends at ``\n``, or at
+    ``\r`` not followed by ``\n``.
     """
 
     def __init__(self, data):
         text = np.frombuffer(data, dtype=np.uint8)
-        newlines = np.flatnonzero(text == ord("\n"))
+        line_end = (text == ord("\n")) | ((text == ord("\r")) & (np.r_[text[1:], 0] != ord("\n")))
+        newlines = np.flatnonzero(line_end)
         if b"#" in data:
-            after_hash = last_index(text == ord("#")) > last_index(text == ord("\n"))
+            after_hash = last_index(text == ord("#")) > last_index(line_end)
             text = np.where(after_hash, ord(" "), text).astype(np.uint8)
         self.text = text
         space = np.isin(text, OBJ_WHITESPACE)
@@ -113,7 +118,7 @@ def obj_vertices(tokens, vertex_lines, source):
     xyz = arguments[position <= 3]
     values = tokens.numbers(xyz, np.float64)
     if values is None:
-        raise first_bad_token(tokens, xyz, float, "not a number", source)
+        raise first_bad_token(tokens, xyz, is_number, "not a number", source)
     return values.reshape(-1, 3)
 
 
@@ -129,7 +134,7 @@ def obj_triangles(tokens, face_lines, vertex_lines, source):
                        line=int(face_lines[np.argmax(counts < 3)]) + 1)
     flat = tokens.numbers(corners, np.int64, cut_at_slash=True)
     if flat is None:
-        raise first_bad_token(tokens, corners, int_before_slash, "bad vertex index", source)
+        raise first_bad_token(tokens, corners, is_index, "bad vertex index", source)
     # A negative index counts back from the vertices defined so far in the file.
     defined_before = np.searchsorted(vertex_lines, corner_line)
     flat = np.where(flat < 0, flat + defined_before, flat - 1)
@@ -140,18 +145,16 @@ def obj_triangles(tokens, face_lines, vertex_lines, source):
     return fan_triangulate_ragged(flat, counts)
 
 
-def int_before_slash(token):
-    """The vertex index of an OBJ face corner such as ``7/3/2``."""
-    return int(token.split("/", 1)[0])
+def is_index(token):
+    """True when an OBJ face corner such as ``7/3/2`` or ``-1`` starts with an ASCII integer."""
+    return re.fullmatch(r"[-+]?[0-9]+", token.split("/", 1)[0]) is not None
 
 
-def first_bad_token(tokens, indices, convert, message, source):
-    """The MzcError for the first token that ``convert`` refuses (the slow path, errors only)."""
+def first_bad_token(tokens, indices, accept, message, source):
+    """The MzcError for the first token that ``accept`` refuses (the slow path, errors only)."""
     for index in indices:
         text = tokens.token_text(index)
-        try:
-            convert(text)
-        except ValueError:
+        if not accept(text):
             return MzcError(f"{message}: {text[:40]!r}", source=source, line=int(tokens.line[index]) + 1)
     return MzcError(message, source=source)
 

@@ -1,18 +1,24 @@
 """PLY, ascii and binary: vertices, faces (``vertex_indices`` or ``vertex_index``) and
 triangle strips, read by our own vectorised reader; written binary through meshio.
 
-Ours reads the dialects meshio refuses (vertex-only files, ``vertex_index``, extra
-properties) and spares the 0.2 s import of meshio; a body it refuses goes to meshio.
+Ours reads every dialect meshio reads and more (vertex-only files, ``vertex_index``,
+extra properties, 64-bit types, ``\\r`` line ends) and spares the 0.2 s import of meshio,
+so nothing falls back to meshio: a PLY file ours refuses is refused, with the reason.
+The header's counts are promises the body must keep, checked before anything is
+allocated: a body that ends early is "truncated" (naming the element, how many records
+it declares and how many the file holds), and data after the last element is refused.
 """
 
 import re
 from dataclasses import dataclass, field
+from typing import NamedTuple
 
 import numpy as np
 
 from mzc.errors import MzcError
 from mzc.meshes import Mesh, meshio_fallback
-from mzc.meshes.common import decode_text, fan_triangulate, fan_triangulate_ragged, numbers_or_error
+from mzc.meshes.common import as_indices, decode_text, fan_triangulate_ragged, flat_numbers
+from mzc.numbers import is_count
 
 NAME = "ply"
 EXTENSIONS = (".ply",)
@@ -24,18 +30,13 @@ def sniff(data: bytes) -> bool:
 
 
 def read(data: bytes, source: str) -> Mesh:
-    """Read PLY with our own reader; hand a body it refuses to meshio.
-
-    A broken header is final: meshio would loop forever looking for ``end_header``.
-    """
+    """The mesh or point cloud of PLY ``data``; a broken file is an MzcError saying why."""
     elements, body_format, body, body_line = parse_ply_header(data, source)
-    try:
-        return parse_ply_body(elements, body_format, body, body_line, source)
-    except MzcError as own_error:
-        try:
-            return meshio_fallback.read_as("ply", data, source)
-        except MzcError:
-            raise own_error from None
+    if body_format == "ascii":
+        tables = read_ply_ascii(elements, body, body_line, source)
+    else:
+        tables = read_ply_binary(elements, body, "<" if body_format == "binary_little_endian" else ">", source)
+    return ply_mesh(elements, tables, source)
 
 
 def write(mesh: Mesh) -> bytes:
@@ -46,10 +47,12 @@ def write(mesh: Mesh) -> bytes:
 PLY_TYPES = {
     "char": "i1", "int8": "i1", "uchar": "u1", "uint8": "u1", "short": "i2", "int16": "i2",
     "ushort": "u2", "uint16": "u2", "int": "i4", "int32": "i4", "uint": "u4", "uint32": "u4",
-    "float": "f4", "float32": "f4", "double": "f8", "float64": "f8",
+    "int64": "i8", "uint64": "u8", "float": "f4", "float32": "f4", "double": "f8", "float64": "f8",
 }
+BODY_FORMATS = ("ascii", "binary_little_endian", "binary_big_endian")
 FACE_LIST_NAMES = ("vertex_indices", "vertex_index")
 PLY_ELEMENTS = ("vertex", "face", "tristrips")
+PLURALS = {"vertex": "vertices", "face": "faces"}
 
 
 @dataclass
@@ -64,168 +67,210 @@ class PlyElement:
     properties: list = field(default_factory=list)
 
 
-def parse_ply_body(elements, body_format, body, body_line, source):
-    """Read the body of a PLY file (ascii or binary): vertices, and faces when present."""
-    if body_format == "ascii":
-        tables = read_ply_ascii(elements, body, body_line, source)
-    else:
-        order = "<" if body_format == "binary_little_endian" else ">"
-        tables = read_ply_binary(elements, body, order, source)
-    return ply_mesh(elements, tables, source)
+class Lists(NamedTuple):
+    """The values of one list property of every record: all items in a row, and each record's count."""
+
+    values: np.ndarray
+    counts: np.ndarray
+
+
+def truncated(element, held, source, line=None):
+    """The MzcError for a body that ends after ``held`` records of ``element``."""
+    return MzcError(f"truncated: element {element.name} declares {element.count} "
+                    f"{PLURALS.get(element.name, 'records')}, the file holds {held}", source=source, line=line)
 
 
 def parse_ply_header(data, source):
-    """Parse the PLY header into elements; return them, the body format, body bytes and line."""
-    match = re.search(rb"(^|\n)end_header[ \t]*\r?\n", data)
-    if not data.startswith(b"ply") or not match:
+    """Parse the PLY header into elements; return them, the body format, body bytes and line.
+
+    The line end of the ``ply`` line (``\\n``, ``\\r\\n`` or ``\\r``) is the header's: a
+    binary body may start with either byte, so ``end_header`` must end the same way.
+    """
+    magic = re.match(rb"ply[ \t]*(\r\n|\r|\n)", data)
+    cr_only = magic is not None and magic.group(1) == b"\r"
+    match = re.search(rb"\rend_header[ \t]*\r" if cr_only else rb"\nend_header[ \t]*\r?\n", data)
+    if not magic or not match:
         raise MzcError("not a PLY file: missing 'ply' or 'end_header'", source=source, line=1)
-    header_lines = data[:match.start()].decode("ascii", "replace").splitlines()
+    header_lines = data[:match.start()].decode("utf-8", "replace").splitlines()
     elements, body_format = [], None
     for number, line in enumerate(header_lines, 1):
         words = line.split()
-        if not words or words[0] in ("ply", "comment", "obj_info"):
+        if number == 1 or not words or words[0] in ("comment", "obj_info"):
             continue
-        if words[0] == "format" and len(words) >= 2:
+        if words[0] == "format" and len(words) in (2, 3) and body_format is None:
             body_format = words[1]
-        elif words[0] == "element" and len(words) == 3 and words[2].isdigit():
+        elif (words[0] == "element" and len(words) == 3 and is_count(words[2])
+              and all(element.name != words[1] for element in elements)):
             elements.append(PlyElement(words[1], int(words[2])))
         elif words[0] == "property" and elements:
-            elements[-1].properties.append(ply_property(words, source, number))
+            elements[-1].properties.append(ply_property(words, elements[-1], source, number))
         else:
             raise MzcError(f"bad PLY header line {line.strip()[:40]!r}", source=source, line=number)
-    if body_format not in ("ascii", "binary_little_endian", "binary_big_endian"):
-        raise MzcError(f"unknown PLY format {body_format!r}", source=source)
+    if body_format not in BODY_FORMATS:
+        raise MzcError(f"unknown PLY format {body_format!r} (expected one of {', '.join(BODY_FORMATS)})",
+                       source=source)
+    empty = next((element for element in elements if element.count and not element.properties), None)
+    if empty is not None:
+        raise MzcError(f"element {empty.name} declares {empty.count} records but no properties", source=source)
     return elements, body_format, data[match.end():], len(header_lines) + 2
 
 
-def ply_property(words, source, line):
-    """(name, numpy type) or (name, (count type, item type)) of a ``property`` header line."""
-    try:
-        if len(words) == 5 and words[1] == "list":
-            return words[4], (PLY_TYPES[words[2]], PLY_TYPES[words[3]])
-        if len(words) == 3:
-            return words[2], PLY_TYPES[words[1]]
-    except KeyError:
-        pass
-    raise MzcError(f"bad PLY property {' '.join(words)[:60]!r}", source=source, line=line)
+def ply_property(words, element, source, line):
+    """(name, numpy type) or (name, (count type, item type)) of a ``property`` header line;
+    a list's count must be an integer type and every name is new in its element."""
+    if any(name == words[-1] for name, _ in element.properties):
+        raise MzcError(f"element {element.name} has a second property {words[-1]!r}", source=source, line=line)
+    if len(words) == 5 and words[1] == "list" and words[2] in PLY_TYPES and words[3] in PLY_TYPES:
+        if PLY_TYPES[words[2]].startswith("f"):
+            raise MzcError(f"list {words[4]!r} has a count type {words[2]!r}: counts are integers",
+                           source=source, line=line)
+        return words[4], (PLY_TYPES[words[2]], PLY_TYPES[words[3]])
+    if len(words) == 3 and words[1] in PLY_TYPES:
+        return words[2], PLY_TYPES[words[1]]
+    raise MzcError(f"bad PLY property {' '.join(words)[:60]!r} (types: {', '.join(PLY_TYPES)})",
+                   source=source, line=line)
 
 
 def read_ply_ascii(elements, body, first_line, source):
-    """Rows of number tokens of every element of an ascii PLY body."""
-    lines = [line.split() for line in decode_text(body, source).splitlines()]
+    """{element: {property: values}} of an ascii PLY body: one record per line, blank lines
+    skipped, every record holding exactly its properties and the body nothing more."""
+    numbered = enumerate(decode_text(body, source).splitlines(), first_line)
+    rows = [(number, words) for number, words in ((number, line.split()) for number, line in numbered) if words]
+    end_line = rows[-1][0] + 1 if rows else first_line
     tables, start = {}, 0
     for element in elements:
-        rows = lines[start:start + element.count]
-        if len(rows) < element.count:
-            raise MzcError(f"PLY body ends inside element '{element.name}'", source=source,
-                           line=first_line + len(lines))
-        tables[element.name] = ascii_element(element, rows, first_line + start, source)
+        records = rows[start:start + element.count]
+        if len(records) < element.count:
+            raise truncated(element, len(records), source, line=end_line)
+        tables[element.name] = ascii_element(element, records, source)
         start += element.count
+    if start < len(rows):
+        raise MzcError(f"{len(rows) - start} lines after the last element", source=source, line=rows[start][0])
     return tables
 
 
-def ascii_element(element, rows, first_line, source):
-    """{property: values} of one ascii element; list properties become lists of index arrays."""
-    if all(not isinstance(kind, tuple) for _, kind in element.properties):
+def ascii_element(element, records, source):
+    """{property: values} of one ascii element: a column per scalar, Lists per list property.
+
+    An element of scalars only (vertices) is one table converted in a single call. One with
+    lists has each record walked to find where its lists end (a loop over the lines' word
+    lists only); all the numbers are then converted in one call per property.
+    """
+    numbers = [number for number, _ in records]
+    if not any(isinstance(kind, tuple) for _, kind in element.properties):
         width = len(element.properties)
-        if any(len(row) < width for row in rows):
-            raise MzcError(f"too few values in element '{element.name}'", source=source, line=first_line)
-        values = numbers_or_error([row[:width] for row in rows], width,
-                                  np.arange(len(rows)) + first_line, source)
-        return {name: values[:, i] for i, (name, _) in enumerate(element.properties)}
-    return ascii_rows_with_lists(element, rows, first_line, source)
-
-
-def ascii_rows_with_lists(element, rows, first_line, source):
-    """Walk the rows of an element with list properties one row at a time (lists vary in length)."""
-    columns = {name: [] for name, _ in element.properties}
-    for number, row in enumerate(rows, first_line):
+        wrong = next((number for number, words in records if len(words) != width), None)
+        if wrong is not None:
+            raise MzcError(f"element {element.name}: expected {width} values on the line", source=source, line=wrong)
+        table = flat_numbers([words for _, words in records], numbers, source).reshape(-1, width)
+        return {name: table[:, i] for i, (name, _) in enumerate(element.properties)}
+    tokens = {name: [] for name, _ in element.properties}
+    counts = {name: [] for name, kind in element.properties if isinstance(kind, tuple)}
+    for number, words in records:
         position = 0
-        try:
-            for name, kind in element.properties:
-                if isinstance(kind, tuple):
-                    length = int(row[position])
-                    columns[name].append(np.array(row[position + 1:position + 1 + length], dtype=float))
-                    position += 1 + length
-                else:
-                    columns[name].append(float(row[position]))
-                    position += 1
-        except (ValueError, IndexError):
-            raise MzcError(f"bad or missing value in element '{element.name}'", source=source,
-                           line=number) from None
+        for name, kind in element.properties:
+            length = 1
+            if isinstance(kind, tuple):
+                count = words[position] if position < len(words) else "nothing"
+                if not is_count(count):
+                    raise MzcError(f"element {element.name}: list {name!r} has count {count[:20]!r}, "
+                                   "expected a whole number >= 0", source=source, line=number)
+                length = int(count)
+                counts[name].append(length)
+                position += 1
+            if position + length > len(words):
+                raise MzcError(f"element {element.name}: the line ends inside property {name!r}",
+                               source=source, line=number)
+            tokens[name].append(words[position:position + length])
+            position += length
+        if position != len(words):
+            raise MzcError(f"element {element.name}: {len(words) - position} values after the last property",
+                           source=source, line=number)
+    columns = {}
+    for name, kind in element.properties:
+        if isinstance(kind, tuple):
+            columns[name] = Lists(flat_numbers(tokens[name], numbers, source), np.array(counts[name], dtype=np.int64))
+        else:
+            columns[name] = flat_numbers(tokens[name], numbers, source)
     return columns
 
 
 def read_ply_binary(elements, body, order, source):
-    """{element: {property: values}} of a binary PLY body."""
+    """{element: {property: values}} of a binary PLY body, which must end with its last element."""
     tables, offset = {}, 0
     for element in elements:
         tables[element.name], offset = binary_element(element, body, offset, order, source)
+    if offset < len(body):
+        raise MzcError(f"{len(body) - offset} bytes after the last element", source=source)
     return tables
 
 
 def binary_element(element, body, offset, order, source):
     """Read one binary element starting at ``offset``; return its columns and the next offset.
 
-    Fast path: when every list of the element has the length of the first record's list
-    (triangle meshes), the element is one structured numpy array read in a single call.
+    Records are read in runs whose lists all have the lengths of the run's first record,
+    each run one structured numpy array: a triangle mesh is a few runs of doubling size,
+    mixed polygons a run per change of length. No run reaches beyond the body.
     """
-    first_lengths = list_lengths_of_first_record(element, body, offset, order, source)
-    fields = []
-    for name, kind in element.properties:
-        if isinstance(kind, tuple):
-            fields.append((name + "#count", order + kind[0]))
-            fields.append((name, order + kind[1], (first_lengths[name],)))
-        else:
-            fields.append((name, order + kind))
-    dtype = np.dtype(fields)
-    end = offset + dtype.itemsize * element.count
-    if element.count == 0 or end <= len(body):
-        records = np.frombuffer(body, dtype=dtype, count=element.count, offset=offset)
-        if all((records[name + "#count"] == length).all() for name, length in first_lengths.items()):
-            return {name: records[name] for name, _ in element.properties}, end
-    return binary_records_one_by_one(element, body, offset, order, source)
+    runs, done, span = [], 0, 16
+    while done < element.count:
+        lengths, size = record_layout(element, body, offset, order, source, done)
+        if offset + size > len(body):
+            raise truncated(element, done, source)
+        dtype = np.dtype([field for i, (_, kind) in enumerate(element.properties)
+                          for field in record_fields(i, kind, lengths.get(i), order)])
+        fit = min(element.count - done, (len(body) - offset) // size, span)
+        records = np.frombuffer(body, dtype=dtype, count=fit, offset=offset)
+        same = np.ones(fit, dtype=bool)
+        for i, length in lengths.items():
+            same &= records[f"c{i}"] == length
+        run = fit if same.all() else int(np.argmin(same))
+        runs.append(records[:run])
+        done, offset, span = done + run, offset + run * size, max(16, 2 * run)
+    return element_columns(element, runs, order), offset
 
 
-def list_lengths_of_first_record(element, body, offset, order, source):
-    """The length of each list property in the element's first record."""
-    lengths = {}
-    if element.count == 0:
-        return {name: 0 for name, kind in element.properties if isinstance(kind, tuple)}
-    for name, kind in element.properties:
+def record_layout(element, body, offset, order, source, done):
+    """The list lengths ({property index: length}) and byte size of the record at ``offset``."""
+    lengths, position = {}, offset
+    for i, (name, kind) in enumerate(element.properties):
         if isinstance(kind, tuple):
             count_type = np.dtype(order + kind[0])
-            length = int(unpack(body, offset, count_type, 1, element, source)[0])
-            lengths[name] = length
-            offset += count_type.itemsize + length * np.dtype(kind[1]).itemsize
+            if position + count_type.itemsize > len(body):
+                raise truncated(element, done, source)
+            length = int(np.frombuffer(body, dtype=count_type, count=1, offset=position)[0])
+            if length < 0:
+                raise MzcError(f"element {element.name} record {done + 1}: list {name!r} has count {length}",
+                               source=source)
+            lengths[i] = length
+            position += count_type.itemsize + length * np.dtype(kind[1]).itemsize
         else:
-            offset += np.dtype(kind).itemsize
-    return lengths
+            position += np.dtype(kind).itemsize
+        if position > len(body):
+            raise truncated(element, done, source)
+    return lengths, position - offset
 
 
-def unpack(body, offset, dtype, count, element, source):
-    """``count`` values of ``dtype`` at ``offset``, or an error when the body ends early."""
-    if offset + dtype.itemsize * count > len(body):
-        raise MzcError(f"PLY body ends inside element '{element.name}'", source=source)
-    return np.frombuffer(body, dtype=dtype, count=count, offset=offset)
+def record_fields(i, kind, length, order):
+    """The structured-dtype fields of property ``i``: its value, or a list's count and items."""
+    if isinstance(kind, tuple):
+        return [(f"c{i}", order + kind[0]), (f"p{i}", order + kind[1], (length,))]
+    return [(f"p{i}", order + kind)]
 
 
-def binary_records_one_by_one(element, body, offset, order, source):
-    """Read an element whose lists vary in length, one record at a time (mixed polygons)."""
-    columns = {name: [] for name, _ in element.properties}
-    for _ in range(element.count):
-        for name, kind in element.properties:
-            if isinstance(kind, tuple):
-                count_type, item_type = np.dtype(order + kind[0]), np.dtype(order + kind[1])
-                length = int(unpack(body, offset, count_type, 1, element, source)[0])
-                offset += count_type.itemsize
-                columns[name].append(unpack(body, offset, item_type, length, element, source))
-                offset += item_type.itemsize * length
-            else:
-                scalar_type = np.dtype(order + kind)
-                columns[name].append(unpack(body, offset, scalar_type, 1, element, source)[0])
-                offset += scalar_type.itemsize
-    return columns, offset
+def element_columns(element, runs, order):
+    """{property: values} of an element read as ``runs`` of records: a column per scalar,
+    Lists per list property."""
+    columns = {}
+    for i, (name, kind) in enumerate(element.properties):
+        item = np.dtype(order + (kind[1] if isinstance(kind, tuple) else kind))
+        values = np.concatenate([run[f"p{i}"].reshape(-1) for run in runs] + [np.empty(0, dtype=item)])
+        if isinstance(kind, tuple):
+            counts = np.concatenate([run[f"c{i}"].astype(np.int64) for run in runs] + [np.empty(0, np.int64)])
+            columns[name] = Lists(values, counts)
+        else:
+            columns[name] = values
+    return columns
 
 
 def ply_mesh(elements, tables, source):
@@ -238,34 +283,39 @@ def ply_mesh(elements, tables, source):
     if unknown:
         raise MzcError(f"PLY element '{unknown[0].name}' ({unknown[0].count} records) is not one mzc reads "
                        f"({', '.join(PLY_ELEMENTS)})", source=source)
-    vertex = tables.get("vertex")
-    if vertex is None or not all(axis in vertex for axis in "xyz"):
+    vertex = tables.get("vertex", {})
+    if not all(isinstance(vertex.get(axis), np.ndarray) for axis in "xyz"):
         raise MzcError("PLY file has no 'vertex' element with x, y, z", source=source)
     points = np.column_stack([np.asarray(vertex[axis], dtype=np.float64) for axis in "xyz"])
-    faces, strips = index_lists(tables, "face"), index_lists(tables, "tristrips")
+    faces, strips = index_lists(tables, "face", source), index_lists(tables, "tristrips", source)
     triangles = ([ply_face_triangles(faces, source)] if faces is not None else []) + \
-        ([strip_triangles(strips)] if strips is not None else [])
+        ([strip_triangles(strips, source)] if strips is not None else [])
     if triangles:
         return Mesh(points, np.concatenate(triangles))
     normals = None
-    if all(axis in vertex for axis in ("nx", "ny", "nz")):
+    if all(isinstance(vertex.get(axis), np.ndarray) for axis in ("nx", "ny", "nz")):
         normals = np.column_stack([np.asarray(vertex[axis], dtype=np.float64) for axis in ("nx", "ny", "nz")])
     return Mesh(points, normals=normals)
 
 
-def index_lists(tables, element):
-    """The vertex-index lists of a PLY ``element`` (its first FACE_LIST_NAMES property), or None."""
+def index_lists(tables, element, source):
+    """The vertex-index Lists of a PLY ``element`` (its first FACE_LIST_NAMES property), or None."""
     table = tables.get(element, {})
-    return next((table[name] for name in FACE_LIST_NAMES if name in table), None)
+    name = next((name for name in FACE_LIST_NAMES if name in table), None)
+    if name is None:
+        return None
+    if not isinstance(table[name], Lists):
+        raise MzcError(f"PLY {element} property {name!r} must be a list", source=source)
+    return table[name]
 
 
-def strip_triangles(strips):
+def strip_triangles(strips, source):
     """Triangles of PLY triangle strips (``element tristrips``): each record's list holds
     strips separated by -1; triangle i of a strip is (v_i, v_i+1, v_i+2), its odd ones
     written (v_i+1, v_i, v_i+2) so all face the same way, the degenerate ones (a repeated
     vertex, used to join strips) dropped."""
-    records = [np.append(np.asarray(record, dtype=np.int64), -1) for record in strips]
-    flat = np.concatenate(records) if records else np.empty(0, dtype=np.int64)
+    values = as_indices(strips.values, "tristrips", source)
+    flat = np.insert(values, np.cumsum(strips.counts), -1)
     if len(flat) < 3:
         return np.empty((0, 3), dtype=np.int64)
     position = np.arange(len(flat))
@@ -278,16 +328,8 @@ def strip_triangles(strips):
 
 
 def ply_face_triangles(faces, source):
-    """Triangles of PLY face lists: a 2D array (equal lengths) or a list of index arrays."""
-    if isinstance(faces, np.ndarray) and faces.ndim == 2:
-        if faces.shape[1] < 3 and len(faces):
-            raise MzcError("PLY faces need at least 3 vertices", source=source)
-        return fan_triangulate(faces.astype(np.int64))
-    counts = np.array([len(face) for face in faces], dtype=np.int64)
-    if (counts < 3).any():
-        raise MzcError(f"PLY face {int(np.argmax(counts < 3)) + 1} has fewer than 3 vertices",
+    """Fan-triangulated PLY face lists; a face of fewer than 3 vertices is refused."""
+    if (faces.counts < 3).any():
+        raise MzcError(f"PLY face {int(np.argmax(faces.counts < 3)) + 1} has fewer than 3 vertices",
                        source=source)
-    if not len(faces):
-        return np.empty((0, 3), dtype=np.int64)
-    return fan_triangulate_ragged(np.concatenate(faces).astype(np.int64), counts)
-
+    return fan_triangulate_ragged(as_indices(faces.values, "face", source), faces.counts)

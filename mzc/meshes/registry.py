@@ -14,7 +14,7 @@ FORMATS = {
     "obj": "mzc.meshes.obj",
     "ply": "mzc.meshes.ply",
     "vtk": "mzc.meshes.meshio_fallback:VTK",
-    "stl": "mzc.meshes.meshio_fallback:STL",
+    "stl": "mzc.meshes.stl",
     "off": "mzc.meshes.meshio_fallback:OFF",
     "xyz": "mzc.meshes.xyz",
 }

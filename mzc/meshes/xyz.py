@@ -1,7 +1,7 @@
 """Point clouds as plain text: one ``x y z`` line per point.
 
-Extra columns (colours, intensities), commas between numbers and ``#`` comments are
-accepted. mzc reads these files but does not write them.
+Extra columns (colours, intensities), commas between numbers, ``#`` comments and any of
+``\n``, ``\r\n`` or ``\r`` as line ends are accepted. mzc reads these files but does not write them.
 """
 
 import re
@@ -18,7 +18,7 @@ write = None   # a point cloud is read, never written
 def sniff(data: bytes) -> bool:
     """True for text with a line starting like a number (tried last: most text fits)."""
     head = data[:4096]
-    return bool(re.search(rb"(^|\n)\s*[-+.\d][^\n]*", head)) and is_text(head)
+    return bool(re.search(rb"(^|[\r\n])\s*[-+.\d]", head)) and is_text(head)
 
 
 def read(data: bytes, source: str) -> Mesh:
