@@ -9,12 +9,12 @@ import numpy as np
 import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
-from test_cli import assert_one_line_error
 
 from mzc.errors import MzcError
 from mzc.meshes import mesh_from_bytes
 
 from conftest import face_path
+from test_cli import assert_one_line_error
 
 # A unit square as two triangles: 4 points, 2 triangles, exact in float32.
 POINTS = np.array([[0, 0, 0], [1, 0, 0.5], [1, 1, 1], [0, 1, 0.25]])
