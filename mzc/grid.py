@@ -15,6 +15,7 @@ import numpy as np
 
 from mzc import projections
 from mzc.errors import MzcError
+from mzc.limits import length_problem
 
 IDENTITY_TRANSFORM = np.hstack([np.eye(3), np.zeros((3, 1))])
 TOKEN = re.compile(r"[^\s\x00-\x1f\x7f]{1,64}")   # one header token: no space, no control character
@@ -68,6 +69,10 @@ class ZGrid:
         self.d2 = float(self.d2)
         for name in ("units", "nodata"):
             check_token(getattr(self, name), name)
+        for name in ("d1", "d2"):
+            problem = length_problem(getattr(self, name))
+            if problem:
+                raise MzcError(problem, field=name)
         if self.projection not in projections.PROJECTIONS:
             raise MzcError(f"unknown projection {self.projection!r}")
         if self.projection == "planar":

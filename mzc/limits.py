@@ -15,6 +15,7 @@ from mzc.errors import MzcError
 MAX_DIMENSION = 1_000_000     # rows or columns
 MAX_NODES = 100_000_000       # rows x columns
 MAX_MAGNITUDE = 1e100         # |height| or |coordinate|: squares and sums of 10^8 of them stay finite
+MAX_LENGTH = 1e50             # spacings and radii within 1/MAX_LENGTH..MAX_LENGTH: densify's stencils take d^-4
 MAX_INSERTED = 20             # densify's n: rows 21 times denser (a biharmonic -n 50 took 78 s on a thesis grid)
 MAX_ITERATIONS = 100_000      # sweeps of the thesis's Jacobi densify (100 by default)
 MAX_SAMPLES = 2_000_000       # diff --surface samples per surface (10^7 ran out of 8 GB)
@@ -37,3 +38,11 @@ def check_magnitude(values, what: str, **where) -> None:
     if largest > MAX_MAGNITUDE or math.isinf(largest):
         raise MzcError(f"{what} reach {largest:.3g}: mzc computes with {what} up to {MAX_MAGNITUDE:.0e} in "
                        f"magnitude (beyond that its transforms overflow); rescale or change the unit", **where)
+
+
+def length_problem(value: float) -> str | None:
+    """Why a spacing or radius ``value`` is out of range (None when it is a length mzc computes
+    with: 1/MAX_LENGTH .. MAX_LENGTH, so that fourth powers of it and their quotients stay finite)."""
+    if not (math.isfinite(value) and 1 / MAX_LENGTH <= value <= MAX_LENGTH):
+        return f"must be a length from {1 / MAX_LENGTH:.0e} to {MAX_LENGTH:.0e}, not {value:g}"
+    return None

@@ -109,9 +109,23 @@ def one_line(problem):
         # click's "Invalid value for '-q': 0 is not in the range 1<=x<=100." as "-q: 0 is not in 1..100"
         hint = problem.param_hint or "/".join(getattr(problem.param, "opts", None) or [problem.param.name or ""])
         message = f"{hint}: {problem.message}"
-        message = re.sub(r"is not in the range (\S+)<=x<=(\S+?)\.?$", r"is not in \1..\2", message)
-        message = re.sub(r"is not in the range x([<>]=?)(\S+?)\.?$", r"must be \1 \2", message).rstrip(".")
+        message = re.sub(r"is not in the range (\S+?)\.?$", lambda m: range_words(m[1]), message).rstrip(".")
     return f"{path}: {message} (see '{path} --help')"
+
+
+def range_words(bounds):
+    """click's range ``1<=x<=100``, ``0<x<=1e+100`` or ``x>0`` in words: ``is not in 1..100``,
+    ``must be > 0 and <= 1e+100``, ``must be > 0``."""
+    closed = re.fullmatch(r"(\S+?)<=x<=(\S+)", bounds)
+    if closed:
+        return f"is not in {closed[1]}..{closed[2]}"
+    low = re.match(r"(\S+?)(<=?)x", bounds)
+    high = re.search(r"x(<=?)(\S+)$", bounds)
+    below = re.fullmatch(r"x(>=?)(\S+)", bounds)
+    words = [f"{'>' if low[2] == '<' else '>='} {low[1]}"] if low else []
+    words += [f"{high[1]} {high[2]}"] if high else []
+    words += [f"{below[1]} {below[2]}"] if below else []
+    return "must be " + " and ".join(words) if words else f"is not in the range {bounds}"
 
 
 def show_warning(message, category, filename, lineno, file=None, line=None):

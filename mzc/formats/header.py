@@ -32,7 +32,7 @@ import numpy as np
 from mzc import projections
 from mzc.errors import MzcError
 from mzc.grid import IDENTITY_TRANSFORM
-from mzc.limits import MAX_DIMENSION, check_grid_size
+from mzc.limits import MAX_DIMENSION, check_grid_size, length_problem
 
 RIGID_TOLERANCE = 1e-6
 CHECKSUM = "crc32"   # the header keyword of a file's checksum
@@ -141,6 +141,14 @@ class Header:
             raise self.error(keyword, f"must be > 0, found {values[0]}")
         return values[0]
 
+    def length(self, keyword, required=True):
+        """A spacing or radius: a float within mzc.limits' range of lengths."""
+        value = self.positive(keyword, required)
+        problem = None if value is None else length_problem(value)
+        if problem:
+            raise self.error(keyword, problem)
+        return value
+
     def word(self, keyword, choices=None, required=True, default=None):
         """One token, optionally from ``choices``."""
         values = self.tokens(keyword, 1, required)
@@ -242,8 +250,8 @@ def read_grid_fields(header):
                 or np.linalg.det(rotation) < 0):
             raise header.error("transform", "the 3x3 part is not a rotation (orthonormal, det +1)")
     fields = dict(
-        d1=header.positive("d1"),
-        d2=header.positive("d2"),
+        d1=header.length("d1"),
+        d2=header.length("d2"),
         origin=tuple(header.floats("origin", 2, required=False, default=[0.0, 0.0])),
         transform=transform,
         units=header.word("units", required=False),
@@ -269,7 +277,7 @@ def read_projection(header, rows, cols):
     if not header.projected:
         raise header.error("projection", f"a {projection} grid needs a newer major version of this "
                                          "format (older readers would read it as planar)")
-    radius = header.positive("radius")
+    radius = header.length("radius")
     v0 = header.floats("origin", 2, required=False, default=[0.0, 0.0])[1]
     problem = projections.extent_problem(projection, radius, rows, cols, header.positive("d1"),
                                          header.positive("d2"), v0)

@@ -23,6 +23,7 @@ from mzc.formats.header import (
     with_checksum,
 )
 from mzc.grid import ZGrid
+from mzc.limits import MAX_MAGNITUDE
 
 KIND = "dwt2d"
 VERSION = (3, 1)             # every grid; 3.0 (no crc32 line) and 2.0 (planar, periodised transform) are still read
@@ -544,9 +545,9 @@ CODEC = Codec(
     "dwt2d", encode_grid, read, version=VERSION, oldest_major=OLDEST_MAJOR, extension=".mzw2", spec="spec/dwt2d.md",
     summary="2D wavelet of the whole grid, entropy coded, error-bounded", check_options=one_target,
     example={"max_error": 0.05}, options=(
-        Option("max_error", float, None, 0, min_open=True, metavar="E",
+        Option("max_error", float, None, 0, MAX_MAGNITUDE, min_open=True, metavar="E",
                help="|decoded - input| <= E at every valid node."),
-        Option("rmse", float, None, 0, min_open=True, metavar="E",
+        Option("rmse", float, None, 0, MAX_MAGNITUDE, min_open=True, metavar="E",
                help="Aim at this RMS surface error (value error times cos of the lean)."),
         Option("size", int, None, 1, metavar="BYTES", help="Aim at this file size."),
         Option("wavelet", w2.TRANSFORMS[VERSION[0]].wavelets, DEFAULT_WAVELET,

@@ -95,10 +95,11 @@ def _power_fit(x, row, n):
 
     with warnings.catch_warnings(), np.errstate(all="ignore"):
         warnings.simplefilter("ignore", np.exceptions.RankWarning)
-        if not np.isfinite(x.max() ** (2 * n)):
+        scale = np.abs(x).max() ** (2 * n)
+        if n and not (np.isfinite(scale) and scale > 0):
             raise MzcError(f"the power basis cannot fit degree {n} on columns up to x = {x.max():g} (x^{2 * n} "
-                           "overflows; the thesis's basis is unstable past degree ~40): use --basis chebyshev or "
-                           "a lower degree", field="degree")
+                           "leaves binary64; the thesis's basis is unstable past degree ~40): use --basis chebyshev "
+                           "or a lower degree", field="degree")
         try:
             fit = np.polyfit(x, row, n)
         except np.linalg.LinAlgError:
