@@ -111,25 +111,29 @@ def _power_fit(x, row, n):
 
 
 def poly_inverse(coefficients, length, basis="chebyshev", first=1, step=1.0):
-    """Evaluate the polynomials of ``poly_forward`` at the span's samples, in pieces of at most
-    VANDER_BUDGET basis values, so memory stays bounded whatever degree and length a file declares."""
+    """Evaluate the polynomials of ``poly_forward`` at the span's samples.
+
+    Through the basis matrix (span x coefficients) while it holds at most VANDER_BUDGET values,
+    the way every file so far decoded; beyond that by a recurrence over the coefficients
+    (Clenshaw's for Chebyshev, Horner's for powers), whose memory is the output's, so no
+    degree and length a file declares can ask for more than the grid it decodes to.
+    """
     coefficients = np.asarray(coefficients, dtype=float)
-    piece = max(1, VANDER_BUDGET // coefficients.shape[-1])
-    if length <= piece:
-        return poly_values(coefficients, 0, length, length, basis, first, step)
-    return np.concatenate([poly_values(coefficients, start, min(start + piece, length), length, basis, first, step)
-                           for start in range(0, length, piece)], axis=-1)
-
-
-def poly_values(coefficients, start, stop, length, basis, first, step):
-    """The polynomials at samples start..stop-1 of a span of ``length``."""
-    if basis == "chebyshev":
-        vander = np.polynomial.chebyshev.chebvander(chebyshev_points(length)[start:stop], coefficients.shape[-1] - 1)
-        return coefficients @ vander.T
-    x = power_points(first, length, step)[..., start:stop]
-    powers = np.arange(coefficients.shape[-1])[::-1]
+    count = coefficients.shape[-1]
     with np.errstate(over="ignore", invalid="ignore"):
-        return np.einsum("...mn,...n->...m", x[..., None] ** powers, coefficients)
+        if basis == "chebyshev":
+            points = chebyshev_points(length)
+            if length * count <= VANDER_BUDGET:
+                return coefficients @ np.polynomial.chebyshev.chebvander(points, count - 1).T
+            return np.polynomial.chebyshev.chebval(points, np.moveaxis(coefficients, -1, 0))
+        x = power_points(first, length, step)
+        if length * count <= VANDER_BUDGET:
+            powers = np.arange(count)[::-1]
+            return np.einsum("...mn,...n->...m", x[..., None] ** powers, coefficients)
+        values = np.zeros(coefficients.shape[:-1] + (length,))
+        for index in range(count):   # Horner, highest power first as the coefficients are stored
+            values = values * x + coefficients[..., index:index + 1]
+        return values
 
 
 # --- DFT (Ch. 6, §6.2.2) --------------------------------------------------------------
