@@ -17,6 +17,7 @@ import numpy as np
 from mzc.errors import MzcError
 
 WHOLE_NUMBER = re.compile(r"[0-9]+")
+INTEGER = re.compile(r"[+-]?[0-9]{1,18}")
 
 
 def is_number(token: str) -> bool:
@@ -33,6 +34,11 @@ def is_number(token: str) -> bool:
 def is_count(token: str) -> bool:
     """True when ``token`` is a whole number >= 0 written in ASCII digits only."""
     return WHOLE_NUMBER.fullmatch(token) is not None
+
+
+def parse_int(token: str) -> int | None:
+    """``token`` as an int when it is one in ASCII decimal digits (at most 18, signed), else None."""
+    return int(token) if INTEGER.fullmatch(token) else None
 
 
 def bad_token(tokens: Sequence[str]) -> int | None:

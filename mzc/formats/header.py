@@ -33,6 +33,7 @@ from mzc import projections
 from mzc.errors import MzcError
 from mzc.grid import IDENTITY_TRANSFORM
 from mzc.limits import MAX_DIMENSION, check_grid_size, length_problem
+from mzc.numbers import parse_int
 
 RIGID_TOLERANCE = 1e-6
 CHECKSUM = "crc32"   # the header keyword of a file's checksum
@@ -60,14 +61,6 @@ def file_version(grid, planar, projected):
 def magic_line(kind, version):
     """The first line of an mzc file: ``mzc-KIND MAJOR.MINOR``."""
     return f"mzc-{kind} {version[0]}.{version[1]}"
-
-
-INTEGER = re.compile(r"[+-]?[0-9]{1,18}")   # ASCII digits only: int() also takes '١٢', '1_0' and others
-
-
-def parse_int(token):
-    """``token`` as an int when it is one written in ASCII decimal digits (at most 18), else None."""
-    return int(token) if INTEGER.fullmatch(token) else None
 
 
 class Header:

@@ -27,14 +27,13 @@ from mzc.formats.header import (
     format_number,
     grid_header_lines,
     magic_line,
-    parse_int,
     read_grid_fields,
     read_header,
     with_checksum,
 )
 from mzc.formats.zgrid import body_lines
 from mzc.grid import ZGrid
-from mzc.numbers import floats
+from mzc.numbers import floats, parse_int
 
 DEFAULT_PRECISION = 4
 MAX_PRECISION = 17
