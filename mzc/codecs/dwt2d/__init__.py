@@ -1,4 +1,4 @@
-"""The wavelet z-grid codec (``mzc-dwt2d 3.0``; 2.0 is read; extension ``.mzw2``): see spec/dwt2d.md.
+"""The wavelet z-grid codec (``mzc-dwt2d 3.1``; 3.0 and 2.0 are read; extension ``.mzw2``): see spec/dwt2d.md.
 
 Text header (grid fields with the projection, wavelet, levels, steps, slope limit,
 correction step), a ``data`` line, then a binary payload: the validity mask as row spans,

@@ -1,4 +1,4 @@
-"""The DCT codec format (``mzc-dct 1.0``, extension ``.mzd``): see spec/dct.md.
+"""The DCT codec format (``mzc-dct 1.1`` and 2.1, older 1.0 and 2.0 read; extension ``.mzd``): see spec/dct.md.
 
 Each row's valid span is coded by its orthonormal DCT-II (thesis §7.2.2, Table 7.1);
 quality Q keeps the first floor(Q*m/100) coefficients of a span of m samples.

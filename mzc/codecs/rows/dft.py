@@ -1,4 +1,4 @@
-"""The DFT codec format (``mzc-dft 1.0``, extension ``.mzf``): see spec/dft.md.
+"""The DFT codec format (``mzc-dft 1.1`` and 2.1, older 1.0 and 2.0 read; extension ``.mzf``): see spec/dft.md.
 
 Each row's valid span is coded by the thesis's sine-cosine series (§6.2.2, Table 6.1):
 ``a0 aN L an(1..K) bn(1..K)`` with L = floor((m+1)/2) - 1 and K = floor(Q*L/100).

@@ -1,4 +1,4 @@
-"""The DWT codec format (``mzc-dwt 1.0``, extension ``.mzw``): see spec/dwt.md.
+"""The DWT codec format (``mzc-dwt 1.1`` and 2.1, older 1.0 and 2.0 read; extension ``.mzw``): see spec/dwt.md.
 
 Each row's valid span is decomposed by pywt.wavedec (thesis §7.2.3, Table 7.2) into
 C = [A_J D_J ... D_1]; the row line holds the lengths vector L_1..L_(J+2) then the first

@@ -1,4 +1,4 @@
-"""The polynomial codec format (``mzc-poly 1.0``, extension ``.mzp``): see spec/poly.md.
+"""The polynomial codec format (``mzc-poly 1.1`` and 2.1, older 1.0 and 2.0 read; extension ``.mzp``): see spec/poly.md.
 
 Each row's valid span is fitted by a polynomial (thesis Ch. 5, §5.3.1) of degree
 min(n, m-1); the row line holds its coefficients and the degree follows from their count.
