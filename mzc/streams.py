@@ -123,6 +123,12 @@ def destination(path):
     return "replace", target, info
 
 
+def is_stream(path):
+    """True when ``path`` is stdout or is written through (a device, FIFO, terminal or open
+    descriptor): it has no extension to tell a file format by."""
+    return is_stdio(path) or destination(path)[0] == "through"
+
+
 def names_a_descriptor(name):
     """True when ``name``, or a symlink on the way to its file, lies in /proc (/dev/stdout,
     /dev/fd/N): it is an open descriptor of some process, to be written through."""

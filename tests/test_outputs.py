@@ -270,3 +270,14 @@ def test_no_temporary_is_left_by_a_signal_at_any_moment(tmp_path):
     named.mkdir()
     kill_while_writing(unnamed, "unnamed", [signal.SIGKILL, signal.SIGTERM, signal.SIGHUP], 50, deadline)
     kill_while_writing(named, "named", [signal.SIGTERM, signal.SIGHUP, signal.SIGINT], 30, deadline)
+
+
+def test_a_mesh_to_a_device_is_obj_and_a_file_without_extension_is_refused(mzc, grid, tmp_path):
+    """A device or FIFO has no extension to tell the format by: OBJ, as on stdout; a file without
+    one is a one-line error asking for an extension or --format, and nothing is written."""
+    assert mzc("sample", "bump", "-o", "/dev/null").returncode == 0
+    through = mzc("triangulate", grid, "-o", "/dev/stdout")
+    assert through.returncode == 0 and through.stdout.startswith(b"v ")
+    result = mzc("triangulate", grid, "-o", tmp_path / "noext")
+    assert_one_line_error(result, "noext", "no mesh format")
+    assert not (tmp_path / "noext").exists()

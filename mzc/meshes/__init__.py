@@ -24,7 +24,7 @@ import numpy as np
 
 from mzc.errors import MzcError
 from mzc.meshes import registry
-from mzc.streams import display_name, is_stdio, read_input, write_output
+from mzc.streams import display_name, is_stdio, is_stream, read_input, write_output
 
 if TYPE_CHECKING:
     from mzc.grid import ZGrid
@@ -98,13 +98,19 @@ def checked(mesh: Mesh, source: str) -> Mesh:
 def write_mesh(path: str | os.PathLike | None, mesh: Mesh, file_format: str | None = None) -> None:
     """Write ``mesh`` to ``path`` atomically, as ``file_format`` or the format of its extension.
 
-    ``-`` or None writes OBJ text to stdout whatever ``file_format`` says.
+    ``-`` or None writes OBJ text to stdout whatever ``file_format`` says; a device or FIFO
+    (``/dev/null``) without ``file_format`` gets OBJ too.
     """
     if is_stdio(path):
         write_output(path, mesh_to_bytes(mesh, "obj"))
         return
     if file_format is None:
         file_format = os.path.splitext(str(path))[1].lower().lstrip(".")
+        if not file_format:
+            if not is_stream(path):
+                raise MzcError("no mesh format: give the file an extension (.obj, .ply, .stl, .vtk, .off) "
+                               "or --format", source=path)
+            file_format = "obj"
     try:
         data = mesh_to_bytes(mesh, file_format)
     except MzcError as error:
