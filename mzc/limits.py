@@ -43,6 +43,8 @@ def check_magnitude(values, what: str, **where) -> None:
 def length_problem(value: float) -> str | None:
     """Why a spacing or radius ``value`` is out of range (None when it is a length mzc computes
     with: 1/MAX_LENGTH .. MAX_LENGTH, so that fourth powers of it and their quotients stay finite)."""
-    if not (math.isfinite(value) and 1 / MAX_LENGTH <= value <= MAX_LENGTH):
+    if not (math.isfinite(value) and value > 0):
+        return f"must be a positive number, not {value}"
+    if not 1 / MAX_LENGTH <= value <= MAX_LENGTH:
         return f"must be a length from {1 / MAX_LENGTH:.0e} to {MAX_LENGTH:.0e}, not {value:g}"
     return None

@@ -8,16 +8,9 @@ import io
 
 import numpy as np
 
-from mzc.streams import write_output
-
 SCATTER_POINTS = 30_000   # residual panels subsample to this many points: fast, same picture
 DPI = 110
 COLOUR_PERCENTILE = 99.5
-
-
-def error_plot(path, error, predicted, xs, ys, stats, units=None):
-    """Write the three quality panels of B - A (``error_png``) to ``path`` whole or not at all."""
-    write_output(path, error_png(error, predicted, xs, ys, stats, units))
 
 
 def error_png(error, predicted, xs, ys, stats, units=None):

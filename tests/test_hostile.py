@@ -63,7 +63,7 @@ def run(*args, stdin=b""):
 def kept_promises(result):
     """The general promise of every case; returns the result for case-specific checks."""
     assert result.status in (0, 1, 2), result.stderr
-    assert len(result.stderr) <= (1 if result.status else 1), result.stderr
+    assert len(result.stderr) <= 1, result.stderr
     text = " ".join(result.stderr)
     for word in ("internal error", "Traceback", "RuntimeWarning", "Warning:", "LAPACK", "On entry to"):
         assert word not in text, result.stderr
@@ -264,7 +264,7 @@ def test_numerically_nasty_grids_make_no_noise(command, grid):
 
 def test_a_too_fine_d1_names_d1():
     result = kept_promises(run("slice", "--d1", "5e-324", "--d2", "1", stdin=b"0 0 0\n1 0 0\n0 1 1\n1 1 0\n"))
-    assert result.status == 1 and "d1" in result.stderr[0].split(":")[2] + result.stderr[0]
+    assert result.status == 1 and ": d1: " in result.stderr[0]
 
 
 @pytest.mark.parametrize("line, field", [("0.5 0.5 10 99999999 50", "k2"), ("0.5 0.5 99999999 10 50", "k1")])
@@ -302,3 +302,11 @@ def test_no_library_prints_to_the_stderr_file_itself(mzc, args, grid):
     """LAPACK's ``** On entry to ...`` lines bypass Python's sys.stderr: run as a process to see them."""
     result = mzc(*args, input=grid)
     assert result.returncode in (0, 1) and len(result.stderr.decode().splitlines()) <= 1, result.stderr
+
+
+@pytest.mark.parametrize("codec", CODECS, ids=[" ".join(c) for c in CODECS])
+def test_a_unit_outside_ascii_survives_every_codec(codec):
+    """``units µm`` is one UTF-8 word: every codec writes it (dwt2d once wrote its header as ASCII
+    and failed) and decoding gives it back."""
+    result = kept_promises(run("encode", *codec, stdin=grid_text([[1, 2, 3, 4]] * 3, extra="units µm")))
+    assert result.status == 0 and read_any(result.stdout, "coded").units == "µm"

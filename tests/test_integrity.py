@@ -25,7 +25,7 @@ FLIPS = 1000
 
 
 @pytest.fixture(scope="module")
-def face_file(request):
+def face_file():
     """f18 sliced at 0.5 mm and coded with --dwt2d --rmse 0.05, as the README's pipeline does."""
     from conftest import face_path
 

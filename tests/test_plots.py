@@ -4,7 +4,8 @@ import numpy as np
 import pytest
 
 from mzc.errors import MzcError
-from mzc.plots import SCATTER_POINTS, error_figure, error_plot
+from mzc.plots import SCATTER_POINTS, error_figure, error_png
+from mzc.streams import write_output
 
 PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
 
@@ -18,6 +19,11 @@ def example(rows=60, cols=80):
     error[20:30, 30:40] = np.nan
     stats = {"rmse": 0.1, "max": 0.4, "r2": 0.99, "count": int(np.isfinite(error).sum())}
     return error, predicted, xs, ys, stats
+
+
+def error_plot(path, *panels):
+    """The PNG written to ``path`` as mzc diff --plot writes it (mzc.streams)."""
+    write_output(path, error_png(*panels))
 
 
 def test_png_is_written_and_sensible(tmp_path):

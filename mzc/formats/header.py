@@ -31,7 +31,7 @@ import numpy as np
 
 from mzc import projections
 from mzc.errors import MzcError
-from mzc.grid import IDENTITY_TRANSFORM
+from mzc.grid import IDENTITY_TRANSFORM, check_token
 from mzc.limits import MAX_DIMENSION, check_grid_size, length_problem
 from mzc.numbers import parse_int
 
@@ -152,14 +152,16 @@ class Header:
         return values[0]
 
 
-def read_header(data, source, kind, supported_major, oldest_major=1, projected_major=None, checksum_since=None):
+def read_header(data, source, kind, supported_major, oldest_major=1, projected_major=None, checksum_since=None,
+                binary=False):
     """Parse magic and header lines of ``data``; return (Header, body bytes, first body line number).
 
     Majors above ``supported_major`` are refused (upgrade mzc), and so are majors below
     ``oldest_major``, drafts of a format that this mzc no longer reads. From
     ``projected_major`` on, the grid header may hold a central projection. A ``crc32`` line
     is checked against the whole file; from ``checksum_since[major]`` (a minor version) on
-    it is required.
+    it is required. A ``binary`` body (dwt2d's payload) refuses CRLF line ends: a text-mode copy
+    changed its bytes.
     """
     found, major, minor = split_magic(data, source)
     if found != kind:
@@ -190,12 +192,23 @@ def read_header(data, source, kind, supported_major, oldest_major=1, projected_m
         if text == "data":
             since = (checksum_since or {}).get(major)
             check_checksum(data, header, checksum_line, required=since is not None and minor >= since)
+            if binary and b"\r\n" in data[:position]:
+                raise MzcError("the header's line ends are CRLF: the file was copied as text, which changes its "
+                               "binary payload; copy mzc files as binary", source=source, line=1)
             return header, data[position:], line_number + 1
         keyword, *values = text.split()
         header.add(keyword, values, line_number)
         if keyword == CHECKSUM:
             checksum_line = (line_start, position)
 
+
+
+def file_bytes(lines, payload=b"", checksum=True):
+    """The bytes of an mzc file: its magic and header ``lines`` through ``data`` (and, for the text
+    formats, the body's lines), UTF-8 (a unit may be ``µm``), then a binary ``payload``; with
+    ``checksum``, its ``crc32`` line added (with_checksum)."""
+    data = ("\n".join(lines) + "\n").encode("utf-8") + payload
+    return with_checksum(data) if checksum else data
 
 
 def with_checksum(data):
@@ -251,8 +264,11 @@ def read_grid_fields(header):
         nodata=header.word("nodata", required=False, default="nan"),
         **read_projection(header, rows, cols),
     )
-    if fields["nodata"].lower() in ("inf", "+inf", "-inf", "infinity"):
-        raise header.error("nodata", "the no-data marker cannot be infinite")
+    for name in ("units", "nodata"):
+        try:
+            check_token(fields[name], name)
+        except MzcError as error:
+            raise header.error(name, error.message) from None
     return fields, rows, cols
 
 

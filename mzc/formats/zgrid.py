@@ -8,7 +8,15 @@ written as the no-data marker.
 import numpy as np
 
 from mzc.errors import MzcError
-from mzc.formats.header import file_version, format_number, grid_header_lines, magic_line, read_grid_fields, read_header
+from mzc.formats.header import (
+    file_bytes,
+    file_version,
+    format_number,
+    grid_header_lines,
+    magic_line,
+    read_grid_fields,
+    read_header,
+)
 from mzc.grid import ZGrid
 from mzc.numbers import floats
 
@@ -86,4 +94,4 @@ def write(grid, precision=None):
     """Serialise a ZGrid to z-grid bytes; ``precision`` (decimals) rounds the heights."""
     lines = [magic_line(KIND, file_version(grid, VERSION, PROJECTED_VERSION)), *grid_header_lines(grid), "data",
              *format_rows(grid.z, grid.nodata, precision)]
-    return ("\n".join(lines) + "\n").encode("utf-8")
+    return file_bytes(lines, checksum=False)

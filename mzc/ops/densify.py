@@ -47,7 +47,7 @@ of the padding's far edge decays below 1e-12 (it decays as exp(-pi x / d1) along
 import numpy as np
 
 from mzc.errors import MzcError
-from mzc.limits import MAX_INSERTED, MAX_ITERATIONS, check_grid_size
+from mzc.limits import MAX_INSERTED, MAX_ITERATIONS, check_grid_size, length_problem
 
 METHODS = ("thesis", "laplace", "biharmonic")
 DEFAULT_METHOD = "biharmonic"
@@ -118,8 +118,9 @@ def check_request(z, n, d1, d2, method, iterations, tol):
     if method not in METHODS:
         raise MzcError(f"unknown method {method!r} (choose {', '.join(METHODS)})", field="method")
     for name, value in (("d1", d1), ("d2", d2)):
-        if not (np.isfinite(value) and value > 0):
-            raise MzcError(f"spacing must be a positive number, not {value}", field=name)
+        problem = length_problem(float(value))
+        if problem:
+            raise MzcError(f"spacing {problem}", field=name)
     if not 0 <= iterations <= MAX_ITERATIONS:
         raise MzcError(f"must be 0..{MAX_ITERATIONS}, not {iterations}", field="iterations")
     if tol is not None and not tol > 0:

@@ -12,7 +12,7 @@ import numpy as np
 
 from mzc.errors import MzcError
 from mzc.grid import ZGrid
-from mzc.limits import MAX_DIMENSION, check_grid_size
+from mzc.limits import MAX_DIMENSION, check_grid_size, length_problem
 
 DEFAULT_ROWS = 72           # the thesis cuts a face with about 70 horizontal planes (--thesis-grid)
 COLUMN_STEP_RATIO = 10      # and uses about 10x as many vertical planes: d2 = d1/10
@@ -312,9 +312,10 @@ def spacing_from_count(extent, count, name, axis):
 
 
 def check_spacing(value, name):
-    """Spacings must be positive finite numbers."""
-    if not (np.isfinite(value) and value > 0):
-        raise MzcError(f"spacing must be a positive number, not {value}", field=name)
+    """Spacings must be lengths mzc computes with (mzc.limits.length_problem)."""
+    problem = length_problem(float(value))
+    if problem:
+        raise MzcError(f"spacing {problem}", field=name)
 
 
 def nodes_across(extent, step):

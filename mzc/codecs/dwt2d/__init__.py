@@ -14,13 +14,13 @@ from mzc.codecs.base import Codec, Option
 from mzc.codecs.dwt2d import wavelet as w2
 from mzc.errors import MzcError
 from mzc.formats.header import (
+    file_bytes,
     file_version,
     format_number,
     grid_header_lines,
     magic_line,
     read_grid_fields,
     read_header,
-    with_checksum,
 )
 from mzc.grid import ZGrid
 from mzc.limits import MAX_MAGNITUDE
@@ -362,10 +362,10 @@ class Prepared:
             k = np.zeros(self.valid.shape, dtype=np.int64)
             k[self.valid] = w2.corrections(self.grid.z, decoded, self.valid, correction)
             encode_corrections(encoder, k, self.valid)
-        return with_checksum(self.header(step, correction, max_error) + encoder.finish())
+        return file_bytes(self.header_lines(step, correction, max_error), encoder.finish())
 
-    def header(self, step, correction, max_error):
-        """The text header up to and including the ``data`` line."""
+    def header_lines(self, step, correction, max_error):
+        """The lines of the text header, the magic line to the ``data`` line."""
         # lines at their defaults are left out: a face's file can be 1.5 KB, and they were 50 B of it
         lines = [magic_line(KIND, file_version(self.grid, VERSION, PROJECTED_VERSION)),
                  *grid_header_lines(self.grid, write_defaults=False)]
@@ -380,7 +380,7 @@ class Prepared:
             lines.append(f"correction {format_number(correction)}")
         if max_error is not None:
             lines.append(f"max_error {format_number(max_error)}")
-        return ("\n".join(lines + ["data"]) + "\n").encode("ascii")
+        return [*lines, "data"]
 
     def surface_rms(self, step):
         """RMS surface error of the wavelet-only reconstruction, estimated at the valid nodes:
@@ -513,10 +513,8 @@ def read(data, source="<bytes>"):
     """Decode dwt2d bytes (3.0, or 2.0 with its periodised transform) into a ZGrid; any bad input
     raises MzcError."""
     header, body, _first = read_header(data, source, KIND, VERSION[0], oldest_major=OLDEST_MAJOR,
-                                       projected_major=PROJECTED_VERSION[0], checksum_since=CHECKSUM_SINCE)
-    if b"\r\n" in data[:len(data) - len(body)]:
-        raise MzcError("the header's line ends are CRLF: the file was copied as text, which changes its binary "
-                       "payload; copy mzc files as binary", source=source, line=1)
+                                       projected_major=PROJECTED_VERSION[0], checksum_since=CHECKSUM_SINCE,
+                                       binary=True)
     fields, rows, cols = read_grid_fields(header)
     transform = w2.TRANSFORMS[header.major]
     wavelet, levels, steps, slope_limit, correction = read_codec_fields(header, (rows, cols), transform)

@@ -23,13 +23,13 @@ from mzc.codecs.base import Codec, Option
 from mzc.codecs.rows.transforms import fill_holes
 from mzc.errors import MzcError
 from mzc.formats.header import (
+    file_bytes,
     file_version,
     format_number,
     grid_header_lines,
     magic_line,
     read_grid_fields,
     read_header,
-    with_checksum,
 )
 from mzc.formats.zgrid import body_lines
 from mzc.grid import ZGrid
@@ -144,7 +144,7 @@ def write_grid(grid, codec, options):
     rows, holes = encode_rows(grid, codec, options)
     lines = [magic_line(codec.kind, file_version(grid, VERSION, PROJECTED_VERSION)), *codec.header_lines(options),
              *grid_header_lines(grid), "data", *rows, *holes]
-    return with_checksum(("\n".join(lines) + "\n").encode("utf-8"))
+    return file_bytes(lines)
 
 
 # --- reading ----------------------------------------------------------------------------
