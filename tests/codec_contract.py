@@ -58,6 +58,14 @@ def check_round_trip(codec, grid):
     return data
 
 
+def check_decoded_heights(codec, grid):
+    """``encode_with_decoded`` gives the bytes ``encode`` gives and, bit for bit, the heights
+    their decoder gets (what mzc batch reports errors from)."""
+    data, heights = codec.encode_with_decoded(grid, **codec.example)
+    assert data == codec.encode(grid, **codec.example)
+    np.testing.assert_array_equal(heights, codec.decode(data, "contract").z)
+
+
 def spec_examples(kind=None):
     """(file bytes, expected heights, id) of every worked example in spec/*.md (of one kind)."""
     cases = []
@@ -173,6 +181,7 @@ def check_codec(codec):
     """The whole contract: round trips, spec examples (when it has a page), hostile input, fixtures."""
     for grid in generated_grids():
         data = check_round_trip(codec, grid)
+        check_decoded_heights(codec, grid)
     check_hostile_input(codec, data)
     if codec.spec:
         check_spec_examples(codec)

@@ -18,6 +18,8 @@ from typing import TYPE_CHECKING, Any
 from mzc.errors import MzcError
 
 if TYPE_CHECKING:
+    import numpy as np
+
     from mzc.grid import ZGrid
 
 
@@ -85,7 +87,9 @@ class Codec:
     ``oldest_major`` the oldest major version it reads; ``selector`` names the option whose
     value comes with the flag itself (``--poly DEGREE``); ``spec`` is its spec page.
     ``check_options`` enforces rules between options (dwt2d: exactly one target);
-    ``example`` holds the options of a typical use (the contract tests encode with them).
+    ``example`` holds the options of a typical use (the contract tests encode with them);
+    ``writer_with_decoded(grid, **options) -> (bytes, heights)``, for a codec that reconstructs
+    the grid as it codes, also gives the heights a decoder will get (``encode_with_decoded``).
     """
 
     name: str
@@ -101,6 +105,7 @@ class Codec:
     oldest_major: int = 1
     example: dict[str, Any] = field(default_factory=dict)
     check_options: Callable[[dict[str, Any]], None] = field(default=lambda options: None)
+    writer_with_decoded: Callable[..., tuple[bytes, np.ndarray]] | None = None
 
     def __post_init__(self) -> None:
         if not self.kind:
@@ -123,12 +128,25 @@ class Codec:
         return {name: value for name, value in values.items() if value is not None}
 
     def encode(self, grid: ZGrid, **options: Any) -> bytes:
-        """The bytes of ``grid`` coded with ``options`` (checked; defaults filled in); heights too
-        large to code are refused (mzc.limits) rather than written as numbers no reader takes back."""
+        """The bytes of ``grid`` coded with ``options`` (checked; defaults filled in)."""
+        return self.writer(grid, **self.options_for(grid, options))
+
+    def encode_with_decoded(self, grid: ZGrid, **options: Any) -> tuple[bytes, np.ndarray]:
+        """The bytes of ``grid`` and the heights a decoder gets from them (NaN off the valid nodes),
+        so a caller can report the errors of what it wrote: from the writer where it knows them,
+        else by decoding the bytes."""
+        if self.writer_with_decoded is None:
+            data = self.encode(grid, **options)
+            return data, self.decode(data).z
+        return self.writer_with_decoded(grid, **self.options_for(grid, options))
+
+    def options_for(self, grid: ZGrid, options: dict[str, Any]) -> dict[str, Any]:
+        """``options`` checked for coding ``grid``, whose heights must not be too large to code
+        (mzc.limits) rather than written as numbers no reader takes back."""
         from mzc.limits import check_magnitude
 
         check_magnitude(grid.z, "heights", field="z")
-        return self.writer(grid, **self.checked(options))
+        return self.checked(options)
 
     def decode(self, data: bytes, source: str = "<bytes>") -> ZGrid:
         """The z-grid of a file of this codec; ``source`` names it in error messages."""

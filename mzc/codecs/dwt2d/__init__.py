@@ -349,7 +349,8 @@ class Prepared:
         return qflat, z
 
     def encode(self, step, max_error=None):
-        """File bytes for one detail step; with ``max_error`` a correction layer bounds every valid node."""
+        """(file bytes, the heights a decoder gets from them) for one detail step; with ``max_error``
+        a correction layer bounds every valid node."""
         from mzc.codecs.dwt2d.entropy import Encoder  # here, not at the top: `mzc encode` builds this
                                                        # module's CODEC whatever codec it runs
         qflat, decoded = self.decoded(step)
@@ -362,7 +363,9 @@ class Prepared:
             k = np.zeros(self.valid.shape, dtype=np.int64)
             k[self.valid] = w2.corrections(self.grid.z, decoded, self.valid, correction)
             encode_corrections(encoder, k, self.valid)
-        return file_bytes(self.header_lines(step, correction, max_error), encoder.finish())
+            decoded[self.valid] += correction * k[self.valid]   # as the decoder adds them
+        decoded[~self.valid] = np.nan
+        return file_bytes(self.header_lines(step, correction, max_error), encoder.finish()), decoded
 
     def header_lines(self, step, correction, max_error):
         """The lines of the text header, the magic line to the ``data`` line."""
@@ -432,9 +435,15 @@ def one_target(options):
         raise MzcError("give exactly one of max_error, rmse or size", field="dwt2d")
 
 
-def encode_grid(grid, max_error=None, rmse=None, size=None, wavelet=DEFAULT_WAVELET, level=None, slope_limit=None):
-    """Encode a ZGrid (options checked by CODEC); exactly one of ``max_error`` (bound at every valid node, grid units),
-    ``rmse`` (target RMS surface error) or ``size`` (target file bytes, not exceeded when reachable).
+def encode_grid(grid, **options):
+    """The bytes of a ZGrid (options checked by CODEC): see ``encode_grid_with_decoded``."""
+    return encode_grid_with_decoded(grid, **options)[0]
+
+
+def encode_grid_with_decoded(grid, max_error=None, rmse=None, size=None, wavelet=DEFAULT_WAVELET, level=None,
+                             slope_limit=None):
+    """(bytes, the heights a decoder gets from them) of a ZGrid (options checked by CODEC); exactly
+    one of ``max_error`` (bound at every valid node, grid units), ``rmse`` (target RMS surface error) or ``size`` (target file bytes, not exceeded when reachable).
 
     ``slope_limit`` defaults to SLOPE_LIMIT for ``rmse`` and ``size``, whose errors are
     surface distances, and to 1 (equal steps) for ``max_error``, a bound on heights, where
@@ -449,14 +458,14 @@ def encode_grid(grid, max_error=None, rmse=None, size=None, wavelet=DEFAULT_WAVE
     if max_error is not None:
         # the smallest file, except that a finer step (lower RMS error) wins within ALPHA_SLACK of it
         files = [prepared.encode(w2.round_step(a * target), target) for a in ALPHAS]
-        smallest = min(len(f) for f in files)
-        return next(f for f in files if len(f) <= smallest * (1 + ALPHA_SLACK))
+        smallest = min(len(data) for data, _ in files)
+        return next(file for file in files if len(file[0]) <= smallest * (1 + ALPHA_SLACK))
     span = prepared.height_range()
     if rmse is not None:
         step = w2.search_step(lambda s: prepared.surface_rms(w2.round_step(s)), target, 1e-9 * span, 4.0 * span)
         return prepared.encode(w2.round_step(step))
     # size falls as the step grows, so search the largest 1/step whose file still fits
-    step = 1.0 / w2.search_step(lambda inv: len(prepared.encode(w2.round_step(1.0 / inv))), target,
+    step = 1.0 / w2.search_step(lambda inv: len(prepared.encode(w2.round_step(1.0 / inv))[0]), target,
                                 1.0 / (4.0 * span), 1e9 / span, iterations=20)
     return prepared.encode(w2.round_step(step))
 
@@ -540,7 +549,7 @@ def read(data, source="<bytes>"):
 
 
 CODEC = Codec(
-    "dwt2d", encode_grid, read, version=VERSION, oldest_major=OLDEST_MAJOR, extension=".mzw2", spec="spec/dwt2d.md",
+    "dwt2d", encode_grid, read, writer_with_decoded=encode_grid_with_decoded, version=VERSION, oldest_major=OLDEST_MAJOR, extension=".mzw2", spec="spec/dwt2d.md",
     summary="2D wavelet of the whole grid, entropy coded, error-bounded", check_options=one_target,
     example={"max_error": 0.05}, options=(
         Option("max_error", float, None, 0, MAX_MAGNITUDE, min_open=True, metavar="E",
