@@ -17,33 +17,54 @@ def one_word(value):
     return value
 
 
+SLICE_OPTIONS = [   # the grid's options, shared with 'mzc batch encode'
+    click.option("--d1", type=float, metavar="F",
+                 help="Row spacing: distance between horizontal planes [default: from the data]."),
+    click.option("--d2", type=float, metavar="F",
+                 help="Column spacing along each row [default: from the data, else d1]."),
+    click.option("--rows", type=int, metavar="N", help="Number of rows across y instead of --d1."),
+    click.option("--cols", type=int, metavar="N", help="Number of columns across x instead of --d2."),
+    click.option("--thesis-grid", is_flag=True,
+                 help="The thesis's grid: 72 rows across the surface, columns ten times denser."),
+    click.option("--align", type=click.Choice(["none", "pca"]), default="none", show_default=True,
+                 help="pca: rotate so the least spread is z and the most spread is y."),
+    click.option("--projection", type=click.Choice(["auto", "planar", "cylindrical", "spherical"]), default="auto",
+                 show_default=True,
+                 help="Cutting surfaces: the thesis's parallel planes, or planes and half-planes through an axis "
+                      "(cylindrical), or half-planes and cones about a centre (spherical); auto picks what sees "
+                      "the surface best."),
+    click.option("--view", type=click.Choice(["auto", "+z", "-z", "+x", "-x", "+y", "-y"]), default="auto",
+                 show_default=True,
+                 help="The direction a planar grid looks along (the side it sees the surface from), in the "
+                      "--align frame; auto: the axis that sees most of the surface, from the side it faces."),
+    click.option("--center", type=float, nargs=3, metavar="X Y Z",
+                 help="Centre of a central projection (a point of a cylinder's axis) [default: chosen]."),
+    click.option("--axis", type=float, nargs=3, metavar="X Y Z",
+                 help="Axis direction of a central projection [default: chosen]."),
+    click.option("--units", metavar="TEXT", callback=lambda ctx, param, value: one_word(value),
+                 help="Length unit to record, e.g. mm (one word)."),
+]
+
+
+def slice_options(command):
+    """``command`` with the slicing options (SLICE_OPTIONS) added."""
+    for option in reversed(SLICE_OPTIONS):
+        command = option(command)
+    return command
+
+
+def check_slice_options(d1, d2, rows, cols):
+    """Refuse a spacing and a count given for the same direction."""
+    if d1 is not None and rows is not None:
+        raise click.UsageError("--d1 and --rows both set the rows: give one")
+    if d2 is not None and cols is not None:
+        raise click.UsageError("--d2 and --cols both set the columns: give one")
+
+
 @click.command("slice")
 @input_argument
 @output_option
-@click.option("--d1", type=float, metavar="F",
-              help="Row spacing: distance between horizontal planes [default: from the data].")
-@click.option("--d2", type=float, metavar="F", help="Column spacing along each row [default: from the data, else d1].")
-@click.option("--rows", type=int, metavar="N", help="Number of rows across y instead of --d1.")
-@click.option("--cols", type=int, metavar="N", help="Number of columns across x instead of --d2.")
-@click.option("--thesis-grid", is_flag=True,
-              help="The thesis's grid: 72 rows across the surface, columns ten times denser.")
-@click.option("--align", type=click.Choice(["none", "pca"]), default="none", show_default=True,
-              help="pca: rotate so the least spread is z and the most spread is y.")
-@click.option("--projection", type=click.Choice(["auto", "planar", "cylindrical", "spherical"]), default="auto",
-              show_default=True,
-              help="Cutting surfaces: the thesis's parallel planes, or planes and half-planes through an axis "
-                   "(cylindrical), or half-planes and cones about a centre (spherical); auto picks what sees "
-                   "the surface best.")
-@click.option("--view", type=click.Choice(["auto", "+z", "-z", "+x", "-x", "+y", "-y"]), default="auto",
-              show_default=True,
-              help="The direction a planar grid looks along (the side it sees the surface from), in the "
-                   "--align frame; auto: the axis that sees most of the surface, from the side it faces.")
-@click.option("--center", type=float, nargs=3, metavar="X Y Z",
-              help="Centre of a central projection (a point of a cylinder's axis) [default: chosen].")
-@click.option("--axis", type=float, nargs=3, metavar="X Y Z",
-              help="Axis direction of a central projection [default: chosen].")
-@click.option("--units", metavar="TEXT", callback=lambda ctx, param, value: one_word(value),
-              help="Length unit to record, e.g. mm (one word).")
+@slice_options
 @click.option("--precision", type=click.IntRange(0, 17), metavar="DIGITS",
               help="Decimal digits of the written heights.")
 def command(input, output, d1, d2, rows, cols, thesis_grid, align, projection, view, center, axis, units,
@@ -56,10 +77,7 @@ def command(input, output, d1, d2, rows, cols, thesis_grid, align, projection, v
     from mzc.meshes import read_mesh
     from mzc.streams import check_not_input, display_name
 
-    if d1 is not None and rows is not None:
-        raise click.UsageError("--d1 and --rows both set the rows: give one")
-    if d2 is not None and cols is not None:
-        raise click.UsageError("--d2 and --cols both set the columns: give one")
+    check_slice_options(d1, d2, rows, cols)
     check_not_input(output, input)
     mesh = read_mesh(input)
     with about(display_name(input), "slicing it"):

@@ -443,7 +443,8 @@ def encode_grid(grid, **options):
 def encode_grid_with_decoded(grid, max_error=None, rmse=None, size=None, wavelet=DEFAULT_WAVELET, level=None,
                              slope_limit=None):
     """(bytes, the heights a decoder gets from them) of a ZGrid (options checked by CODEC); exactly
-    one of ``max_error`` (bound at every valid node, grid units), ``rmse`` (target RMS surface error) or ``size`` (target file bytes, not exceeded when reachable).
+    one of ``max_error`` (bound at every valid node, grid units), ``rmse`` (target RMS surface
+    error) or ``size`` (target file bytes, not exceeded when reachable).
 
     ``slope_limit`` defaults to SLOPE_LIMIT for ``rmse`` and ``size``, whose errors are
     surface distances, and to 1 (equal steps) for ``max_error``, a bound on heights, where
@@ -549,7 +550,8 @@ def read(data, source="<bytes>"):
 
 
 CODEC = Codec(
-    "dwt2d", encode_grid, read, writer_with_decoded=encode_grid_with_decoded, version=VERSION, oldest_major=OLDEST_MAJOR, extension=".mzw2", spec="spec/dwt2d.md",
+    "dwt2d", encode_grid, read, writer_with_decoded=encode_grid_with_decoded, version=VERSION,
+    oldest_major=OLDEST_MAJOR, extension=".mzw2", spec="spec/dwt2d.md",
     summary="2D wavelet of the whole grid, entropy coded, error-bounded", check_options=one_target,
     example={"max_error": 0.05}, options=(
         Option("max_error", float, None, 0, MAX_MAGNITUDE, min_open=True, metavar="E",
