@@ -2,9 +2,10 @@
 
 The method follows a PhD thesis on cutting planes, per-row transforms and a PDE step (see
 README.md and spec/). ``import mzc`` gives the Python API (``mzc.api``): slice, encode,
-decode, densify, triangulate, compare, read and write, the ZGrid and Mesh types, the codec
-registry and the error types. The names are imported on first use, so that ``import mzc``
-(and the command line's start-up) stays free of numpy and scipy until they are needed.
+decode, densify, triangulate, compare, read and write, batch_encode and batch_decode (on
+Dask), the ZGrid and Mesh types, the codec registry and the error types. The names are
+imported on first use, so that ``import mzc`` (and the command line's start-up) stays free
+of numpy and scipy until they are needed.
 """
 
 from __future__ import annotations
@@ -16,7 +17,7 @@ __version__ = "0.1.0"
 
 HOMES = {
     **dict.fromkeys(("slice", "encode", "decode", "densify", "triangulate", "compare", "read", "write",
-                      "sample"), "mzc.api"),
+                      "sample", "batch_encode", "batch_decode"), "mzc.api"),
     "ZGrid": "mzc.grid",
     "Mesh": "mzc.meshes",
     "Codec": "mzc.codecs.base",
@@ -26,11 +27,24 @@ HOMES = {
 }
 __all__ = [  # the names of HOMES, spelled out so that linters and type checkers see them
     "__version__", "slice", "encode", "decode", "densify", "triangulate", "compare", "read", "write", "sample",
-    "ZGrid", "Mesh", "Codec", "Option", "register_codec", "get_codec", "codec_names", "MzcError", "MzcWarning",
+    "batch_encode", "batch_decode", "ZGrid", "Mesh", "Codec", "Option", "register_codec", "get_codec", "codec_names",
+    "MzcError", "MzcWarning",
 ]
 
 if TYPE_CHECKING:
-    from mzc.api import compare, decode, densify, encode, read, sample, slice, triangulate, write
+    from mzc.api import (
+        batch_decode,
+        batch_encode,
+        compare,
+        decode,
+        densify,
+        encode,
+        read,
+        sample,
+        slice,
+        triangulate,
+        write,
+    )
     from mzc.codecs import codec_names, get_codec, register_codec
     from mzc.codecs.base import Codec, Option
     from mzc.errors import MzcError, MzcWarning

@@ -169,3 +169,63 @@ def write(path: PathLike, item: ZGrid | Mesh | bytes, file_format: str | None = 
         from mzc.meshes import write_mesh
 
         write_mesh(path, as_mesh(item), file_format)
+
+
+def batch_encode(sources: Any, dest: PathLike, codec: str = "dwt2d", *, slice_options: dict[str, Any] | None = None,
+                 verify: bool = False, scheduler: str | None = None, workers: int | None = None,
+                 chunk_size: int | None = None, listener: Any = None, **codec_options: Any) -> Any:
+    """Slice and encode every mesh of ``sources`` (paths, folders, globs, ``@list`` files) into the
+    folder ``dest`` on Dask (``mzc batch encode``): ``slice_options`` are :func:`slice`'s,
+    ``codec_options`` :func:`encode`'s. Returns the ``mzc.batch.Summary`` (its ``rows`` are the
+    manifest's, ``dest``/manifest.csv); a bad file is a failed row, never an exception."""
+    import inspect
+
+    from mzc.codecs import get_codec
+    from mzc.meshes import registry
+    from mzc.ops.slicing import slice_surface
+
+    chosen = get_codec(codec)
+    defaults = {name: p.default for name, p in inspect.signature(slice_surface).parameters.items() if name != "mesh"}
+    unknown = sorted(set(slice_options or {}) - set(defaults))
+    if unknown:
+        raise MzcError(f"slice takes no option {unknown[0]!r} (it takes: {', '.join(sorted(defaults))})",
+                       field=unknown[0])
+    # the options that differ from slice's defaults: the same settings however they were spelled
+    slicing = {k: v for k, v in (slice_options or {}).items() if v not in (None, ()) and v != defaults[k]}
+    settings = {"codec": chosen.name, "codec_options": chosen.checked(codec_options), "slice_options": slicing}
+    extensions = [e for name in registry.FORMATS for e in registry.format_named(name).EXTENSIONS]
+    return run_batch_job("encode", sources, dest, settings, extensions, chosen.extension, verify=verify,
+                         scheduler=scheduler, workers=workers, chunk_size=chunk_size, listener=listener)
+
+
+def batch_decode(sources: Any, dest: PathLike, *, densify: int = 0, method: str = "biharmonic",
+                 file_format: str = "ply", jump_angle: float | None = None, scheduler: str | None = None,
+                 workers: int | None = None, chunk_size: int | None = None, listener: Any = None) -> Any:
+    """Decode every mzc file of ``sources`` into a mesh in the folder ``dest`` on Dask (``mzc batch
+    decode``): decoded, densified with ``densify`` rows between planes, triangulated into
+    ``file_format``. Returns the ``mzc.batch.Summary``."""
+    from mzc.codecs import codec_names, get_codec
+    from mzc.limits import MAX_INSERTED
+    from mzc.meshes import registry
+
+    if file_format not in registry.writable():
+        raise MzcError(f"cannot write mesh format {file_format!r} (known: {', '.join(registry.writable())})",
+                       field="file_format")
+    if not 0 <= int(densify) <= MAX_INSERTED:
+        raise MzcError(f"{densify} is not in 0..{MAX_INSERTED}", field="densify")
+    settings = {"densify": int(densify), "method": method, "format": file_format, "jump_angle": jump_angle}
+    extensions = [".zg", *(get_codec(name).extension for name in codec_names())]
+    return run_batch_job("decode", sources, dest, settings, extensions, "." + file_format, scheduler=scheduler,
+                         workers=workers, chunk_size=chunk_size, listener=listener)
+
+
+def run_batch_job(action: str, sources: Any, dest: PathLike, settings: dict[str, Any], extensions: list[str],
+                  output_extension: str, verify: bool = False, **engine: Any) -> Any:
+    """Collect the items of ``sources`` and run ``action`` on them (mzc.batch)."""
+    from mzc.batch import Job, run_batch
+    from mzc.batch.items import collect
+
+    sources = [os.fspath(sources)] if isinstance(sources, (str, os.PathLike)) else [os.fspath(s) for s in sources]
+    dest = os.path.abspath(os.fspath(dest))
+    items = collect(sources, extensions, output_extension, dest)
+    return run_batch(Job(action, dest, settings, verify), items, **engine)

@@ -25,6 +25,7 @@ COMMANDS = {
     "diff": "Compare two surfaces (meshes or z-grids).",
     "info": "Describe any mzc file.",
     "sample": "Write a built-in sample surface.",
+    "batch": "Slice and encode (or decode) whole archives, on Dask.",
 }
 
 
@@ -69,7 +70,9 @@ def main():
     warnings.simplefilter("once", MzcWarning)
     warnings.showwarning = show_warning
     try:
-        group.main(standalone_mode=False, prog_name="mzc")
+        status = group.main(standalone_mode=False, prog_name="mzc")   # a click Exit's status, or None
+        if status:
+            sys.exit(status)
     except click.exceptions.Exit as done:
         sys.exit(done.exit_code)
     except click.ClickException as usage:

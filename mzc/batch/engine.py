@@ -1,0 +1,234 @@
+"""Running a batch on Dask: chunks of items as tasks, faults, resuming, the summary.
+
+By default a local cluster is started for the run, one worker process per core with one
+thread each (the work is numpy's and holds the GIL between calls); ``scheduler`` sends the
+tasks to a running Dask scheduler instead, whose workers must see the same paths. Items go
+in chunks of several (``chunk_size``; by default about 32 chunks per worker, so that a
+worker's queue stays full and the last chunks even out), each chunk one task.
+
+Faults: an item that fails is a failed row and the batch goes on. A worker that dies has
+its chunks run again elsewhere by the scheduler (a local cluster's nanny restarts it); a
+chunk that killed workers the scheduler's allowed number of times is split into single
+items, and an item that still kills a worker becomes a failed row. Each finished chunk's
+rows are appended to the manifest before the next is waited for, and a rerun skips the
+items whose rows still hold, so a batch killed at any moment resumes where it stopped.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+import os
+import sys
+import time
+import uuid
+from contextlib import contextmanager
+from dataclasses import dataclass, field
+
+from mzc.batch import manifest
+from mzc.batch.work import run_chunk
+from mzc.errors import MzcError
+
+CHUNKS_PER_WORKER = 32
+MAX_CHUNK = 64
+SPAWN_ENVIRONMENT = "distributed.nanny.pre-spawn-environ"
+DASK_MISSING = "mzc batch runs on Dask, which is not installed: pip install 'mzc[batch]'"
+
+
+@dataclass
+class Summary:
+    """What a batch did: one row per item (done now, or ``skipped`` as done before), and time."""
+
+    action: str
+    rows: list[dict] = field(default_factory=list)
+    seconds: float = 0.0
+
+    @property
+    def failed(self) -> list[dict]:
+        return [row for row in self.rows if row.get("status") != "ok"]
+
+    @property
+    def skipped(self) -> int:
+        return sum(1 for row in self.rows if row.get("skipped"))
+
+    def total(self, column: str) -> int:
+        """The sum of a byte column over the items that are done."""
+        return sum(int(row.get(column) or 0) for row in self.rows if row.get("status") == "ok")
+
+    def line(self) -> str:
+        """The one-line summary: items, bytes in and out, ratio, rate, skipped and failed items."""
+        done_in, done_out = self.total("input_bytes"), self.total("output_bytes")
+        ratio = f" ({done_in / done_out:.0f}x smaller)" if done_out and self.action == "encode" else ""
+        rate = len(self.rows) / self.seconds if self.seconds > 0 else 0.0
+        return (f"mzc batch {self.action}: {len(self.rows)} items, {human_bytes(done_in)} in, {human_bytes(done_out)} "
+                f"out{ratio}, {rate:.2f} items/s in {self.seconds:.1f} s; {self.skipped} skipped, "
+                f"{len(self.failed)} failed")
+
+
+def human_bytes(count):
+    """``1234567`` as ``1.2 MB``."""
+    for unit in ("B", "KB", "MB", "GB", "TB"):
+        if count < 1000 or unit == "TB":
+            return f"{count:.0f} {unit}" if unit == "B" else f"{count:.1f} {unit}"
+        count /= 1000
+
+
+def run_batch(job, items, scheduler=None, workers=None, chunk_size=None, listener=None):
+    """Do ``job`` to every item on Dask and return the Summary; the manifest in ``job.dest`` holds
+    the rows. ``listener`` (optional) has ``started(count)`` and ``row(row)``, told as rows come."""
+    started = time.perf_counter()
+    os.makedirs(job.dest, exist_ok=True)
+    path = manifest.path_in(job.dest)
+    previous = manifest.read(path)
+    tasks = [(item, matching(previous.get(item.output), item)) for item in items]
+    summary = Summary(job.action)
+    if listener is not None:
+        listener.started(len(tasks))
+    appender = manifest.Appender(path)
+    try:
+        with dask_client(scheduler, workers) as client:
+            size = chunk_size or default_chunk_size(len(tasks), worker_count(client))
+            for rows in finished_chunks(client, job, [tasks[i:i + size] for i in range(0, len(tasks), size)]):
+                appender.append([row for row in rows if not row.get("skipped")])
+                for row in rows:
+                    summary.rows.append(row)
+                    if listener is not None:
+                        listener.row(row)
+    finally:
+        appender.close()
+        done = {row["output"]: {k: v for k, v in row.items() if k != "skipped"} for row in summary.rows}
+        manifest.rewrite(path, list({**previous, **done}.values()))
+        summary.seconds = time.perf_counter() - started
+    return summary
+
+
+def matching(row, item):
+    """An earlier run's row for ``item``'s output, when it was made from the same input path."""
+    return row if row is not None and row.get("input") == item.source else None
+
+
+def default_chunk_size(count, workers):
+    """Items per task: about CHUNKS_PER_WORKER tasks per worker, at most MAX_CHUNK items each."""
+    return max(1, min(MAX_CHUNK, math.ceil(count / (max(1, workers) * CHUNKS_PER_WORKER))))
+
+
+def worker_count(client):
+    """The workers the scheduler has now."""
+    return len(client.scheduler_info().get("workers", {}))
+
+
+def finished_chunks(client, job, chunks):
+    """The rows of each chunk as its task finishes (in the order they finish). A chunk whose task
+    kept killing workers is split into single items; an item that does is a failed row."""
+    from distributed import as_completed
+    from distributed.scheduler import KilledWorker
+
+    run = uuid.uuid4().hex[:8]
+    submitted = {}
+
+    def submit(chunk, index):
+        future = client.submit(run_chunk, job, chunk, pure=False, key=f"mzc-batch-{run}-{index}")
+        submitted[future.key] = chunk
+        return future
+
+    pending = as_completed([submit(chunk, str(i)) for i, chunk in enumerate(chunks)])
+    for future in pending:
+        chunk = submitted.pop(future.key)
+        try:
+            yield future.result()
+        except KilledWorker:
+            if len(chunk) > 1:
+                for i, task in enumerate(chunk):
+                    pending.add(submit([task], f"{future.key}-{i}"))
+            else:
+                yield [killed_row(job, chunk[0][0])]
+        finally:
+            future.release()
+
+
+def killed_row(job, item):
+    """The failed row of an item whose task killed every worker that ran it."""
+    return {"input": item.source, "output": item.output, "settings": job.settings_text, "status": "failed",
+            "error": f"{item.source}: a worker died each time it ran this file (out of memory, or a crash)"}
+
+
+def worker_environment():
+    """The environment a local cluster's nannies give their workers: Dask's, less its
+    MALLOC_TRIM_THRESHOLD_. Setting that variable turns off glibc's adaptive mmap threshold, so
+    every array above 64 KB is mapped and unmapped afresh: slicing and encoding a face took 2.0x
+    as long (0.75 s against 0.38 s a face, most of it in page faults: benchmarks/batch-results.md)."""
+    import dask
+
+    environment = dict(dask.config.get(SPAWN_ENVIRONMENT, {}))
+    environment.pop("MALLOC_TRIM_THRESHOLD_", None)
+    return environment
+
+
+@contextmanager
+def dask_client(scheduler=None, workers=None):
+    """A Dask client for the run: to the scheduler at ``scheduler``, or to a local cluster of
+    ``workers`` processes (one per core by default) started and stopped with it."""
+    try:
+        import dask
+        from distributed import Client, LocalCluster
+    except ImportError:
+        raise MzcError(DASK_MISSING) from None
+    quiet = logging.CRITICAL
+    for name in ("distributed", "tornado", "asyncio"):
+        logging.getLogger(name).setLevel(quiet)
+    if scheduler is not None:
+        try:
+            client = Client(scheduler, timeout=30)
+        except (OSError, TimeoutError, ValueError) as error:
+            raise MzcError(f"cannot reach the Dask scheduler: {error}", source=scheduler) from None
+        with client:
+            yield client
+        return
+    with dask.config.set({SPAWN_ENVIRONMENT: worker_environment()}), \
+            LocalCluster(n_workers=workers or os.cpu_count() or 1, threads_per_worker=1, processes=True,
+                         dashboard_address=None, silence_logs=quiet) as cluster, Client(cluster) as client:
+        yield client
+
+
+class TerminalProgress:
+    """A listener that prints each failed item's error on ``stream`` as it comes and, when
+    ``bar`` is true (stderr is a terminal), keeps one updated line: items, bytes in and out,
+    rate and ETA."""
+
+    def __init__(self, stream=sys.stderr, bar=False):
+        self.stream, self.bar = stream, bar
+        self.count = self.done = self.bytes_in = self.bytes_out = 0
+        self.started_at = time.perf_counter()
+
+    def started(self, count):
+        self.count = count
+        self.started_at = time.perf_counter()
+        self.draw()
+
+    def row(self, row):
+        self.done += 1
+        if row.get("status") == "ok":
+            self.bytes_in += int(row.get("input_bytes") or 0)
+            self.bytes_out += int(row.get("output_bytes") or 0)
+        else:
+            self.clear()
+            print(f"mzc: {row.get('error')}", file=self.stream, flush=True)
+        self.draw()
+
+    def draw(self):
+        if not self.bar:
+            return
+        elapsed = time.perf_counter() - self.started_at
+        rate = self.done / elapsed if elapsed > 0 else 0.0
+        eta = (self.count - self.done) / rate if rate > 0 else float("nan")
+        filled = int(20 * self.done / self.count) if self.count else 20
+        eta_text = f"ETA {eta:.0f} s" if math.isfinite(eta) else "ETA ?"
+        self.stream.write(f"\r[{'#' * filled}{'.' * (20 - filled)}] {self.done}/{self.count} items, "
+                          f"{human_bytes(self.bytes_in)} in, {human_bytes(self.bytes_out)} out, {rate:.1f} items/s, "
+                          f"{eta_text}\x1b[K")
+        self.stream.flush()
+
+    def clear(self):
+        if self.bar:
+            self.stream.write("\r\x1b[K")
+            self.stream.flush()

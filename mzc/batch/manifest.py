@@ -1,0 +1,117 @@
+"""The manifest of a batch: ``manifest.csv`` in the destination folder, one row per output.
+
+Columns (README, "mzc batch"): the input's path, bytes and SHA-256; the output's path
+(relative to the destination) and bytes; the grid's rows, columns and valid nodes; the
+settings (compact JSON); the codec's errors at the grid's nodes, and with ``--verify`` the
+whole-surface RMS and Hausdorff distances; seconds and the stages' timings; status (ok or
+failed), the one-line error of a failed item and any warning.
+
+Rows are appended (and flushed to disk) as chunks finish, so a batch killed at any moment
+leaves the rows of everything it finished; at the end the whole manifest is rewritten
+atomically, one row per output, sorted. Reading takes the last row of each output and
+ignores a line cut short by a kill.
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+import os
+
+from mzc.errors import MzcError
+
+NAME = "manifest.csv"
+COLUMNS = ("input", "input_bytes", "input_sha256", "output", "output_bytes", "rows", "cols", "valid_nodes",
+           "settings", "node_rms", "node_max_error", "surface_rms", "surface_hausdorff", "seconds", "timings",
+           "status", "error", "warning")
+FLOAT_FORMAT = {"seconds": "{:.3f}"}   # everything else: repr, exact
+
+
+def path_in(dest):
+    """The manifest's path in the destination folder ``dest``."""
+    return os.path.join(dest, NAME)
+
+
+def cell(name, value):
+    """A row's value as its CSV text."""
+    if value is None:
+        return ""
+    if isinstance(value, float):
+        return FLOAT_FORMAT.get(name, "{!r}").format(value)
+    return str(value)
+
+
+def line_of(row):
+    """One row as a CSV line (the COLUMNS, in order)."""
+    text = io.StringIO()
+    csv.writer(text, lineterminator="\n").writerow([cell(name, row.get(name)) for name in COLUMNS])
+    return text.getvalue()
+
+
+def text_of(rows):
+    """A whole manifest: the header line, then ``rows`` sorted by output."""
+    header = ",".join(COLUMNS) + "\n"
+    return header + "".join(line_of(row) for row in sorted(rows, key=lambda r: r["output"]))
+
+
+def read(path):
+    """output -> row (a dict of COLUMNS -> text) of the manifest at ``path``; {} when there is none.
+    A line that is not a whole row (a kill cut it short) is left out."""
+    try:
+        with open(path, encoding="utf-8", newline="") as file:
+            text = file.read()
+    except FileNotFoundError:
+        return {}
+    except (OSError, UnicodeDecodeError) as error:
+        raise MzcError(f"cannot read the manifest: {getattr(error, 'strerror', None) or error}", source=path) from None
+    if not text.endswith("\n"):
+        text = text[:text.rfind("\n") + 1]   # the line a kill cut
+    lines = list(csv.reader(io.StringIO(text)))
+    if not lines:
+        return {}
+    if tuple(lines[0]) != COLUMNS:
+        raise MzcError(f"not an mzc batch manifest (its first line is not {','.join(COLUMNS[:3])},...): "
+                       "give another -o or move it away", source=path, line=1)
+    return {fields[3]: dict(zip(COLUMNS, fields)) for fields in lines[1:] if len(fields) == len(COLUMNS)}
+
+
+class Appender:
+    """Rows appended to the manifest as they come, each batch of them flushed to disk."""
+
+    def __init__(self, path):
+        self.path = path
+        try:
+            self.file = open(path, "a+b")
+            cut_partial_line(self.file)
+        except OSError as error:
+            raise MzcError(f"cannot write the manifest: {error.strerror or error}", source=path) from None
+        self.file = io.TextIOWrapper(self.file, encoding="utf-8", newline="")
+        if self.file.tell() == 0:
+            self.file.write(",".join(COLUMNS) + "\n")
+
+    def append(self, rows):
+        """Write ``rows`` and make them durable."""
+        self.file.write("".join(line_of(row) for row in rows))
+        self.file.flush()
+        os.fsync(self.file.fileno())
+
+    def close(self):
+        self.file.close()
+
+
+def cut_partial_line(file):
+    """Truncate ``file`` (binary, open for appending) after its last newline: a kill may have cut
+    its last row short, and rows appended after it must start on a line of their own."""
+    file.seek(0)
+    data = file.read()
+    keep = data.rfind(b"\n") + 1
+    if keep != len(data):
+        file.truncate(keep)
+    file.seek(0, os.SEEK_END)
+
+
+def rewrite(path, rows):
+    """Replace the manifest at ``path`` by ``rows`` (atomically)."""
+    from mzc.streams import write_output
+
+    write_output(path, text_of(rows).encode("utf-8"))

@@ -1,0 +1,199 @@
+"""One item of a batch, done in the process that runs it: a Dask worker, or any Python.
+
+``run_chunk`` is the task a worker gets: many items, one row each. An item that fails
+(a bad file, a grid too large, a file mzc cannot slice) becomes a row with its one-line
+error; the chunk goes on. The work is that of the filters, called in-process: ``encode``
+reads a mesh, slices it (the options of ``mzc slice``) and encodes it (those of ``mzc
+encode``), so its output is byte for byte that of ``mzc slice | mzc encode``; ``decode``
+decodes, optionally densifies and triangulates (``mzc decode | mzc densify | mzc
+triangulate``).
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import os
+import time
+import warnings
+from contextlib import contextmanager
+from dataclasses import dataclass, field
+from typing import Any
+
+from mzc.errors import MzcError, MzcWarning, about
+
+ACTIONS = ("encode", "decode")
+
+
+@dataclass(frozen=True)
+class Job:
+    """What a batch does to every item: ``action`` (encode or decode) with ``settings``, into the
+    folder ``dest``.
+
+    For encode, ``settings`` holds ``codec`` (a registry name), ``codec_options`` (as the codec
+    checked them) and ``slice_options`` (those of ``mzc slice`` that were given); for decode,
+    ``densify`` (rows to insert), ``method``, ``jump_angle`` and ``format``. ``verify`` also
+    measures the whole-surface distance between each input and its decoded output (encode).
+    """
+
+    action: str
+    dest: str
+    settings: dict[str, Any] = field(default_factory=dict)
+    verify: bool = False
+
+    @property
+    def settings_text(self) -> str:
+        """The settings as the manifest records them (and a rerun compares them): compact JSON."""
+        return json.dumps(self.settings, sort_keys=True, separators=(",", ":"))
+
+
+class Timings:
+    """Seconds spent in each stage of an item, in the order the stages ran."""
+
+    def __init__(self):
+        self.seconds = {}
+
+    @contextmanager
+    def stage(self, name):
+        started = time.perf_counter()
+        try:
+            yield
+        finally:
+            self.seconds[name] = self.seconds.get(name, 0.0) + time.perf_counter() - started
+
+    def text(self):
+        """``read 0.006 slice 0.150 ...``: the manifest's timings column."""
+        return " ".join(f"{name} {seconds:.4f}" for name, seconds in self.seconds.items())
+
+
+def run_chunk(job, tasks):
+    """The rows of ``tasks``, a list of (Item, previous row or None): an item whose previous row
+    still holds (same input bytes, its output there) is kept as it was, marked ``skipped``."""
+    return [run_item(job, item, previous) for item, previous in tasks]
+
+
+def run_item(job, item, previous=None):
+    """The manifest row of one item, done (or found done) now; never raises for a bad input."""
+    started = time.perf_counter()
+    timings = Timings()
+    row = {"input": item.source, "output": item.output, "settings": job.settings_text}
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("ignore")
+        warnings.simplefilter("always", MzcWarning)
+        try:
+            with timings.stage("read"):
+                data = read_bytes(item.source)
+            row.update(input_bytes=len(data), input_sha256=hashlib.sha256(data).hexdigest())
+            if still_done(job, row, previous):
+                return {**previous, "skipped": True}
+            output = (encode_item if job.action == "encode" else decode_item)(job, item, data, row, timings)
+            with timings.stage("write"):
+                write_item(job, item, output)
+            row.update(output_bytes=len(output), status="ok")
+        except MzcError as error:
+            row.update(status="failed", error=str(error))
+        except MemoryError:
+            row.update(status="failed", error=f"{item.source}: out of memory")
+        except Exception as error:  # noqa: BLE001 - one bad item must not stop the batch
+            row.update(status="failed", error=f"{item.source}: internal error: {type(error).__name__}: {error}")
+    warned = "; ".join(dict.fromkeys(str(w.message) for w in caught if issubclass(w.category, MzcWarning)))
+    row.update(warning=warned, seconds=time.perf_counter() - started, timings=timings.text())
+    return row
+
+
+def read_bytes(path):
+    """The bytes of an input file, or an MzcError naming it."""
+    try:
+        with open(path, "rb") as file:
+            return file.read()
+    except OSError as error:
+        raise MzcError(f"cannot read: {error.strerror or error}", source=path) from None
+
+
+def still_done(job, row, previous):
+    """True when ``previous``, the item's row from an earlier run, holds for the input read now:
+    done with the same settings from the same bytes, its output of the recorded size in place."""
+    if not previous or previous.get("status") != "ok" or previous.get("settings") != row["settings"]:
+        return False
+    if previous.get("input_sha256") != row["input_sha256"]:
+        return False
+    try:
+        return os.path.getsize(os.path.join(job.dest, row["output"])) == int(previous.get("output_bytes", -1))
+    except (OSError, ValueError):
+        return False
+
+
+def encode_item(job, item, data, row, timings):
+    """A mesh's bytes sliced and encoded: the compressed file, with the grid and the codec's
+    errors at the grid's nodes (and with ``verify`` the whole-surface distance) in ``row``."""
+    import numpy as np
+
+    from mzc.codecs import get_codec
+    from mzc.meshes import mesh_from_bytes
+    from mzc.ops.slicing import slice_surface
+
+    settings, source = job.settings, item.source
+    with timings.stage("read"):
+        mesh = mesh_from_bytes(data, source)
+    with timings.stage("slice"), about(source, "slicing it"):
+        grid = slice_surface(mesh, **settings["slice_options"])
+    codec = get_codec(settings["codec"])
+    with timings.stage("encode"), about(source, f"encoding it with {codec.name}"):
+        output, decoded = codec.encode_with_decoded(grid, **settings["codec_options"])
+    valid = grid.valid
+    errors = np.abs(decoded[valid] - grid.z[valid])
+    row.update(rows=grid.shape[0], cols=grid.shape[1], valid_nodes=int(valid.sum()),
+               node_rms=float(np.sqrt(np.mean(errors ** 2))) if errors.size else 0.0,
+               node_max_error=float(errors.max()) if errors.size else 0.0)
+    if job.verify:
+        with timings.stage("verify"), about(source, "measuring the decoded surface"):
+            row.update(surface_distances(mesh, grid, decoded))
+    return output
+
+
+def surface_distances(mesh, grid, decoded):
+    """The whole-surface RMS and Hausdorff distances between ``mesh`` and the mesh of ``grid``
+    with the ``decoded`` heights (``mzc diff --surface``)."""
+    import dataclasses
+
+    from mzc.measure import compare_surfaces
+    from mzc.ops.triangulation import grid_to_mesh
+
+    report = compare_surfaces(mesh, grid_to_mesh(dataclasses.replace(grid, z=decoded)), surface=True).report
+    return {"surface_rms": report["surface_rms"], "surface_hausdorff": report["surface_hausdorff"]}
+
+
+def decode_item(job, item, data, row, timings):
+    """An mzc file's bytes decoded, densified when asked and triangulated: the mesh file's bytes."""
+    from mzc.formats import is_mzc, read_any
+    from mzc.meshes import mesh_to_bytes
+    from mzc.ops.triangulation import grid_to_mesh
+
+    settings, source = job.settings, item.source
+    if not data:
+        raise MzcError("empty input: expected an mzc file", source=source)
+    if not is_mzc(data):
+        raise MzcError("not an mzc file", source=source, line=1)
+    with timings.stage("decode"), about(source, "decoding it"):
+        grid = read_any(data, source)
+    row.update(rows=grid.shape[0], cols=grid.shape[1], valid_nodes=int(grid.valid.sum()))
+    if settings["densify"]:
+        from mzc.ops.densify import densify_grid
+
+        with timings.stage("densify"), about(source, f"densifying it ({settings['method']}, "
+                                                     f"n = {settings['densify']})"):
+            grid = densify_grid(grid, settings["densify"], settings["method"], jump_angle=settings["jump_angle"])
+    with timings.stage("triangulate"), about(source, "triangulating it"):
+        return mesh_to_bytes(grid_to_mesh(grid, settings["jump_angle"]), settings["format"])
+
+
+def write_item(job, item, output):
+    """Write an item's output under the destination (atomically, folders made as needed)."""
+    from mzc.streams import write_output
+
+    path = os.path.join(job.dest, item.output)
+    try:
+        os.makedirs(os.path.dirname(path), exist_ok=True)
+    except OSError as error:
+        raise MzcError(f"cannot make the folder: {error.strerror or error}", source=os.path.dirname(path)) from None
+    write_output(path, output)
