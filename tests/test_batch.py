@@ -1,0 +1,346 @@
+"""mzc batch: items and layout, the manifest, one item's work, and whole runs on real Dask
+processes (a scheduler and two workers on 127.0.0.1) with a worker and then the client
+killed mid-run."""
+
+import csv
+import hashlib
+import os
+import signal
+import socket
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+import mzc
+from mzc.batch import Job, items, manifest, work
+from mzc.errors import MzcError
+from mzc.meshes import mesh_to_bytes, read_mesh
+
+from conftest import FACES, face_path, run_mzc
+
+pytest.importorskip("distributed")
+
+RMSE = {"rmse": 0.05}
+ENCODE = {"codec": "dwt2d", "codec_options": {"rmse": 0.05, "wavelet": "bior4.4"}, "slice_options": {}}
+
+
+def face_files():
+    """The 13 shared faces (12 PLY, one OBJ), or a skip."""
+    faces = sorted(FACES.glob("*.ply")) + [FACES / "example.obj"] if FACES.is_dir() else []
+    if len(faces) < 13:
+        pytest.skip("shared face data not available")
+    return faces
+
+
+def archive(folder, faces, bad=True):
+    """A folder of the faces (linked), in two subfolders, plus a cut PLY and an empty file."""
+    for index, face in enumerate(faces):
+        target = folder / ("left" if index % 2 else "right") / face.name
+        target.parent.mkdir(parents=True, exist_ok=True)
+        target.symlink_to(face)
+    if bad:
+        (folder / "cut.ply").write_bytes(faces[0].read_bytes()[:5000])
+        (folder / "empty.ply").write_bytes(b"")
+    return folder
+
+
+def rows_of(dest):
+    """The manifest's rows, output -> row."""
+    return manifest.read(manifest.path_in(str(dest)))
+
+
+def expected_bytes(face, **options):
+    """What ``mzc slice FACE | mzc encode --dwt2d ...`` writes, computed in process."""
+    return mzc.encode(mzc.slice(read_mesh(face)), "dwt2d", **options)
+
+
+# --------------------------------------------------------------------------- items
+
+
+def test_a_folder_is_walked_with_its_layout_leaving_out_hidden_names_and_the_destination(tmp_path):
+    for name in ("a.ply", "sub/b.obj", "sub/deeper/c.stl", ".hidden/d.ply", "sub/.e.ply", "notes.md",
+                 "out/old.ply"):
+        (tmp_path / name).parent.mkdir(parents=True, exist_ok=True)
+        (tmp_path / name).write_text("x")
+    found = items.collect([str(tmp_path)], [".ply", ".obj", ".stl"], ".mzw2", str(tmp_path / "out"))
+    assert [(Path(i.source).relative_to(tmp_path).as_posix(), i.output) for i in found] == [
+        ("a.ply", "a.mzw2"), ("sub/b.obj", "sub/b.mzw2"), ("sub/deeper/c.stl", "sub/deeper/c.mzw2")]
+
+
+def test_globs_keep_the_layout_below_their_fixed_part_and_files_keep_their_name(tmp_path):
+    for name in ("2026/01/a.ply", "2026/02/b.ply", "2026/02/c.obj"):
+        (tmp_path / name).parent.mkdir(parents=True, exist_ok=True)
+        (tmp_path / name).write_text("x")
+    found = items.collect([str(tmp_path / "2026" / "*" / "*.ply"), str(tmp_path / "2026/02/c.obj")], [".ply"],
+                          ".mzw2", str(tmp_path / "out"))
+    assert [i.output for i in found] == ["01/a.mzw2", "02/b.mzw2", "c.mzw2"]
+
+
+def test_a_list_of_paths_skips_comments_and_takes_relative_paths_from_its_folder(tmp_path):
+    for name in ("scans/x/a.ply", "scans/y/b.ply"):
+        (tmp_path / name).parent.mkdir(parents=True, exist_ok=True)
+        (tmp_path / name).write_text("x")
+    listing = tmp_path / "todo.txt"
+    listing.write_text(f"# today\nscans/x/a.ply\n\n{tmp_path / 'scans/y/b.ply'}\n")
+    found = items.collect([f"@{listing}"], [".ply"], ".mzw2", str(tmp_path / "out"))
+    assert [i.output for i in found] == ["x/a.mzw2", "y/b.mzw2"]
+    listing.write_text("scans/x/a.ply\nscans/nope.ply\n")
+    with pytest.raises(MzcError, match=r"todo.txt:2: no such file"):
+        items.collect([f"@{listing}"], [".ply"], ".mzw2", str(tmp_path / "out"))
+
+
+@pytest.mark.parametrize("sources, problem", [
+    (["missing.ply"], "missing.ply: no such file or folder"),
+    (["empty"], "no input found here"),
+    (["*.nothing"], "no input found here"),
+    (["a/f.ply", "b/f.ply"], "would both write f.mzw2"),
+])
+def test_sources_that_name_nothing_or_collide_are_refused_before_any_work(tmp_path, monkeypatch, sources, problem):
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "empty").mkdir()
+    for name in ("a/f.ply", "b/f.ply"):
+        (tmp_path / name).parent.mkdir(exist_ok=True)
+        (tmp_path / name).write_text("x")
+    with pytest.raises(MzcError, match=problem):
+        items.collect(sources, [".ply"], ".mzw2", str(tmp_path / "out"))
+
+
+# --------------------------------------------------------------------------- manifest
+
+text = st.text(st.characters(blacklist_categories=("Cs",), blacklist_characters="\r\n\x00"), max_size=40)
+
+
+@settings(max_examples=100, deadline=None)
+@given(st.lists(st.fixed_dictionaries({name: text for name in manifest.COLUMNS}), max_size=8,
+                unique_by=lambda row: row["output"]))
+def test_the_manifest_reads_back_what_it_wrote(rows):
+    with_cells = [{name: manifest.cell(name, value) for name, value in row.items()} for row in rows]
+    path = Path(os.environ.get("TMPDIR", "/tmp")) / f"mzc-manifest-{os.getpid()}.csv"
+    try:
+        path.write_text(manifest.text_of(rows), encoding="utf-8")
+        assert manifest.read(str(path)) == {row["output"]: row for row in with_cells}
+    finally:
+        path.unlink(missing_ok=True)
+
+
+def test_a_row_cut_by_a_kill_is_dropped_and_appending_starts_on_a_new_line(tmp_path):
+    path = str(tmp_path / manifest.NAME)
+    whole = {"input": "/a.ply", "output": "a.mzw2", "status": "ok", "seconds": 0.25}
+    cut = manifest.line_of({"input": "/b.ply", "output": "b.mzw2", "status": "ok"})[:-9]
+    Path(path).write_text(manifest.text_of([whole]) + cut, encoding="utf-8")
+    assert list(manifest.read(path)) == ["a.mzw2"]
+    appender = manifest.Appender(path)
+    appender.append([{"input": "/c.ply", "output": "c.mzw2", "status": "failed", "error": 'bad, "quoted"'}])
+    appender.close()
+    rows = manifest.read(path)
+    assert list(rows) == ["a.mzw2", "c.mzw2"] and rows["c.mzw2"]["error"] == 'bad, "quoted"'
+    assert rows["a.mzw2"]["seconds"] == "0.250"
+
+
+def test_a_file_that_is_not_a_manifest_is_not_overwritten(tmp_path):
+    (tmp_path / manifest.NAME).write_text("name,size\nmine,1\n")
+    with pytest.raises(MzcError, match="not an mzc batch manifest"):
+        manifest.read(str(tmp_path / manifest.NAME))
+
+
+# --------------------------------------------------------------------------- one item
+
+
+def test_an_item_gives_the_bytes_of_slice_then_encode_and_the_errors_at_the_nodes(tmp_path, f18):
+    job = Job("encode", str(tmp_path), ENCODE)
+    row = work.run_item(job, items.Item(str(f18), "f18.mzw2"))
+    data = (tmp_path / "f18.mzw2").read_bytes()
+    assert row["status"] == "ok" and data == expected_bytes(f18, **RMSE)
+    assert row["input_sha256"] == hashlib.sha256(f18.read_bytes()).hexdigest()
+    assert (row["input_bytes"], row["output_bytes"]) == (f18.stat().st_size, len(data))
+    decoded = mzc.decode(data)
+    grid = mzc.slice(read_mesh(f18))
+    error = abs(decoded.z - grid.z)[grid.valid]
+    assert row["node_max_error"] == error.max() and row["valid_nodes"] == grid.valid.sum()
+    assert (row["rows"], row["cols"]) == grid.shape
+    assert set(row["timings"].split()[::2]) == {"read", "slice", "encode", "write"}
+
+
+def test_a_rerun_keeps_an_item_only_while_its_input_settings_and_output_hold(tmp_path):
+    source = tmp_path / "bump.obj"
+    source.write_bytes(mesh_to_bytes(mzc.sample("bump"), "obj"))
+    item = items.Item(str(source), "bump.mzw2")
+    job = Job("encode", str(tmp_path), ENCODE)
+    first = work.run_item(job, item)
+    previous = {name: manifest.cell(name, value) for name, value in first.items()}
+    assert work.run_item(job, item, previous).get("skipped")
+    assert not work.run_item(Job("encode", str(tmp_path), {**ENCODE, "codec": "dct"}), item, previous).get("skipped")
+    (tmp_path / "bump.mzw2").write_bytes(b"cut")
+    assert not work.run_item(job, item, previous).get("skipped")
+    source.write_bytes(source.read_bytes() + b"# changed\n")
+    assert not work.run_item(job, item, previous).get("skipped")
+
+
+def test_bad_items_become_failed_rows_with_their_one_line_error(tmp_path):
+    (tmp_path / "empty.ply").write_bytes(b"")
+    (tmp_path / "words.obj").write_text("v 1 2 three\n")
+    job = Job("encode", str(tmp_path / "out"), ENCODE)
+    rows = work.run_chunk(job, [(items.Item(str(tmp_path / n), n + ".mzw2"), None)
+                                for n in ("empty.ply", "words.obj", "gone.ply")])
+    assert [r["status"] for r in rows] == ["failed"] * 3
+    assert "empty input" in rows[0]["error"] and "words.obj:1" in rows[1]["error"]
+    assert "gone.ply: cannot read" in rows[2]["error"]
+    assert all("\n" not in r["error"] for r in rows) and not (tmp_path / "out").exists()
+
+
+# --------------------------------------------------------------------------- whole runs
+
+
+def test_a_local_cluster_encodes_and_decodes_an_archive(tmp_path):
+    source = tmp_path / "in"
+    source.mkdir()
+    for name in ("bump", "tube"):
+        (source / f"{name}.obj").write_bytes(mesh_to_bytes(mzc.sample(name), "obj"))
+    summary = mzc.batch_encode(source, tmp_path / "coded", max_error=0.01, workers=2)
+    assert not summary.failed and len(summary.rows) == 2
+    assert summary.line().endswith("0 skipped, 0 failed")
+    meshes = mzc.batch_decode(tmp_path / "coded", tmp_path / "meshes", densify=1, file_format="obj", workers=2)
+    assert not meshes.failed
+    for name in ("bump", "tube"):
+        data = (tmp_path / "coded" / f"{name}.mzw2").read_bytes()
+        assert data == mzc.encode(mzc.slice(source / f"{name}.obj"), "dwt2d", max_error=0.01)
+        rebuilt = mzc.triangulate(mzc.densify(mzc.decode(data), 1))
+        assert (tmp_path / "meshes" / f"{name}.obj").read_bytes() == mesh_to_bytes(rebuilt, "obj")
+
+
+def free_port():
+    with socket.socket() as probe:
+        probe.bind(("127.0.0.1", 0))
+        return probe.getsockname()[1]
+
+
+@pytest.fixture(scope="module")
+def scheduler():
+    """A Dask scheduler and two workers (each a nanny and its worker process) on 127.0.0.1."""
+    from distributed import Client
+
+    address = f"tcp://127.0.0.1:{free_port()}"
+    dask = [sys.executable, "-m", "dask"]
+    quiet = {"stdout": subprocess.DEVNULL, "stderr": subprocess.DEVNULL}
+    processes = [subprocess.Popen([*dask, "scheduler", "--host", "127.0.0.1", "--port", address.rsplit(":", 1)[1],
+                                   "--no-dashboard"], **quiet)]
+    processes += [subprocess.Popen([*dask, "worker", address, "--nthreads", "1", "--no-dashboard",
+                                    "--host", "127.0.0.1"], **quiet) for _ in range(2)]
+    try:
+        with Client(address, timeout=60) as client:
+            client.wait_for_workers(2, timeout=60)
+        yield address, processes[1:]
+    finally:
+        for process in processes:
+            process.kill()
+            process.wait()
+
+
+def start_batch(source, dest, address):
+    """``mzc batch encode SOURCE -o DEST --dwt2d --rmse 0.05`` on the scheduler, one item per task."""
+    return subprocess.Popen([sys.executable, "-m", "mzc", "batch", "encode", str(source), "-o", str(dest), "--dwt2d",
+                             "--rmse", "0.05", "--scheduler", address, "--chunk-size", "1"],
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+
+
+def wait_for_rows(dest, count, process, timeout=120):
+    """Wait until the manifest has ``count`` rows while ``process`` runs; fail if it ends first."""
+    deadline = time.monotonic() + timeout
+    path = Path(manifest.path_in(str(dest)))
+    while time.monotonic() < deadline:
+        assert process.poll() is None, "the batch ended before the test could interrupt it"
+        if path.exists() and len(rows_of(dest)) >= count:
+            return
+        time.sleep(0.05)
+    raise AssertionError(f"no {count} manifest rows within {timeout} s")
+
+
+def worker_process(nanny):
+    """The worker process a ``dask worker`` nanny started."""
+    import psutil
+
+    children = psutil.Process(nanny.pid).children(recursive=True)
+    return next(c for c in children if "spawn_main" in " ".join(c.cmdline()))
+
+
+def replaced(nanny, worker, timeout=60):
+    """True once ``nanny`` runs a worker process other than ``worker``."""
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        try:
+            if worker_process(nanny).pid != worker.pid:
+                return True
+        except StopIteration:
+            pass
+        time.sleep(0.1)
+    return False
+
+
+def test_a_worker_killed_mid_run_loses_nothing_and_bad_files_are_recorded(tmp_path, scheduler):
+    address, nannies = scheduler
+    faces = face_files()
+    source = archive(tmp_path / "in", faces)
+    batch = start_batch(source, tmp_path / "out", address)
+    wait_for_rows(tmp_path / "out", 2, batch)
+    victim = worker_process(nannies[0])
+    victim.send_signal(signal.SIGKILL)
+    _, stderr = batch.communicate(timeout=300)
+    lines = stderr.decode().strip().splitlines()
+    assert batch.returncode == 1 and lines[-1].endswith("2 failed"), stderr.decode()
+    assert lines[-1].startswith("mzc batch encode: 15 items")
+    assert len(lines) == 3 and all(line.startswith("mzc: ") for line in lines[:2]), lines   # no Dask noise
+    rows = rows_of(tmp_path / "out")
+    assert len(rows) == 15
+    assert "truncated" in rows["cut.mzw2"]["error"] and "empty input" in rows["empty.mzw2"]["error"]
+    assert {r["status"] for o, r in rows.items() if o not in ("cut.mzw2", "empty.mzw2")} == {"ok"}
+    for face in faces:
+        side = "left" if faces.index(face) % 2 else "right"
+        written = (tmp_path / "out" / side / face.with_suffix(".mzw2").name).read_bytes()
+        assert written == expected_bytes(face, **RMSE), face.name
+    assert replaced(nannies[0], victim)
+    pipeline = subprocess.run(f"{sys.executable} -m mzc slice {face_path('f18.ply')} | "
+                              f"{sys.executable} -m mzc encode --dwt2d --rmse 0.05", shell=True, capture_output=True)
+    assert pipeline.stdout == (tmp_path / "out" / "right" / "f18.mzw2").read_bytes()
+
+
+def test_a_killed_client_resumes_without_redoing_the_done_items(tmp_path, scheduler):
+    address, _ = scheduler
+    source = archive(tmp_path / "in", face_files(), bad=False)
+    dest = tmp_path / "out"
+    batch = start_batch(source, dest, address)
+    wait_for_rows(dest, 4, batch)
+    batch.send_signal(signal.SIGKILL)
+    batch.wait()
+    done = rows_of(dest)
+    assert 4 <= len(done) < 13
+    stamps = {o: (dest / o).stat().st_mtime_ns for o in done}
+    rerun = start_batch(source, dest, address)
+    _, stderr = rerun.communicate(timeout=300)
+    assert rerun.returncode == 0, stderr.decode()
+    assert stderr.decode().strip().endswith(f"{len(done)} skipped, 0 failed")
+    rows = rows_of(dest)
+    assert len(rows) == 13 and {r["status"] for r in rows.values()} == {"ok"}
+    assert {o: rows[o] for o in done} == done   # the done items' rows, seconds and all, as they were
+    assert {o: (dest / o).stat().st_mtime_ns for o in done} == stamps   # and their files untouched
+    with open(manifest.path_in(str(dest)), newline="") as file:
+        assert len(list(csv.reader(file))) == 14   # one header, one row per item: nothing twice
+
+
+def test_the_batch_command_reports_usage_and_missing_sources_in_one_line(tmp_path):
+    usage = run_mzc("batch", "encode", str(tmp_path), "-o", str(tmp_path / "out"))
+    assert usage.returncode == 2 and "give exactly one codec" in usage.stderr.decode()
+    missing = run_mzc("batch", "encode", str(tmp_path / "nope"), "-o", str(tmp_path / "out"), "--dwt2d", "--rmse", "1")
+    assert missing.returncode == 1
+    assert missing.stderr.decode() == f"mzc: {tmp_path / 'nope'}: no such file or folder\n"
+
+
+def test_batch_help_does_not_start_or_import_dask(tmp_path):
+    script = "import sys; from mzc.cli import main; sys.argv = ['mzc', 'batch', 'encode', '--help']\n" \
+             "try:\n    main()\nexcept SystemExit:\n    pass\nprint('distributed' in sys.modules, file=sys.stderr)"
+    result = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True)
+    assert result.stderr.strip() == "False" and "SOURCES" in result.stdout
