@@ -31,7 +31,11 @@ from mzc.errors import MzcError
 
 CHUNKS_PER_WORKER = 32
 MAX_CHUNK = 64
-SPAWN_ENVIRONMENT = "distributed.nanny.pre-spawn-environ"
+# Dask's nannies set MALLOC_TRIM_THRESHOLD_ in their workers' environment (None unsets it). That turns
+# off glibc's adaptive mmap threshold, so every array above 128 KB is mapped and unmapped afresh:
+# slicing and encoding a face then took 2.0x as long (0.75 s against 0.38 s, most of it page
+# faults; benchmarks/batch-results.md). Workers of a scheduler need the same (README, mzc batch).
+MALLOC_TRIM = "distributed.nanny.pre-spawn-environ.MALLOC_TRIM_THRESHOLD_"
 DASK_MISSING = "mzc batch runs on Dask, which is not installed: pip install 'mzc[batch]'"
 
 
@@ -152,18 +156,6 @@ def killed_row(job, item):
             "error": f"{item.source}: a worker died each time it ran this file (out of memory, or a crash)"}
 
 
-def worker_environment():
-    """The environment a local cluster's nannies give their workers: Dask's, less its
-    MALLOC_TRIM_THRESHOLD_. Setting that variable turns off glibc's adaptive mmap threshold, so
-    every array above 64 KB is mapped and unmapped afresh: slicing and encoding a face took 2.0x
-    as long (0.75 s against 0.38 s a face, most of it in page faults: benchmarks/batch-results.md)."""
-    import dask
-
-    environment = dict(dask.config.get(SPAWN_ENVIRONMENT, {}))
-    environment.pop("MALLOC_TRIM_THRESHOLD_", None)
-    return environment
-
-
 @contextmanager
 def dask_client(scheduler=None, workers=None):
     """A Dask client for the run: to the scheduler at ``scheduler``, or to a local cluster of
@@ -184,7 +176,7 @@ def dask_client(scheduler=None, workers=None):
         with client:
             yield client
         return
-    with dask.config.set({SPAWN_ENVIRONMENT: worker_environment()}), \
+    with dask.config.set({MALLOC_TRIM: None}), \
             LocalCluster(n_workers=workers or os.cpu_count() or 1, threads_per_worker=1, processes=True,
                          dashboard_address=None, silence_logs=quiet) as cluster, Client(cluster) as client:
         yield client
