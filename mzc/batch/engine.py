@@ -30,6 +30,7 @@ from mzc.batch.work import run_chunk
 from mzc.errors import MzcError
 
 CHUNKS_PER_WORKER = 32
+CONNECT_SECONDS = 10   # to reach a scheduler given by --scheduler
 MAX_CHUNK = 64
 # Dask's nannies set MALLOC_TRIM_THRESHOLD_ in their workers' environment (None unsets it). That turns
 # off glibc's adaptive mmap threshold, so every array above 128 KB is mapped and unmapped afresh:
@@ -79,31 +80,41 @@ def human_bytes(count):
 
 def run_batch(job, items, scheduler=None, workers=None, chunk_size=None, listener=None):
     """Do ``job`` to every item on Dask and return the Summary; the manifest in ``job.dest`` holds
-    the rows. ``listener`` (optional) has ``started(count)`` and ``row(row)``, told as rows come."""
+    the rows. ``listener`` (a Listener) is told of the start and of each row as it comes.
+    Nothing is made in ``job.dest`` until the cluster is there."""
     started = time.perf_counter()
-    os.makedirs(job.dest, exist_ok=True)
+    listener = listener or Listener()
+    if os.path.exists(job.dest) and not os.path.isdir(job.dest):
+        raise MzcError("the destination is not a folder", source=job.dest)
     path = manifest.path_in(job.dest)
     previous = manifest.read(path)
     tasks = [(item, matching(previous.get(item.output), item)) for item in items]
     summary = Summary(job.action)
-    if listener is not None:
+    with dask_client(scheduler, workers) as client:
+        make_folder(job.dest)
+        appender = manifest.Appender(path)
         listener.started(len(tasks))
-    appender = manifest.Appender(path)
-    try:
-        with dask_client(scheduler, workers) as client:
+        try:
             size = chunk_size or default_chunk_size(len(tasks), worker_count(client))
             for rows in finished_chunks(client, job, [tasks[i:i + size] for i in range(0, len(tasks), size)]):
                 appender.append([row for row in rows if not row.get("skipped")])
+                summary.rows += rows
                 for row in rows:
-                    summary.rows.append(row)
-                    if listener is not None:
-                        listener.row(row)
-    finally:
-        appender.close()
-        done = {row["output"]: {k: v for k, v in row.items() if k != "skipped"} for row in summary.rows}
-        manifest.rewrite(path, list({**previous, **done}.values()))
-        summary.seconds = time.perf_counter() - started
+                    listener.row(row)
+        finally:
+            appender.close()
+            done = {row["output"]: {k: v for k, v in row.items() if k != "skipped"} for row in summary.rows}
+            manifest.rewrite(path, list({**previous, **done}.values()))
+            summary.seconds = time.perf_counter() - started
     return summary
+
+
+def make_folder(folder):
+    """Make ``folder`` (and its parents) unless it is there, or an MzcError naming it."""
+    try:
+        os.makedirs(folder, exist_ok=True)
+    except OSError as error:
+        raise MzcError(f"cannot make the destination folder: {error.strerror or error}", source=folder) from None
 
 
 def matching(row, item):
@@ -170,7 +181,7 @@ def dask_client(scheduler=None, workers=None):
         logging.getLogger(name).setLevel(quiet)
     if scheduler is not None:
         try:
-            client = Client(scheduler, timeout=30)
+            client = Client(scheduler, timeout=CONNECT_SECONDS)
         except (OSError, TimeoutError, ValueError) as error:
             raise MzcError(f"cannot reach the Dask scheduler: {error}", source=scheduler) from None
         with client:
@@ -182,7 +193,17 @@ def dask_client(scheduler=None, workers=None):
         yield client
 
 
-class TerminalProgress:
+class Listener:
+    """What a run tells as it goes (nothing, here): ``started(count)`` once, then ``row(row)`` per item."""
+
+    def started(self, count):
+        pass
+
+    def row(self, row):
+        pass
+
+
+class TerminalProgress(Listener):
     """A listener that prints each failed item's error on ``stream`` as it comes and, when
     ``bar`` is true (stderr is a terminal), keeps one updated line: items, bytes in and out,
     rate and ETA."""

@@ -41,6 +41,9 @@ def collect(sources, extensions, output_extension, dest):
         found += pairs
     items = {}
     for path, relative in found:
+        if relative.split(os.sep)[0] == os.pardir:
+            raise MzcError("its output would fall outside the destination: name it without '..' after a "
+                           "wildcard", source=path)
         output = os.path.splitext(relative)[0] + output_extension
         earlier = items.get(output)
         if earlier is not None and earlier.source != path:
