@@ -59,6 +59,41 @@ def test_encode_imports_only_what_its_codec_uses(tmp_path):
     assert result.returncode == 0 and not imported & {"constriction", "pywt", "meshio", "matplotlib"}
 
 
+HEAVY = {"scipy", "constriction", "pywt", "meshio", "matplotlib", "distributed", "dask"}
+# what each command may load of HEAVY: scipy only where a sparse solve (or an FFT) runs
+IMPORT_SETS = [
+    (["slice", "{mesh}"], set()),
+    (["encode", "--dwt2d", "--rmse", "0.05", "{grid}"], {"scipy", "constriction"}),   # the hole fill's solve
+    (["encode", "--dct", "-q", "20", "{grid}"], {"scipy"}),                             # scipy.fft
+    (["decode", "{coded}"], {"constriction"}),
+    (["densify", "-n", "1", "{grid}"], {"scipy"}),                                      # the biharmonic solve
+    (["triangulate", "{grid}"], set()),
+    (["info", "{coded}"], set()),
+    (["diff", "{grid}", "{grid}"], set()),
+]
+
+
+@pytest.fixture(scope="module")
+def sample_files(tmp_path_factory):
+    """A sample mesh, its grid and its dwt2d file."""
+    folder = tmp_path_factory.mktemp("imports")
+    mesh, grid, coded = folder / "bump.obj", folder / "bump.zg", folder / "bump.mzw2"
+    subprocess.run([sys.executable, "-m", "mzc", "sample", "bump", "-o", mesh], check=True)
+    subprocess.run([sys.executable, "-m", "mzc", "slice", mesh, "-o", grid], check=True)
+    subprocess.run([sys.executable, "-m", "mzc", "encode", "--dwt2d", "--rmse", "0.05", grid, "-o", coded], check=True)
+    return {"mesh": mesh, "grid": grid, "coded": coded}
+
+
+@pytest.mark.parametrize("arguments, allowed", IMPORT_SETS, ids=lambda v: " ".join(v) if isinstance(v, list) else "")
+def test_each_command_imports_only_what_it_uses(sample_files, arguments, allowed):
+    arguments = [a.format(**sample_files) for a in arguments]
+    result = subprocess.run([sys.executable, "-X", "importtime", "-m", "mzc", *arguments],
+                            stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+    assert result.returncode == 0, result.stderr[-500:]
+    imported = {line.split("|")[-1].strip().split(".")[0] for line in result.stderr.splitlines() if "|" in line}
+    assert imported & HEAVY <= allowed
+
+
 def test_usage_errors_exit_2(mzc):
     result = mzc("diff", "only-one")
     assert result.returncode == 2 and "Traceback" not in result.stderr.decode()
