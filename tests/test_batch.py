@@ -213,6 +213,33 @@ def test_a_local_cluster_encodes_and_decodes_an_archive(tmp_path):
         assert (tmp_path / "meshes" / f"{name}.obj").read_bytes() == mesh_to_bytes(rebuilt, "obj")
 
 
+def crash_on_poison(job, chunk):
+    """run_chunk, except that a worker process dies outright on an item named ``poison``."""
+    if any(item.output.startswith("poison") for item, _ in chunk):
+        os._exit(1)
+    return [{"output": item.output, "status": "ok"} for item, _ in chunk]
+
+
+def test_a_chunk_that_kills_its_workers_is_split_and_only_the_culprit_fails(tmp_path):
+    import cloudpickle
+    import dask
+    from distributed import Client, LocalCluster
+
+    from mzc.batch.engine import SATURATION, finished_chunks
+
+    cloudpickle.register_pickle_by_value(sys.modules[__name__])   # the workers cannot import this module
+    job = Job("encode", str(tmp_path), ENCODE)
+    chunks = [[(items.Item(f"/in/{name}", name), None) for name in names]
+              for names in (["a", "poison", "b"], ["c", "d"])]
+    with dask.config.set({"distributed.scheduler.allowed-failures": 0, SATURATION: 1.0}), \
+            LocalCluster(n_workers=2, threads_per_worker=1, dashboard_address=None, silence_logs=50) as cluster, \
+            Client(cluster) as client:
+        rows = [row for chunk in finished_chunks(client, job, chunks, task=crash_on_poison) for row in chunk]
+    outcome = {row["output"]: row["status"] for row in rows}
+    assert outcome == {"a": "ok", "b": "ok", "c": "ok", "d": "ok", "poison": "failed"}
+    assert "a worker died each time it ran this file" in next(r["error"] for r in rows if r["output"] == "poison")
+
+
 def free_port():
     with socket.socket() as probe:
         probe.bind(("127.0.0.1", 0))

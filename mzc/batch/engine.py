@@ -37,6 +37,9 @@ MAX_CHUNK = 64
 # slicing and encoding a face then took 2.0x as long (0.75 s against 0.38 s, most of it page
 # faults; benchmarks/batch-results.md). Workers of a scheduler need the same (README, mzc batch).
 MALLOC_TRIM = "distributed.nanny.pre-spawn-environ.MALLOC_TRIM_THRESHOLD_"
+# One task at a time per worker thread (Dask's default queues 1.1): when a worker dies, only the
+# chunk it was running is charged with its death, so a bad file cannot take its neighbours along.
+SATURATION = "distributed.scheduler.worker-saturation"
 DASK_MISSING = "mzc batch runs on Dask, which is not installed: pip install 'mzc[batch]'"
 
 
@@ -132,9 +135,10 @@ def worker_count(client):
     return len(client.scheduler_info().get("workers", {}))
 
 
-def finished_chunks(client, job, chunks):
-    """The rows of each chunk as its task finishes (in the order they finish). A chunk whose task
-    kept killing workers is split into single items; an item that does is a failed row."""
+def finished_chunks(client, job, chunks, task=run_chunk):
+    """The rows of each chunk, ``task(job, chunk)``, as its task finishes (in the order they
+    finish). A chunk whose task kept killing workers is split into single items; an item that
+    does is a failed row."""
     from distributed import as_completed
     from distributed.scheduler import KilledWorker
 
@@ -142,7 +146,7 @@ def finished_chunks(client, job, chunks):
     submitted = {}
 
     def submit(chunk, index):
-        future = client.submit(run_chunk, job, chunk, pure=False, key=f"mzc-batch-{run}-{index}")
+        future = client.submit(task, job, chunk, pure=False, key=f"mzc-batch-{run}-{index}")
         submitted[future.key] = chunk
         return future
 
@@ -153,8 +157,8 @@ def finished_chunks(client, job, chunks):
             yield future.result()
         except KilledWorker:
             if len(chunk) > 1:
-                for i, task in enumerate(chunk):
-                    pending.add(submit([task], f"{future.key}-{i}"))
+                for i, single in enumerate(chunk):
+                    pending.add(submit([single], f"{future.key}-{i}"))
             else:
                 yield [killed_row(job, chunk[0][0])]
         finally:
@@ -187,7 +191,7 @@ def dask_client(scheduler=None, workers=None):
         with client:
             yield client
         return
-    with dask.config.set({MALLOC_TRIM: None}), \
+    with dask.config.set({MALLOC_TRIM: None, SATURATION: 1.0}), \
             LocalCluster(n_workers=workers or os.cpu_count() or 1, threads_per_worker=1, processes=True,
                          dashboard_address=None, silence_logs=quiet) as cluster, Client(cluster) as client:
         yield client
