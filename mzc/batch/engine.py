@@ -34,8 +34,8 @@ CONNECT_SECONDS = 10   # to reach a scheduler given by --scheduler
 MAX_CHUNK = 64
 # Dask's nannies set MALLOC_TRIM_THRESHOLD_ in their workers' environment (None unsets it). That turns
 # off glibc's adaptive mmap threshold, so every array above 128 KB is mapped and unmapped afresh:
-# slicing and encoding a face then took 2.0x as long (0.75 s against 0.38 s, most of it page
-# faults; benchmarks/batch-results.md). Workers of a scheduler need the same (README, mzc batch).
+# slicing and encoding a face then took 2.0x as long (0.76 s against 0.40 s a face, most of it in
+# page faults: measured on the 13 faces, 2026-12-02). Workers of a scheduler need the same (README).
 MALLOC_TRIM = "distributed.nanny.pre-spawn-environ.MALLOC_TRIM_THRESHOLD_"
 # One task at a time per worker thread (Dask's default queues 1.1): when a worker dies, only the
 # chunk it was running is charged with its death, so a bad file cannot take its neighbours along.
