@@ -204,8 +204,12 @@ def test_a_local_cluster_encodes_and_decodes_an_archive(tmp_path):
     summary = mzc.batch_encode(source, tmp_path / "coded", max_error=0.01, workers=2)
     assert not summary.failed and len(summary.rows) == 2
     assert summary.line().endswith("0 skipped, 0 failed")
+    damaged = bytearray((tmp_path / "coded" / "bump.mzw2").read_bytes())
+    damaged[-5] ^= 1
+    (tmp_path / "coded" / "damaged.mzw2").write_bytes(damaged)
     meshes = mzc.batch_decode(tmp_path / "coded", tmp_path / "meshes", densify=1, file_format="obj", workers=2)
-    assert not meshes.failed
+    assert [row["output"] for row in meshes.failed] == ["damaged.obj"] and "crc32" in meshes.failed[0]["error"]
+    assert not (tmp_path / "meshes" / "damaged.obj").exists()
     for name in ("bump", "tube"):
         data = (tmp_path / "coded" / f"{name}.mzw2").read_bytes()
         assert data == mzc.encode(mzc.slice(source / f"{name}.obj"), "dwt2d", max_error=0.01)
