@@ -152,9 +152,13 @@ def read(path: PathLike) -> ZGrid | Mesh:
 
 
 def write(path: PathLike, item: ZGrid | Mesh | bytes, file_format: str | None = None,
-          precision: int | None = None) -> None:
+          precision: int | None = None, *, plain: bool = False, float32: bool = False) -> None:
     """Write a ZGrid as a z-grid, a Mesh in the format of ``path``'s extension (or ``file_format``),
-    or bytes (a compressed file) as they are; atomically: nothing is left on failure."""
+    or bytes (a compressed file) as they are; atomically: nothing is left on failure.
+
+    A z-grid's heights are written raw by default (``mzc-zgrid 3.0``: exact little-endian
+    float64, or float32 with ``float32``); ``plain`` writes them as text rows (1.0, 2.0), which
+    ``precision`` (decimals) rounds. ``precision`` without ``plain`` is an MzcError."""
     from mzc.grid import ZGrid
     from mzc.streams import write_output
 
@@ -164,7 +168,10 @@ def write(path: PathLike, item: ZGrid | Mesh | bytes, file_format: str | None = 
     elif isinstance(item, ZGrid):
         from mzc.formats import zgrid
 
-        write_output(path, zgrid.write(item, precision=precision))
+        if plain and float32:
+            raise MzcError("float32 is a raw body and plain a text one: give one", field="float32")
+        raw = None if plain else "float32" if float32 else "float64"
+        write_output(path, zgrid.write(item, precision=precision, raw=raw))
     else:
         from mzc.meshes import write_mesh
 

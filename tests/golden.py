@@ -84,13 +84,13 @@ def surface_cases(name, mesh, detailed):
     codecs = CODECS if detailed else {"rmse": CODECS["rmse"]}
     for label, options in codecs.items():
         coded = outputs[f"{name}: encode {label}"] = run(["encode", *options], grid)
-        outputs[f"{name}: decode {label}"] = run(["decode", "--precision", "6"], coded)
+        outputs[f"{name}: decode {label}"] = run(["decode", "--plain", "--precision", "6"], coded)
     if not detailed:
         return outputs
     outputs[f"{name}: slice --thesis-grid"] = run(["slice", mesh, "--thesis-grid"])
     decoded = run(["decode"], outputs[f"{name}: encode rmse"])
     for method in ("biharmonic", "laplace", "thesis"):
-        outputs[f"{name}: densify -n 2 {method}"] = run(["densify", "-n", "2", "--method", method,
+        outputs[f"{name}: densify -n 2 {method}"] = run(["densify", "-n", "2", "--method", method, "--plain",
                                                          "--precision", "6"], decoded)
     folder = mesh.parent
     for file_format in formats_of(name):

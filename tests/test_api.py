@@ -33,9 +33,12 @@ def test_the_api_gives_the_bytes_of_the_pipeline_of_commands(tmp_path):
     decoded = mzc.decode(coded)
     assert np.nanmax(np.abs(decoded.z - grid.z)) <= 0.05
     dense = mzc.densify(decoded, 2)
-    mzc.write(tmp_path / "dense.zg", dense, precision=6)
-    assert (tmp_path / "dense.zg").read_bytes() == run(["densify", "-n", "2", "--precision", "6"],
+    mzc.write(tmp_path / "dense.zg", dense, precision=6, plain=True)
+    assert (tmp_path / "dense.zg").read_bytes() == run(["densify", "-n", "2", "--plain", "--precision", "6"],
                                                        run(["decode"], coded))
+    mzc.write(tmp_path / "dense-raw.zg", dense)   # raw by default, as the commands write
+    assert (tmp_path / "dense-raw.zg").read_bytes() == run(["densify", "-n", "2"], run(["decode"], coded))
+    np.testing.assert_array_equal(mzc.read(tmp_path / "dense-raw.zg").z, dense.z)
     mesh = mzc.triangulate(dense)
     mzc.write(tmp_path / "out.obj", mesh)
     assert (tmp_path / "out.obj").read_bytes() == run(["triangulate"], run(["densify", "-n", "2"],

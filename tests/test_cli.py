@@ -5,7 +5,10 @@ import os
 import subprocess
 import sys
 
+import numpy as np
 import pytest
+
+from mzc.formats import zgrid
 
 from conftest import face_path
 
@@ -133,7 +136,7 @@ def test_sample_slice_triangulate_diff_pipeline(mzc, tmp_path):
     mesh = tmp_path / "bump.obj"
     mzc("sample", "bump", "-o", mesh, check=True)
     grid = mzc("slice", mesh, "--d1", "1", "--d2", "1", check=True).stdout
-    assert grid.startswith(b"mzc-zgrid 1.0\n")
+    assert grid.startswith(b"mzc-zgrid 3.0\n")   # the raw body, the pipes' default
     rebuilt = tmp_path / "rebuilt.ply"
     mzc("triangulate", "-o", rebuilt, input=grid, check=True)
     report = json.loads(mzc("diff", mesh, rebuilt, "--json", check=True).stdout)
@@ -149,7 +152,8 @@ def test_info_describes_a_grid(mzc, tmp_path):
         mzc("sample", "bump", "-o", mesh, check=True)
         grid = mzc("slice", mesh, check=True)
     text = mzc("info", "--decode", input=grid.stdout, check=True).stdout.decode()
-    assert "format    mzc-zgrid 1.0" in text and "rows x" in text and "valid" in text
+    assert "format    mzc-zgrid 3.0" in text and "rows x" in text and "valid" in text
+    assert "  raw float64\n" in text
     assert f"bytes     {len(grid.stdout)}" in text
 
 
@@ -175,6 +179,8 @@ def test_error_grid_is_a_zgrid_of_b_minus_a(mzc, tmp_path):
     errors = tmp_path / "e.zg"
     report = json.loads(mzc("diff", a, b, "--json", "--error-grid", errors, check=True).stdout)
     assert report["count"] == 3 and report["max"] == pytest.approx(0.5)
+    np.testing.assert_array_equal(zgrid.read(errors.read_bytes(), "e.zg").z, [[0.5, 0], [0, np.nan]])
+    mzc("diff", a, b, "--plain", "--error-grid", errors, check=True)
     assert errors.read_text().endswith("data\n0.5 0\n0 nan\n")
 
 
@@ -211,3 +217,42 @@ def test_output_files_follow_the_umask(mzc, tmp_path):
     finally:
         os.umask(mask)
     assert out.stat().st_mode & 0o777 == 0o644
+
+
+# --- the z-grid's body: raw through pipes, --plain for people -----------------------------
+
+
+@pytest.fixture
+def bump_grid(mzc, tmp_path):
+    """A small z-grid of the bump sample, sliced through the command line (raw)."""
+    mesh = tmp_path / "bump.obj"
+    mzc("sample", "bump", "-o", mesh, check=True)
+    return mzc("slice", mesh, "--d1", "2", "--d2", "2", check=True).stdout
+
+
+def test_filters_write_raw_by_default_and_plain_text_with_plain(mzc, bump_grid):
+    grid = zgrid.read(bump_grid, "-")
+    assert bump_grid.startswith(b"mzc-zgrid 3.0\n") and b"\nraw float64\ncrc32 " in bump_grid
+    assert len(bump_grid.split(b"\ndata\n", 1)[1]) == 8 * grid.z.size
+    for command in (["decode"], ["densify", "-n", "0"]):
+        assert mzc(*command, input=bump_grid, check=True).stdout == bump_grid   # exact, unchanged
+        plain = mzc(*command, "--plain", input=bump_grid, check=True).stdout
+        assert plain == zgrid.write(grid)   # today's text, byte for byte
+        assert plain.startswith(b"mzc-zgrid 1.0\n") and b"raw" not in plain
+
+
+def test_float32_halves_the_body_and_every_reader_takes_it(mzc, bump_grid):
+    small = mzc("decode", "--float32", input=bump_grid, check=True).stdout
+    z = zgrid.read(bump_grid, "-").z
+    assert b"\nraw float32\n" in small and len(small.split(b"\ndata\n", 1)[1]) == 4 * z.size
+    np.testing.assert_array_equal(zgrid.read(small, "-").z, z.astype(np.float32).astype(float))
+    assert b"format    mzc-zgrid 3.0" in mzc("info", input=small, check=True).stdout
+    assert mzc("encode", "--dwt2d", "--max-error", "0.05", input=small, check=True).stdout.startswith(b"mzc-dwt2d")
+
+
+@pytest.mark.parametrize("options, message", [(["--precision", "3"], "--precision rounds the text of --plain"),
+                                              (["--plain", "--float32"], "give one")])
+def test_body_options_that_contradict_each_other_are_usage_errors(mzc, bump_grid, options, message):
+    result = mzc("decode", *options, input=bump_grid)
+    assert result.returncode == 2 and message in result.stderr.decode()
+    assert result.stdout == b""

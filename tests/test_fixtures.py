@@ -52,15 +52,25 @@ def test_fixture_name_states_its_magic_line_and_extension(name):
     assert parts["ext"] == EXTENSIONS[kind]
 
 
+def written_versions(module):
+    """The versions a format's writer writes: planar and projected grids, and the z-grid's raw
+    body (RAW_VERSION), a third version above both."""
+    return {module.VERSION, module.PROJECTED_VERSION, getattr(module, "RAW_VERSION", module.VERSION)}
+
+
+def newest_major(kind):
+    """The newest major version ``kind``'s reader reads, the newest one its writer writes."""
+    return max(written_versions(module_for(kind)))[0]
+
+
 def readable_versions():
     """Every (kind, major, minor) the registry reads: each format's OLDEST_MAJOR up to its newest
-    (the one that holds central projections, mzc.formats.header), and within each major every
-    minor up to the one its writer writes (minor 0 alone for a major no longer written)."""
+    (newest_major), and within each major every minor up to the one its writer writes (minor 0
+    alone for a major no longer written)."""
     versions = set()
     for kind in REGISTRY:
-        module = module_for(kind)
-        written = {module.VERSION, module.PROJECTED_VERSION}
-        for major in range(module.OLDEST_MAJOR, module.PROJECTED_VERSION[0] + 1):
+        written = written_versions(module_for(kind))
+        for major in range(module_for(kind).OLDEST_MAJOR, newest_major(kind) + 1):
             newest = max((minor for m, minor in written if m == major), default=0)
             versions |= {(kind, major, minor) for minor in range(newest + 1)}
     return versions
@@ -85,9 +95,8 @@ def test_every_fixture_has_its_expectation_and_nothing_is_left_over():
 
 
 def newest_fixtures():
-    """The fixtures of each kind's newest readable major (its projected one)."""
-    return [n for n in fixture_names()
-            if split_magic(fixture_bytes(n), n)[1] == module_for(n.split("-")[0]).PROJECTED_VERSION[0]]
+    """The fixtures of each kind's newest readable major (newest_major)."""
+    return [n for n in fixture_names() if split_magic(fixture_bytes(n), n)[1] == newest_major(n.split("-")[0])]
 
 
 @pytest.mark.parametrize("name", newest_fixtures())
@@ -236,15 +245,15 @@ def test_a_central_grid_spanning_more_than_a_turn_is_refused():
 
 @pytest.mark.parametrize("kind", sorted(REGISTRY))
 def test_a_newer_major_is_refused_with_an_upgrade_hint(kind):
-    major = module_for(kind).VERSION[0] + 2
+    major = newest_major(kind) + 1
     error = refusal(f"mzc-{kind} {major}.0\nrows 1\ncols 1\nd1 1\nd2 1\ndata\n".encode())
     assert error.line == 1 and f"mzc-{kind} version {major}.x is newer" in error.message
     assert "upgrade mzc" in error.message
 
 
-def test_zgrid_3_is_refused_as_newer():
-    error = refusal(zgrid_text(magic="mzc-zgrid 3.0"))
-    assert error.line == 1 and "newer than this mzc reads (2.x)" in error.message
+def test_zgrid_4_is_refused_as_newer():
+    error = refusal(zgrid_text(magic="mzc-zgrid 4.0"))
+    assert error.line == 1 and "newer than this mzc reads (3.x)" in error.message
 
 
 # --- the version rule for projections: what writers write ---------------------------------

@@ -382,7 +382,7 @@ def test_cli_slices_a_mesh_to_a_zgrid(tmp_path, mzc):
 def test_cli_reads_a_point_cloud_from_stdin(mzc):
     cloud = paraboloid_samples(2000)
     text = "".join(f"{x!r} {y!r} {z!r}\n" for x, y, z in cloud.tolist()).encode()
-    result = mzc("slice", "--rows", "11", "--cols", "11", "--precision", "3", input=text)
+    result = mzc("slice", "--rows", "11", "--cols", "11", "--plain", "--precision", "3", input=text)
     assert result.returncode == 0, result.stderr
     grid = zgrid.read(result.stdout, "-")
     x, y = np.meshgrid(grid.xs(), grid.ys())

@@ -13,17 +13,18 @@ from mzc.errors import MzcError
 from mzc.formats import read_any, zgrid
 from mzc.grid import ZGrid
 
+from codec_contract import CHECKSUM_LINE, rechecksummed
+from codec_contract import spec_examples as contract_examples
+
 SPEC = Path(__file__).resolve().parents[1] / "spec" / "zgrid.md"
 
 
-def spec_examples(path):
-    """(example bytes, expected array) pairs from a spec page's fenced blocks."""
-    text = path.read_text()
-    examples = re.findall(r"```mzc-example\n(.*?)```", text, re.S)
-    expected = re.findall(r"```expected\n(.*?)```", text, re.S)
-    assert examples and len(examples) == len(expected)
-    return [(e.encode(), np.array([[float(v) for v in line.split()] for line in x.strip().splitlines()]))
-            for e, x in zip(examples, expected)]
+def spec_examples(_path):
+    """(example bytes, expected array) pairs of the spec page's worked z-grid examples, plain
+    and raw (codec_contract.spec_examples reads both kinds of block)."""
+    examples = contract_examples("zgrid")
+    assert len(examples) == 7
+    return [(data, expected) for data, expected, _id in examples]
 
 
 @pytest.mark.parametrize("example, expected", spec_examples(SPEC))
@@ -107,7 +108,7 @@ GOOD = b"mzc-zgrid 1.0\nrows 2\ncols 2\nd1 1\nd2 1\ndata\n1 2\n3 4\n"
 @pytest.mark.parametrize("data, message, line", [
     (b"rows 2\n", "missing magic", 1),
     (b"", "missing magic", 1),
-    (GOOD.replace(b"mzc-zgrid 1.0", b"mzc-zgrid 3.0"), "newer than this mzc reads", 1),
+    (GOOD.replace(b"mzc-zgrid 1.0", b"mzc-zgrid 4.0"), "newer than this mzc reads", 1),
     (GOOD.replace(b"mzc-zgrid 1.0", b"mzc-zgrid one"), "bad version", 1),
     (GOOD.replace(b"mzc-zgrid", b"mzc-other"), "expected an mzc-zgrid file", 1),
     (GOOD.replace(b"d2 1\n", b""), "required header line missing", None),
@@ -172,3 +173,138 @@ def test_a_central_grid_that_cannot_exist_is_refused_when_built():
         ZGrid(np.zeros((2, 10)), 1.0, 1.0, projection="cylindrical", radius=1.0)
     with pytest.raises(ValueError, match="poles"):
         ZGrid(np.zeros((3, 2)), 1.0, 0.1, origin=(0, 1.0), projection="spherical", radius=1.0)
+
+
+# --- the raw body (mzc-zgrid 3.0) ---------------------------------------------------------
+
+any_float = st.floats(allow_nan=False, allow_infinity=False)   # ±0, subnormals, up to ±1.8e308
+
+
+@st.composite
+def raw_grids(draw, elements=any_float):
+    """Grids of any finite values (holes as NaN), any projection fields as grids() draws them."""
+    grid = draw(grids())
+    grid.z = draw(arrays(float, grid.shape, elements=elements))
+    grid.z[draw(arrays(bool, grid.shape))] = np.nan
+    return grid
+
+
+def same_bits(a, b):
+    """Equal arrays bit for bit, NaN where NaN (so -0 differs from 0, as a raw body keeps it)."""
+    np.testing.assert_array_equal(np.isnan(a), np.isnan(b))
+    assert a[~np.isnan(a)].tobytes() == b[~np.isnan(b)].tobytes()
+
+
+@given(raw_grids())
+@settings(max_examples=150, deadline=None)
+def test_raw_round_trip_is_exact_bit_for_bit(grid):
+    data = zgrid.write(grid, raw="float64")
+    assert data.startswith(b"mzc-zgrid 3.0\n")
+    back = zgrid.read(data, "t")
+    same_bits(back.z, grid.z)
+    assert (back.d1, back.d2, back.origin, back.units, back.nodata) == (
+        grid.d1, grid.d2, grid.origin, grid.units, grid.nodata)
+    np.testing.assert_array_equal(back.transform, grid.transform)
+    assert len(data.split(b"\ndata\n", 1)[1]) == 8 * grid.z.size
+
+
+@given(raw_grids(st.floats(-3e38, 3e38, allow_nan=False)))
+@settings(max_examples=100, deadline=None)
+def test_raw_float32_holds_each_value_rounded_to_the_nearest_float32(grid):
+    data = zgrid.write(grid, raw="float32")
+    assert len(data.split(b"\ndata\n", 1)[1]) == 4 * grid.z.size
+    same_bits(zgrid.read(data, "t").z, grid.z.astype(np.float32).astype(np.float64))
+
+
+def test_raw_float32_refuses_a_value_it_cannot_hold():
+    with pytest.raises(MzcError, match="row 1, column 2, 1e\\+39, does not fit float32") as error:
+        zgrid.write(ZGrid(np.array([[1.0, 1e39]]), 1.0, 1.0), raw="float32")
+    assert error.value.field == "raw"
+
+
+def test_raw_refuses_a_precision():
+    with pytest.raises(MzcError, match="plain body") as error:
+        zgrid.write(ZGrid(np.ones((1, 2)), 1.0, 1.0), precision=3, raw="float64")
+    assert error.value.field == "precision"
+
+
+def test_raw_writes_one_nan_and_reads_any_nan_as_invalid():
+    data = zgrid.write(ZGrid(np.array([[np.nan, -np.nan, 1.0]]), 1.0, 1.0), raw="float64")
+    header, body = data.split(b"\ndata\n", 1)
+    assert body[:16] == bytes.fromhex("000000000000f87f") * 2
+    odd_nans = bytes.fromhex("010000000000f07f") + bytes.fromhex("000000000000f8ff")   # signalling, negative
+    back = zgrid.read(rechecksummed(header + b"\ndata\n" + odd_nans + body[16:]), "t")
+    np.testing.assert_array_equal(np.isnan(back.z), [[True, True, False]])
+
+
+RAW = zgrid.write(ZGrid(np.array([[1.0, 2.0, np.nan], [0.1, -0.0, 5e-324]]), 1.0, 1.0, units="mm"), raw="float64")
+
+
+def test_raw_body_refuses_an_infinite_value():
+    data = rechecksummed(RAW.replace(np.float64(2.0).tobytes(), np.float64(np.inf).tobytes()))
+    with pytest.raises(MzcError, match="row 1, column 2 is infinite") as error:
+        zgrid.read(data, "inf.zg")
+    assert (error.value.source, error.value.field) == ("inf.zg", "data")
+
+
+def damaged_raw():
+    """RAW cut at every length past its header, padded, one byte flipped anywhere, its line ends
+    converted to CRLF, and its crc32 line removed: (variant, what is wrong)."""
+    start = RAW.index(b"\ndata\n") + 6
+    yield from ((RAW[:n], f"cut to {n}") for n in range(start, len(RAW)))
+    yield RAW + b"\n", "padded with a newline"
+    yield RAW + b"\x00" * 8, "padded with a value"
+    yield from ((RAW[:i] + bytes([RAW[i] ^ 1]) + RAW[i + 1:], f"bit flipped at {i}") for i in range(len(RAW)))
+    yield RAW.replace(b"\n", b"\r\n"), "CRLF"
+    yield CHECKSUM_LINE.sub(b"", RAW), "without crc32"
+
+
+@pytest.mark.parametrize("data, what", list(damaged_raw()), ids=lambda v: v if isinstance(v, str) else "")
+def test_a_damaged_raw_body_is_a_one_line_error_naming_file_and_field_or_line(data, what):
+    with pytest.raises(MzcError) as error:
+        zgrid.read(data, "raw.zg")
+    assert error.value.source == "raw.zg" and (error.value.field or error.value.line), what
+    assert "\n" not in str(error.value)
+
+
+@pytest.mark.parametrize("body, cause", [(b"", "cut short"), (RAW.split(b"data\n", 1)[1] * 2, "with bytes added")],
+                         ids=["cut", "padded"])
+def test_the_body_length_is_checked_against_the_declared_sizes(body, cause):
+    """Past a right checksum (a file made so on purpose), the length check still stands."""
+    head = RAW.split(b"data\n", 1)[0] + b"data\n"
+    with pytest.raises(MzcError, match=f"has {len(body)} bytes, but rows 2 x cols 3 of float64 take 48 \\({cause}") \
+            as error:
+        zgrid.read(rechecksummed(head + body), "len.zg")
+    assert error.value.field == "data"
+
+
+def test_a_huge_declared_raw_grid_is_refused_before_allocating(monkeypatch):
+    allocations = []
+    for name in ("empty", "frombuffer", "zeros"):
+        real = getattr(np, name)
+        monkeypatch.setattr(np, name, lambda *a, real=real, **k: allocations.append(a) or real(*a, **k))
+    forged = rechecksummed(RAW.replace(b"rows 2\ncols 3", b"rows 10000\ncols 10000"))
+    with pytest.raises(MzcError, match="take 800000000"):
+        zgrid.read(forged, "big.zg")
+    assert allocations == []
+
+
+def test_a_raw_body_labelled_as_a_text_version_is_refused_not_misread():
+    """An older reader ignores the raw line; this reader, reading the file as 2.0 does, refuses
+    the binary rows (3.0 exists so that a 2.0 reader refuses it by its version instead)."""
+    with pytest.raises(MzcError):
+        zgrid.read(rechecksummed(RAW.replace(b"mzc-zgrid 3.0", b"mzc-zgrid 2.0")), "old.zg")
+
+
+def test_a_raw_body_without_its_raw_line_or_with_an_unknown_type_is_refused():
+    for line, message in [(b"", "required header line missing"), (b"raw float16\n", "'float16' is not one of")]:
+        with pytest.raises(MzcError, match=message) as error:
+            zgrid.read(rechecksummed(RAW.replace(b"raw float64\n", line)), "t.zg")
+        assert error.value.field == "raw"
+
+
+def test_plain_writing_is_unchanged_by_the_raw_body():
+    """The plain writer is the default of the format module, byte for byte as 1.0 and 2.0 were."""
+    assert zgrid.write(zgrid.read(RAW, "t")) == (
+        b"mzc-zgrid 1.0\nrows 2\ncols 3\nd1 1\nd2 1\norigin 0 0\nunits mm\nnodata nan\ndata\n"
+        b"1 2 nan\n0.1 -0 5e-324\n")

@@ -2,7 +2,7 @@
 
 import click
 
-from mzc.cli.options import input_argument, output_option, read_grid, write_grid
+from mzc.cli.options import input_argument, output_option, read_grid, write_grid, zgrid_body, zgrid_output_options
 
 LEGACY_KINDS = ("poly", "dft", "dct", "dwt")
 
@@ -11,17 +11,18 @@ LEGACY_KINDS = ("poly", "dft", "dct", "dwt")
 
 The codec is recognised by the file's magic line (mzc-poly, mzc-dft, mzc-dct, mzc-dwt, ...).
 Files written by the thesis's MATLAB code have no magic line: name their kind with
---legacy. Invalid nodes (outside each row's span, and recorded holes) come back as nan.""")
+--legacy. Invalid nodes (outside each row's span, and recorded holes) come back as nan.
+The heights are written exactly by default (raw), the grid the codec's error bounds speak
+of; --plain writes text, which --precision rounds.""")
 @input_argument
 @output_option
 @click.option("--legacy", type=click.Choice(LEGACY_KINDS),
               help="Read a thesis file (Tables 6.1, 7.1, 7.2, §5.3.1) of this kind.")
-@click.option("--precision", type=click.IntRange(0, 17), metavar="DIGITS",
-              help="Round the written heights to DIGITS decimals [default: exact, so the decoded "
-                   "grid is the one the codec's error bounds speak of].")
-def command(input, output, legacy, precision):
+@zgrid_output_options
+def command(input, output, legacy, plain, float32, precision):
     from mzc.streams import check_not_input, display_name, read_input
 
+    body = zgrid_body(plain, float32, precision)
     check_not_input(output, input)
     if legacy:
         from mzc.codecs.rows.legacy import read_legacy
@@ -29,4 +30,4 @@ def command(input, output, legacy, precision):
         grid = read_legacy(read_input(input), display_name(input), legacy)
     else:
         grid = read_grid(input)
-    write_grid(grid, output, precision=precision)
+    write_grid(grid, output, body)

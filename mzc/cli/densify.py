@@ -2,7 +2,15 @@
 
 import click
 
-from mzc.cli.options import input_argument, jump_angle_option, output_option, read_grid, write_grid
+from mzc.cli.options import (
+    input_argument,
+    jump_angle_option,
+    output_option,
+    read_grid,
+    write_grid,
+    zgrid_body,
+    zgrid_output_options,
+)
 from mzc.limits import MAX_INSERTED, MAX_ITERATIONS
 
 METHODS = ("thesis", "laplace", "biharmonic")
@@ -29,16 +37,16 @@ across a depth jump (--jump-angle), and never smoothed across one.
               help="Jacobi sweeps of --method thesis.")
 @click.option("--tol", type=click.FloatRange(min=0, min_open=True), metavar="T",
               help="Stop the thesis sweeps once no node moves by T or more.")
-@click.option("--precision", type=click.IntRange(0, 17), metavar="DIGITS",
-              help="Decimal digits of the written heights.")
+@zgrid_output_options
 @jump_angle_option
-def command(input, output, count, method, iterations, tol, precision, jump_angle):
+def command(input, output, count, method, iterations, tol, plain, float32, precision, jump_angle):
     from mzc.api import densify
     from mzc.errors import about
     from mzc.streams import check_not_input, display_name
 
+    body = zgrid_body(plain, float32, precision)
     check_not_input(output, input)
     grid = read_grid(input)
     with about(display_name(input), f"densifying it ({method}, n = {count})"):
         dense = densify(grid, count, method, iterations=iterations, tol=tol, jump_angle=jump_angle)
-    write_grid(dense, output, precision=precision)
+    write_grid(dense, output, body)

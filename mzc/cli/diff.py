@@ -4,6 +4,7 @@ import json
 
 import click
 
+from mzc.cli.options import float32_option, plain_option, zgrid_body
 from mzc.limits import MAX_SAMPLES
 
 
@@ -41,14 +42,17 @@ direction on the first line.""")
 @click.option("--d2", type=click.FloatRange(min=0, min_open=True), help="Column spacing of the common grid.")
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON object instead of text lines.")
 @click.option("--error-grid", metavar="FILE", help="Write the error surface B - A as a z-grid.")
+@plain_option
+@float32_option
 @click.option("--plot", metavar="FILE.png", help="Write the quality plots (error map, residuals, normal probability).")
 def command(a, b, rmse, max_, mean, r2, percentiles, count, surface, heightfield, samples, seed, d1, d2,
-            as_json, error_grid, plot):
+            as_json, error_grid, plain, float32, plot):
     from mzc.api import read_surface
     from mzc.errors import MzcError, about
     from mzc.measure import STATISTICS, compare_surfaces
     from mzc.streams import check_distinct, check_not_input
 
+    body = zgrid_body(plain, float32)
     check_distinct({"--error-grid": error_grid, "--plot": plot})
     for output in (error_grid, plot):
         if output:
@@ -59,7 +63,7 @@ def command(a, b, rmse, max_, mean, r2, percentiles, count, surface, heightfield
     chosen = [name for name, on in zip(STATISTICS, (rmse, max_, mean, r2, percentiles, count)) if on]
     with about(f"{a} vs {b}", f"comparing them ({samples} samples per surface)" if surface else "comparing them"):
         result = compare_surfaces(first, second, chosen, surface, heightfield, samples, seed, d1, d2, names=(a, b))
-    write_results(result, error_grid, plot)
+    write_results(result, error_grid, body, plot)
     click.echo(json.dumps(result.report, indent=2) if as_json else format_report(result.report))
 
 
@@ -69,15 +73,16 @@ def format_report(report):
                      for name, value in report.items())
 
 
-def write_results(result, error_grid, plot):
-    """Write the error grid and the quality plots that were asked for: both are made in memory
-    and staged before either is published, so a failing one leaves neither."""
+def write_results(result, error_grid, body, plot):
+    """Write the error grid (its body as ``body``, options.zgrid_body, says) and the quality plots
+    that were asked for: both are made in memory and staged before either is published, so a
+    failing one leaves neither."""
     from mzc.formats import zgrid
     from mzc.streams import write_outputs
 
     outputs = []
     if error_grid:
-        outputs.append((error_grid, zgrid.write(result.errors)))
+        outputs.append((error_grid, zgrid.write(result.errors, **body)))
     if plot:
         outputs.append((plot, plot_png(result.reference, result.errors, result.stats)))
     write_outputs(*outputs)

@@ -32,9 +32,33 @@ def read_grid(path):
         return read_any(data, source)
 
 
-def write_grid(grid, path, precision=None):
-    """Write ``grid`` as a z-grid to ``path`` or stdout."""
+plain_option = click.option("--plain", is_flag=True,
+                            help="Write the z-grid as text, one line of heights per row (mzc-zgrid 1.0/2.0) "
+                                 "[default: raw, exact binary heights, mzc-zgrid 3.0].")
+float32_option = click.option("--float32", is_flag=True,
+                              help="Raw heights as float32: half the bytes, each rounded to the nearest float32.")
+precision_option = click.option("--precision", type=click.IntRange(0, 17), metavar="DIGITS",
+                                help="With --plain: round the written heights to DIGITS decimals [default: exact].")
+
+
+def zgrid_output_options(command):
+    """``command`` with --plain, --float32 and --precision, how it writes its z-grid's body."""
+    return plain_option(float32_option(precision_option(command)))
+
+
+def zgrid_body(plain, float32, precision=None):
+    """The keyword arguments of ``mzc.formats.zgrid.write`` for the body options, checked before
+    any work is done: --precision rounds text, so it needs --plain, and --float32 is raw."""
+    if plain and float32:
+        raise click.UsageError("--float32 is a raw body and --plain a text one: give one")
+    if precision is not None and not plain:
+        raise click.UsageError("--precision rounds the text of --plain; the default raw body is exact: add --plain")
+    return {"precision": precision} if plain else {"raw": "float32" if float32 else "float64"}
+
+
+def write_grid(grid, path, body):
+    """Write ``grid`` as a z-grid to ``path`` or stdout, its body as ``body`` (zgrid_body) says."""
     from mzc.formats import zgrid
     from mzc.streams import write_output
 
-    write_output(path, zgrid.write(grid, precision=precision))
+    write_output(path, zgrid.write(grid, **body))

@@ -2,7 +2,7 @@
 
 import click
 
-from mzc.cli.options import input_argument, output_option, write_grid
+from mzc.cli.options import input_argument, output_option, write_grid, zgrid_body, zgrid_output_options
 
 
 def one_word(value):
@@ -65,10 +65,9 @@ def check_slice_options(d1, d2, rows, cols):
 @input_argument
 @output_option
 @slice_options
-@click.option("--precision", type=click.IntRange(0, 17), metavar="DIGITS",
-              help="Decimal digits of the written heights.")
+@zgrid_output_options
 def command(input, output, d1, d2, rows, cols, thesis_grid, align, projection, view, center, axis, units,
-            precision):
+            plain, float32, precision):
     """Cut a mesh (OBJ, PLY, VTK, STL, OFF) or point cloud (x y z text, vertex-only PLY)
     into a z-grid: each node holds the outermost hit of its line with the surface (the
     front-most height of planar grids, the farthest distance along a central ray)."""
@@ -78,10 +77,11 @@ def command(input, output, d1, d2, rows, cols, thesis_grid, align, projection, v
     from mzc.streams import check_not_input, display_name
 
     check_slice_options(d1, d2, rows, cols)
+    body = zgrid_body(plain, float32, precision)
     check_not_input(output, input)
     mesh = read_mesh(input)
     with about(display_name(input), "slicing it"):
         grid = slice_surface(mesh, d1=d1, d2=d2, rows=rows, cols=cols, align=align, units=units,
                              projection=projection, center=center, axis=axis, view=view,
                              thesis_grid=thesis_grid)
-    write_grid(grid, output, precision=precision)
+    write_grid(grid, output, body)

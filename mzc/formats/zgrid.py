@@ -1,8 +1,13 @@
-"""The z-grid text format (``mzc-zgrid 1.0``, extension ``.zg``): see spec/zgrid.md.
+"""The z-grid format (extension ``.zg``): see spec/zgrid.md.
 
 The uncompressed format that flows between mzc commands: the grid header, a ``data``
-line, then one line per row with ``cols`` heights separated by spaces, invalid nodes
-written as the no-data marker.
+line, then the heights, in one of two bodies (as netpbm's plain and raw variants):
+
+- plain (``mzc-zgrid 1.0``, ``2.0`` for central projections): one text line per row with
+  ``cols`` heights separated by spaces, invalid nodes written as the no-data marker;
+- raw (``mzc-zgrid 3.0``, any projection): a ``raw float64`` (or ``float32``) header line and
+  the file's ``crc32`` line, then rows x cols little-endian IEEE 754 values, row by row, NaN
+  for invalid nodes. A new major version, so readers that only know text bodies refuse it.
 """
 
 import numpy as np
@@ -16,6 +21,7 @@ from mzc.formats.header import (
     magic_line,
     read_grid_fields,
     read_header,
+    split_magic,
 )
 from mzc.grid import ZGrid
 from mzc.numbers import floats
@@ -24,6 +30,9 @@ KIND = "zgrid"
 VERSION = (1, 0)             # planar grids, byte for byte as before projections
 PROJECTED_VERSION = (2, 0)   # 1.0 with the projection lines (mzc.formats.header)
 OLDEST_MAJOR = 1
+RAW_VERSION = (3, 0)         # 2.0's header with a raw binary body, planar or projected
+CHECKSUM_SINCE = {RAW_VERSION[0]: 0}   # a raw body is never read without its crc32 line
+SAMPLES = {"float64": "<f8", "float32": "<f4"}   # the raw line's value -> numpy dtype of the body
 
 
 def parse_values(tokens, nodata, source, line):
@@ -50,10 +59,19 @@ def body_lines(body, first_line, source):
 
 
 def read(data, source="<bytes>"):
-    """Parse z-grid bytes into a ZGrid; raise MzcError naming the line and field on bad input."""
-    header, body, first_line = read_header(data, source, KIND, PROJECTED_VERSION[0],
-                                           projected_major=PROJECTED_VERSION[0])
+    """Parse z-grid bytes (a plain or a raw body) into a ZGrid; raise MzcError naming the line
+    and field on bad input."""
+    raw = split_magic(data, source)[1] >= RAW_VERSION[0]
+    header, body, first_line = read_header(data, source, KIND, RAW_VERSION[0], projected_major=PROJECTED_VERSION[0],
+                                           checksum_since=CHECKSUM_SINCE, binary=raw)
     fields, rows, cols = read_grid_fields(header)
+    z = read_raw(body, header, rows, cols) if raw else read_plain(body, first_line, fields["nodata"], rows, cols,
+                                                                  source)
+    return ZGrid(z=z, **fields)
+
+
+def read_plain(body, first_line, nodata, rows, cols, source):
+    """The rows x cols heights of a text body, one line per row."""
     lines = body_lines(body, first_line, source)
     if len(lines) != rows:
         raise MzcError(f"header says rows {rows} but the data has {len(lines)} row line(s)",
@@ -64,8 +82,26 @@ def read(data, source="<bytes>"):
         if len(tokens) != cols:
             raise MzcError(f"header says cols {cols} but this row has {len(tokens)} value(s)",
                            source=source, line=line_number)
-        z[r] = parse_values(tokens, fields["nodata"], source, line_number)
-    return ZGrid(z=z, **fields)
+        z[r] = parse_values(tokens, nodata, source, line_number)
+    return z
+
+
+def read_raw(body, header, rows, cols):
+    """The rows x cols heights of a raw body, as float64; its length is checked against the
+    declared sizes before anything is allocated, and an infinite value is refused."""
+    sample = header.word("raw", tuple(SAMPLES))
+    dtype = np.dtype(SAMPLES[sample])
+    expected = rows * cols * dtype.itemsize
+    if len(body) != expected:
+        cause = "cut short" if len(body) < expected else "with bytes added"
+        raise MzcError(f"the raw body has {len(body)} bytes, but rows {rows} x cols {cols} of {sample} take "
+                       f"{expected} ({cause})", source=header.source, field="data")
+    z = np.frombuffer(body, dtype).reshape(rows, cols).astype(np.float64)
+    infinite = np.isinf(z)
+    if infinite.any():
+        r, c = (int(i) for i in np.argwhere(infinite)[0])
+        raise MzcError(f"the value at row {r + 1}, column {c + 1} is infinite", source=header.source, field="data")
+    return z
 
 
 def format_rows(z, nodata, precision=None):
@@ -90,8 +126,31 @@ def check_marker_unused(z, nodata):
                        f"marker, and read back as invalid: choose another marker or more precision", field="nodata")
 
 
-def write(grid, precision=None):
-    """Serialise a ZGrid to z-grid bytes; ``precision`` (decimals) rounds the heights."""
-    lines = [magic_line(KIND, file_version(grid, VERSION, PROJECTED_VERSION)), *grid_header_lines(grid), "data",
-             *format_rows(grid.z, grid.nodata, precision)]
-    return file_bytes(lines, checksum=False)
+def write(grid, precision=None, raw=None):
+    """Serialise a ZGrid to z-grid bytes: plain text (``raw`` None; ``precision`` decimals round
+    the heights), or a raw body of ``raw`` samples, "float64" (exact) or "float32"."""
+    if raw is None:
+        lines = [magic_line(KIND, file_version(grid, VERSION, PROJECTED_VERSION)), *grid_header_lines(grid), "data",
+                 *format_rows(grid.z, grid.nodata, precision)]
+        return file_bytes(lines, checksum=False)
+    if precision is not None:
+        raise MzcError("precision rounds the text of a plain body; a raw body holds the values exactly",
+                       field="precision")
+    lines = [magic_line(KIND, RAW_VERSION), *grid_header_lines(grid), f"raw {raw}", "data"]
+    return file_bytes(lines, raw_body(grid.z, raw))
+
+
+def raw_body(z, sample):
+    """The bytes of a raw body of ``sample`` values: little-endian, row by row, every invalid node
+    the one quiet NaN (so equal grids give equal files); refuses a value float32 cannot hold."""
+    if sample not in SAMPLES:
+        raise MzcError(f"{sample!r} is not one of {', '.join(SAMPLES)}", field="raw")
+    with np.errstate(over="ignore"):
+        values = z.astype(SAMPLES[sample])
+    overflow = np.isinf(values)
+    if overflow.any():
+        r, c = (int(i) for i in np.argwhere(overflow)[0])
+        raise MzcError(f"the value at row {r + 1}, column {c + 1}, {z[r, c]:g}, does not fit {sample} (values "
+                       f"are finite)", field="raw")
+    values[np.isnan(values)] = np.nan
+    return values.tobytes()
