@@ -66,7 +66,7 @@ HEAVY = {"scipy", "constriction", "pywt", "meshio", "matplotlib", "distributed",
 # what each command may load of HEAVY: scipy only where a sparse solve (or an FFT) runs
 IMPORT_SETS = [
     (["slice", "{mesh}"], set()),
-    (["encode", "--dwt2d", "--rmse", "0.05", "{grid}"], {"scipy", "constriction"}),   # the hole fill's solve
+    (["encode", "--dwt2d", "--rmse", "0.05", "{grid}"], {"constriction"}),
     (["encode", "--dct", "-q", "20", "{grid}"], {"scipy"}),                             # scipy.fft
     (["decode", "{coded}"], {"constriction"}),
     (["densify", "-n", "1", "{grid}"], {"scipy"}),                                      # the biharmonic solve

@@ -94,6 +94,59 @@ def test_two_value_steps_line_gives_coarser_levels_finer_steps():
     assert dwt2d.expand_steps([0.5], 4) == [0.5] * 4
 
 
+def direct_fill(z, valid, periodic=False):
+    """The fill's equations solved densely, one node at a time: the reference for the multigrid."""
+    rows, cols = z.shape
+    unknown = [tuple(node) for node in np.argwhere(~valid)]
+    index = {node: i for i, node in enumerate(unknown)}
+    matrix, rhs = np.zeros((len(unknown),) * 2), np.zeros(len(unknown))
+    for i, (r, c) in enumerate(unknown):
+        for dr, dc in ((0, 1), (0, -1), (1, 0), (-1, 0)):
+            rr, cc = r + dr, (c + dc) % cols if periodic else c + dc
+            if not (0 <= rr < rows and 0 <= cc < cols) or (dc and cc == c):
+                continue
+            matrix[i, i] += 1
+            if valid[rr, cc]:
+                rhs[i] += z[rr, cc]
+            else:
+                matrix[i, index[rr, cc]] -= 1
+    filled = np.where(valid, z, 0.0)
+    filled[~valid] = np.linalg.solve(matrix, rhs)
+    return filled
+
+
+@pytest.mark.parametrize("periodic", [False, True])
+@pytest.mark.parametrize("shape, seed", [((13, 17), 0), ((20, 9), 1), ((1, 12), 2), ((16, 2), 3)])
+def test_the_fill_solves_the_laplace_equation_of_the_invalid_nodes(shape, seed, periodic):
+    rng = np.random.default_rng(seed)
+    z, valid = rng.normal(size=shape) * 10, rng.random(shape) < 0.3
+    valid.flat[0] = True
+    filled = w2.laplace_fill(np.where(valid, z, np.nan), valid, periodic)
+    assert np.array_equal(filled[valid], z[valid])       # the valid nodes exactly
+    np.testing.assert_allclose(filled, direct_fill(z, valid, periodic), atol=1e-4)
+
+
+def test_the_fill_of_holes_inside_a_plane_is_the_plane():
+    rows, cols = np.mgrid[0:300, 0:400]
+    plane = 0.3 * rows - 0.7 * cols + 5.0
+    valid = (np.hypot(rows - 150, cols - 200) > 120) | (rows < 3) | (rows > 296) | (cols < 3) | (cols > 396)
+    valid[40:60, 20:380] = False
+    valid[[0, -1], :] = valid[:, [0, -1]] = True       # holes away from the (Neumann) border
+    filled = w2.laplace_fill(np.where(valid, plane, np.nan), valid)
+    assert np.abs(filled - plane).max() < 1e-4 * np.ptp(plane)
+
+
+def test_the_fill_of_a_full_or_empty_or_one_node_grid():
+    z = np.arange(12.0).reshape(3, 4)
+    assert np.array_equal(w2.laplace_fill(z, np.ones_like(z, dtype=bool)), z)
+    assert not w2.laplace_fill(z, np.zeros_like(z, dtype=bool)).any()
+    one = np.zeros_like(z, dtype=bool)
+    one[1, 2] = True
+    np.testing.assert_allclose(w2.laplace_fill(z, one), 6.0, atol=1e-9)   # a single valid node: its height
+    hole = ~one
+    np.testing.assert_allclose(w2.laplace_fill(z, hole)[1, 2], np.mean([2, 5, 7, 10]), atol=1e-9)
+
+
 def test_odd_columns_see_their_left_and_right_neighbours():
     assert dwt2d.beside([1, 2, 3, 4, 5]).tolist() == [0, 4, 0, 8, 0]
     assert dwt2d.beside([[1, 2, 3, 4]]).tolist() == [[0, 4, 0, 3]]      # the last odd column has no right

@@ -34,40 +34,151 @@ MAX_QUANTUM = 1 << 45       # largest |quantised value|; keeps every class below
 def laplace_fill(z, valid, periodic=False):
     """``z`` with invalid nodes replaced by the discrete harmonic interpolant of the valid ones.
 
-    Solves the 5-point Laplace equation on the invalid nodes with the valid nodes as
-    Dirichlet data and a free (Neumann) grid border: one sparse solve, smooth across the
-    mask edge, and it costs no bits because the decoder never needs it. With ``periodic``
-    the last column neighbours the first (a grid that makes a full turn).
+    The 5-point Laplace equation on the invalid nodes, the valid nodes as Dirichlet data
+    and a free (Neumann) grid border: smooth across the mask edge, and it costs no bits
+    because the decoder never needs it. With ``periodic`` the last column neighbours the
+    first (a grid that makes a full turn). Solved by conjugate gradients preconditioned
+    with an aggregation multigrid cycle (``FillLevel``): time and memory linear in the
+    invalid nodes, where a sparse LU grew as n^1.3 and needed 317 MB per million nodes.
     """
-    import scipy.sparse as sp
-    from scipy.sparse.linalg import spsolve
-
     filled = np.where(valid, z, 0.0)
     if valid.all() or not valid.any():
         return filled
-    rows, cols = z.shape
-    unknown = np.flatnonzero(~valid.ravel())
-    index = np.full(rows * cols, -1)
-    index[unknown] = np.arange(len(unknown))
-    r, c = np.divmod(unknown, cols)
-    diagonal = np.zeros(len(unknown))
-    rhs = np.zeros(len(unknown))
-    row_ids, col_ids = [], []
-    for dr, dc in ((-1, 0), (1, 0), (0, -1), (0, 1)):
-        column = np.mod(c + dc, cols) if periodic else c + dc
-        inside = (r + dr >= 0) & (r + dr < rows) & (column >= 0) & (column < cols) & ((dc == 0) | (column != c))
-        neighbour = (r + dr) * cols + column
-        diagonal += inside
-        known = inside & valid.ravel()[np.where(inside, neighbour, 0)]
-        rhs[known] += filled.ravel()[neighbour[known]]
-        free = inside & ~known
-        row_ids.append(np.flatnonzero(free))
-        col_ids.append(index[neighbour[free]])
-    row_ids, col_ids = np.concatenate(row_ids), np.concatenate(col_ids)
-    matrix = sp.csr_matrix((np.full(len(row_ids), -1.0), (row_ids, col_ids)), shape=(len(unknown),) * 2)
-    matrix = matrix + sp.diags(diagonal)
-    filled.ravel()[unknown] = spsolve(matrix.tocsc(), rhs, permc_spec="MMD_AT_PLUS_A")   # symmetric: 15% faster
+    fine, rhs = FillLevel.of_mask(filled, valid, periodic)
+    levels = [fine]
+    while levels[-1].size > 1:
+        levels.append(levels[-1].coarser())
+    filled[fine.rows, fine.cols] = conjugate_gradients(levels, rhs)
     return filled
+
+
+FILL_TOLERANCE = 1e-6       # relative residual: the fill moves < 1e-4 of the height range, files not at all
+FILL_OVERCORRECTION = 1.5   # coarse corrections of aggregates undershoot; 1.5 halved the iterations
+FILL_W_CYCLE = 2000         # levels with more nodes are visited twice per cycle (iterations stay ~8 at any size)
+NEIGHBOURS = ((0, 1), (0, -1), (1, 0), (-1, 0))
+
+
+class FillLevel:
+    """One level of the fill's multigrid: a weighted 5-point graph Laplacian on the unknown
+    nodes of a grid, plus a leak to the fixed (valid) nodes on the diagonal.
+
+    Nodes are listed red ((row + column) even) first, so a Gauss-Seidel half-sweep is a
+    slice. ``neighbours``/``weights`` (4 x size) point to each node's neighbours (``size``,
+    a zero slot, where there is none). A coarser level aggregates 2x2 blocks: its weights
+    are the sums of the fine edges between two blocks, its leak the sum of the block's
+    (the Galerkin operator of piecewise-constant interpolation), so it stays a 5-point stencil.
+    """
+
+    def __init__(self, rows, cols, shape, periodic):
+        order = np.argsort((rows + cols) % 2, kind="stable")
+        self.rows, self.cols, self.shape, self.periodic = rows[order], cols[order], shape, periodic
+        self.size, self.red = len(order), int(np.count_nonzero((rows + cols) % 2 == 0))
+        self.index = np.full(shape, self.size, dtype=np.int32)
+        self.index[self.rows, self.cols] = np.arange(self.size)
+
+    @classmethod
+    def of_mask(cls, filled, valid, periodic):
+        """(the finest level: the invalid nodes, unit weights, leak = count of valid
+        neighbours; the right-hand side: the sum of the valid neighbours' heights)."""
+        level = cls(*np.nonzero(~valid), valid.shape, periodic)
+        neighbours, leak, rhs = [], np.zeros(level.size), np.zeros(level.size)
+        for step in NEIGHBOURS:
+            inside, r, c = level.beside(*step)
+            known = inside & valid[r, c]
+            leak += known
+            rhs += np.where(known, filled[r, c], 0.0)
+            neighbours.append(np.where(inside & ~known, level.index[r, c], level.size))
+        neighbours = np.array(neighbours, dtype=np.int32)
+        level.connect(neighbours, (neighbours < level.size).astype(float), leak)
+        return level, rhs
+
+    def beside(self, dr, dc):
+        """(whether each node has a neighbour (dr, dc) away, its row, its column): the
+        grid border ends the grid, except that periodic columns wrap (never onto the node itself)."""
+        r, c = self.rows + dr, self.cols + dc
+        if self.periodic:
+            c = np.mod(c, self.shape[1])
+        inside = (r >= 0) & (r < self.shape[0]) & (c >= 0) & (c < self.shape[1]) & ((dc == 0) | (c != self.cols))
+        return inside, np.where(inside, r, 0), np.where(inside, c, 0)
+
+    def connect(self, neighbours, weights, leak):
+        """Set the stencil: the diagonal is the leak plus every edge's weight."""
+        self.neighbours, self.weights, self.diagonal = neighbours, weights, leak + weights.sum(axis=0)
+
+    def coarser(self):
+        """The level of 2x2 aggregates of this one's nodes; sets ``parent``, each node's aggregate."""
+        shape = ((self.shape[0] + 1) // 2, (self.shape[1] + 1) // 2)
+        occupied = np.zeros(shape, dtype=bool)
+        occupied[self.rows // 2, self.cols // 2] = True
+        coarse = FillLevel(*np.nonzero(occupied), shape, self.periodic)
+        self.parent = coarse.index[self.rows // 2, self.cols // 2]
+        target = np.append(self.parent, -1)[self.neighbours]
+        neighbours, weights = [], []
+        for k, step in enumerate(NEIGHBOURS):
+            crossing = (target[k] >= 0) & (target[k] != self.parent)
+            weights.append(np.bincount(self.parent, np.where(crossing, self.weights[k], 0.0), minlength=coarse.size))
+            inside, r, c = coarse.beside(*step)
+            neighbours.append(np.where(inside & (weights[-1] > 0), coarse.index[r, c], coarse.size))
+        coarse.connect(np.array(neighbours, dtype=np.int32), np.array(weights),
+                       np.bincount(self.parent, self.leak_of(), minlength=coarse.size))
+        return coarse
+
+    def leak_of(self):
+        """Each node's leak to fixed nodes: its diagonal less its edges."""
+        return self.diagonal - self.weights.sum(axis=0)
+
+    def times(self, u):
+        """The stencil applied to ``u`` (one value per node)."""
+        return self.diagonal * u - (self.weights * np.append(u, 0.0)[self.neighbours]).sum(axis=0)
+
+    def relax(self, u, b, colour):
+        """One Gauss-Seidel half-sweep on the red (0) or black (1) nodes of ``u`` (size + 1
+        values, the last 0), in place: red nodes neighbour only black ones and vice versa."""
+        part = slice(0, self.red) if colour == 0 else slice(self.red, self.size)
+        u[part] = (b[part] + (self.weights[:, part] * u[self.neighbours[:, part]]).sum(axis=0)) / self.diagonal[part]
+
+
+def fill_cycle(levels, b):
+    """The multigrid preconditioner: approximately solve levels[0] u = b. Symmetric (red-black
+    before, black-red after the coarse correction), as conjugate gradients needs."""
+    level = levels[0]
+    if len(levels) == 1:   # one node (all the grid's aggregates in one): exact
+        return b / level.diagonal
+    u = np.zeros(level.size + 1)
+    level.relax(u, b, 0)
+    level.relax(u, b, 1)
+    coarse_b = np.bincount(level.parent, b - level.times(u[:-1]), minlength=levels[1].size)
+    correction = fill_cycle(levels[1:], coarse_b)
+    if len(levels) > 2 and levels[1].size > FILL_W_CYCLE:
+        correction += fill_cycle(levels[1:], coarse_b - levels[1].times(correction))
+    u[:-1] += FILL_OVERCORRECTION * correction[level.parent]
+    level.relax(u, b, 1)
+    level.relax(u, b, 0)
+    return u[:-1]
+
+
+def conjugate_gradients(levels, b):
+    """Solve levels[0] x = b to FILL_TOLERANCE (relative residual) by preconditioned conjugate gradients."""
+    x, residual = np.zeros_like(b), b.copy()
+    direction = preconditioned = fill_cycle(levels, residual)
+    product, limit = inner(residual, preconditioned), FILL_TOLERANCE * np.sqrt(inner(b, b))
+    for _ in range(100):
+        image = levels[0].times(direction)
+        length = product / inner(direction, image)
+        x += length * direction
+        residual -= length * image
+        if np.sqrt(inner(residual, residual)) <= limit:
+            break
+        preconditioned = fill_cycle(levels, residual)
+        product, previous = inner(residual, preconditioned), product
+        direction = preconditioned + (product / previous) * direction
+    return x
+
+
+def inner(a, b):
+    """The dot product of two vectors, kept off BLAS: its threads spin, and on a busy
+    machine they made the fill's small products 10-100x slower."""
+    return float(np.einsum("i,i->", a, b))
 
 
 # --------------------------------------------------------------------------- transform
