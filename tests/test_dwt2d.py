@@ -145,6 +145,7 @@ def test_the_fill_of_a_full_or_empty_or_one_node_grid():
     np.testing.assert_allclose(w2.laplace_fill(z, one), 6.0, atol=1e-9)   # a single valid node: its height
     hole = ~one
     np.testing.assert_allclose(w2.laplace_fill(z, hole)[1, 2], np.mean([2, 5, 7, 10]), atol=1e-9)
+    assert not w2.laplace_fill(np.array([[np.nan, 0.0]]), np.array([[False, True]])).any()   # zero data: zero fill
 
 
 def test_odd_columns_see_their_left_and_right_neighbours():

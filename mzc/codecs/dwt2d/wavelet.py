@@ -163,12 +163,12 @@ def conjugate_gradients(levels, b):
     direction = preconditioned = fill_cycle(levels, residual)
     product, limit = inner(residual, preconditioned), FILL_TOLERANCE * np.sqrt(inner(b, b))
     for _ in range(100):
+        if np.sqrt(inner(residual, residual)) <= limit:   # before the first step too: b = 0 is solved by 0
+            break
         image = levels[0].times(direction)
         length = product / inner(direction, image)
         x += length * direction
         residual -= length * image
-        if np.sqrt(inner(residual, residual)) <= limit:
-            break
         preconditioned = fill_cycle(levels, residual)
         product, previous = inner(residual, preconditioned), product
         direction = preconditioned + (product / previous) * direction
