@@ -50,51 +50,46 @@ def sample_surface(points, triangles, count, rng):
 
 
 def point_triangle_distance(p, a, b, c):
-    """Exact distance from points p to triangles (a, b, c), all (n, 3); Ericson's regions, vectorised."""
-    ab, ac, ap = b - a, c - a, p - a
-    d1, d2 = _dot(ab, ap), _dot(ac, ap)
-    bp, cp = p - b, p - c
-    d3, d4 = _dot(ab, bp), _dot(ac, bp)
-    d5, d6 = _dot(ab, cp), _dot(ac, cp)
-    va = d3 * d6 - d5 * d4
-    vb = d5 * d2 - d1 * d6
-    vc = d1 * d4 - d3 * d2
-    with np.errstate(divide="ignore", invalid="ignore"):
-        denom = va + vb + vc
-        v = np.where(denom != 0, vb / denom, 0.0)
-        w = np.where(denom != 0, vc / denom, 0.0)
-        closest = a + v[:, None] * ab + w[:, None] * ac  # inside the face
-        edge_bc = b + (np.clip((d4 - d3) / ((d4 - d3) + (d5 - d6)), 0, 1))[:, None] * (c - b)
-        edge_ac = a + np.clip(d2 / (d2 - d6), 0, 1)[:, None] * ac
-        edge_ab = a + np.clip(d1 / (d1 - d3), 0, 1)[:, None] * ab
-    regions = [
-        (d1 <= 0) & (d2 <= 0), (d3 >= 0) & (d4 <= d3), (d6 >= 0) & (d5 <= d6),
-        (vc <= 0) & (d1 >= 0) & (d3 <= 0), (vb <= 0) & (d2 >= 0) & (d6 <= 0),
-        (va <= 0) & ((d4 - d3) >= 0) & ((d5 - d6) >= 0),
-    ]
-    choices = [a, b, c, edge_ab, edge_ac, edge_bc]
-    for region, point in zip(reversed(regions), reversed(choices)):
-        closest = np.where(region[:, None], point, closest)
-    distance = np.linalg.norm(p - closest, axis=1)
-    flat = ~np.isfinite(distance) | (np.linalg.norm(np.cross(ab, ac), axis=1) == 0)
-    if flat.any():  # a zero-area triangle is its three edges
-        q, x, y, w = p[flat], a[flat], b[flat], c[flat]
-        distance[flat] = np.minimum.reduce([segment_distance(q, x, y), segment_distance(q, y, w),
-                                            segment_distance(q, w, x)])
-    return distance
+    """Exact distance from points p to triangles (a, b, c), all (n, 3)."""
+    return _point_triangle_distance(*(np.asarray(x, dtype=float).T for x in (p, a, b, c)))
 
 
-def segment_distance(p, a, b):
-    """Distance from points p to segments a-b (all (n, 3)); a segment may be a single point."""
-    ab = b - a
-    length2 = _dot(ab, ab)
+def _point_triangle_distance(p, a, b, c):
+    """``point_triangle_distance`` on component arrays (3, n): a few passes of plain arithmetic.
+
+    When p projects into the triangle (on the inner side of its three edges) the distance
+    is to its plane, else to the nearest of its three edges; a zero-area triangle is only
+    its edges (a segment, or a point).
+    """
+    ab, bc, ca = b - a, c - b, a - c
+    ap, bp, cp = p - a, p - b, p - c
+    normal = _cross(ab, -ca)
+    norm2 = _dot(normal, normal)
+    inside = norm2 > 0
+    for edge, start in ((ab, ap), (bc, bp), (ca, cp)):
+        inside &= _dot(_cross(edge, start), normal) >= 0
+    squared = np.minimum.reduce([_segment_distance2(ap, ab), _segment_distance2(bp, bc), _segment_distance2(cp, ca)])
     with np.errstate(divide="ignore", invalid="ignore"):
-        t = np.where(length2 > 0, np.clip(_dot(p - a, ab) / length2, 0, 1), 0.0)
-    return np.linalg.norm(p - (a + t[:, None] * ab), axis=1)
+        plane = _dot(ap, normal) ** 2 / norm2
+    return np.sqrt(np.where(inside, plane, squared))
+
+
+def _segment_distance2(start, edge):
+    """Squared distance from points to segments a + t edge (t in [0, 1]), given start = p - a;
+    components (3, n). A zero-length segment is its point."""
+    length2 = _dot(edge, edge)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        t = np.where(length2 > 0, np.clip(_dot(start, edge) / length2, 0, 1), 0.0)
+    offset = start - t * edge
+    return _dot(offset, offset)
 
 
 def _dot(u, v):
-    return np.einsum("ij,ij->i", u, v)
+    return u[0] * v[0] + u[1] * v[1] + u[2] * v[2]
+
+
+def _cross(u, v):
+    return np.stack([u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]])
 
 
 def distance_to_mesh(samples, points, triangles, chunk=50_000):
@@ -103,11 +98,13 @@ def distance_to_mesh(samples, points, triangles, chunk=50_000):
     The triangles with the nearest centroids give an upper bound u. A triangle can only
     come closer than u if its centroid lies within u plus its own radius (centroid to
     farthest corner), so triangles are grouped by radius (powers of two) and each group
-    is searched within that distance: exact, yet only nearby triangles are tested.
+    is searched within u plus its largest radius; of those found, only the triangles whose
+    own bound (centroid distance minus radius) is within u are measured exactly.
     """
     from scipy.spatial import cKDTree
 
     corners = points[triangles]
+    rows = np.ascontiguousarray(corners.transpose(1, 2, 0))
     centroids = corners.mean(axis=1)
     radius = np.linalg.norm(corners - centroids[:, None], axis=2).max(axis=1)
     nearest_tree = cKDTree(centroids)
@@ -119,16 +116,19 @@ def distance_to_mesh(samples, points, triangles, chunk=50_000):
         k = min(NEAREST_CANDIDATES, len(triangles))
         _, nearest = nearest_tree.query(block, k=k)
         nearest = nearest.reshape(len(block), k)
-        bound = distances_to(block, np.repeat(np.arange(len(block)), k), nearest.ravel(), corners)
+        bound = distances_to(block, np.repeat(np.arange(len(block)), k), nearest.ravel(), rows)
         best = bound.reshape(len(block), k).min(axis=1)
         for ids, tree, largest in trees:
-            found = tree.query_ball_point(block, r=best + largest)
+            found = tree.query_ball_point(block, r=best + largest, workers=-1, return_sorted=False)
             counts = np.fromiter(map(len, found), dtype=np.int64, count=len(block))
             if counts.sum() == 0:
                 continue
             which = np.repeat(np.arange(len(block)), counts)
             candidates = ids[np.concatenate(found).astype(np.int64)]
-            np.minimum.at(best, which, distances_to(block, which, candidates, corners))
+            reach = np.linalg.norm(block[which] - centroids[candidates], axis=1) - radius[candidates]
+            close = reach <= best[which] * (1 + 1e-9)
+            which, candidates = which[close], candidates[close]
+            np.minimum.at(best, which, distances_to(block, which, candidates, rows))
         distances[start:start + chunk] = best
     return distances
 
@@ -140,10 +140,11 @@ def radius_groups(radius):
     return [np.flatnonzero(level == value) for value in np.unique(level)]
 
 
-def distances_to(samples, sample_index, triangle_index, corners):
-    """Distances from samples[sample_index] to the triangles with corners[triangle_index]."""
-    chosen = corners[triangle_index]
-    return point_triangle_distance(samples[sample_index], chosen[:, 0], chosen[:, 1], chosen[:, 2])
+def distances_to(samples, sample_index, triangle_index, rows):
+    """Distances from samples[sample_index] to the triangles triangle_index, whose corners are
+    ``rows`` (3 corners, 3 coordinates, triangles), the layout that gathers fastest."""
+    chosen = rows[:, :, triangle_index]
+    return _point_triangle_distance(samples[sample_index].T, chosen[0], chosen[1], chosen[2])
 
 
 def surface_distance(mesh_a, mesh_b, samples=100_000, seed=0, keep_a=None, keep_b=None):
@@ -181,6 +182,7 @@ def heightfield_filters(points_a, triangles_a, min_normal_z=HEIGHTFIELD_NORMAL_Z
     normals = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
     part = (normals[:, 2] > min_normal_z * np.linalg.norm(normals, axis=1)) & front_most(corners)
     tree = cKDTree(corners.mean(axis=1))
+    rows = np.ascontiguousarray(corners.transpose(1, 2, 0))
     k = min(HEIGHTFIELD_CANDIDATES, len(corners))
 
     def keep_a(samples, triangle_index):
@@ -190,7 +192,7 @@ def heightfield_filters(points_a, triangles_a, min_normal_z=HEIGHTFIELD_NORMAL_Z
         _, candidates = tree.query(samples, k=k)
         candidates = candidates.reshape(len(samples), k)
         sample_index = np.repeat(np.arange(len(samples)), k)
-        distance = distances_to(samples, sample_index, candidates.ravel(), corners).reshape(-1, k)
+        distance = distances_to(samples, sample_index, candidates.ravel(), rows).reshape(-1, k)
         return part[candidates[np.arange(len(samples)), distance.argmin(axis=1)]]
 
     return keep_a, keep_b
@@ -200,8 +202,8 @@ def front_most(corners):
     """True for each triangle whose centroid no other triangle covers from above (+z).
 
     The vertical line through each centroid is tested against every triangle whose xy
-    bounding circle (searched by radius group, as in ``distance_to_mesh``) contains it (the
-    same inclusive barycentric test as slicing); a hit
+    bounding circle contains it (found in one KD-tree per ``radius_groups`` group, searched
+    within that group's largest radius; the same inclusive barycentric test as slicing); a hit
     higher than the centroid by more than 1e-9 of the mesh size hides the triangle.
     """
     from scipy.spatial import cKDTree

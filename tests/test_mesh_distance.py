@@ -1,0 +1,97 @@
+"""The exact point-to-mesh distance against an independent reference: Ericson's closest
+point on a triangle, one point and one triangle at a time, minimised over every triangle."""
+
+import numpy as np
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from mzc.measure.metrics import distance_to_mesh
+
+
+def closest_on_triangle(p, a, b, c):
+    """Ericson's ClosestPtPointTriangle (Real-Time Collision Detection, 5.1.5) for one point;
+    a zero-area triangle is the nearest point of its three edges."""
+    ab, ac, ap = b - a, c - a, p - a
+    if np.linalg.norm(np.cross(ab, ac)) == 0:
+        return min((closest_on_segment(p, x, y) for x, y in ((a, b), (b, c), (c, a))),
+                   key=lambda q: np.linalg.norm(p - q))
+    d1, d2 = ab @ ap, ac @ ap
+    if d1 <= 0 and d2 <= 0:
+        return a
+    bp = p - b
+    d3, d4 = ab @ bp, ac @ bp
+    if d3 >= 0 and d4 <= d3:
+        return b
+    vc = d1 * d4 - d3 * d2
+    if vc <= 0 and d1 >= 0 and d3 <= 0:
+        return a + d1 / (d1 - d3) * ab
+    cp = p - c
+    d5, d6 = ab @ cp, ac @ cp
+    if d6 >= 0 and d5 <= d6:
+        return c
+    vb = d5 * d2 - d1 * d6
+    if vb <= 0 and d2 >= 0 and d6 <= 0:
+        return a + d2 / (d2 - d6) * ac
+    va = d3 * d6 - d5 * d4
+    if va <= 0 and d4 - d3 >= 0 and d5 - d6 >= 0:
+        return b + (d4 - d3) / ((d4 - d3) + (d5 - d6)) * (c - b)
+    denom = 1 / (va + vb + vc)
+    return a + ab * (vb * denom) + ac * (vc * denom)
+
+
+def closest_on_segment(p, a, b):
+    """The nearest point of segment a-b (maybe a single point) to p."""
+    ab = b - a
+    length2 = ab @ ab
+    return a if length2 == 0 else a + min(max((p - a) @ ab / length2, 0), 1) * ab
+
+
+def reference_distance(samples, points, triangles):
+    """The distance of each sample to its nearest triangle, by looking at every triangle."""
+    return np.array([min(np.linalg.norm(p - closest_on_triangle(p, *points[t])) for t in triangles) for p in samples])
+
+
+coordinate = st.integers(-4, 4).map(float)
+corner = st.tuples(coordinate, coordinate, coordinate)
+
+
+@st.composite
+def mesh_and_samples(draw):
+    """A small random mesh on a coarse lattice (so repeated corners, collinear and collapsed
+    triangles come often) and samples: its corners, edge midpoints, points on its triangles,
+    random points near it and points far away."""
+    points = np.array(draw(st.lists(corner, min_size=3, max_size=12)))
+    count = draw(st.integers(1, 16))
+    triangles = np.array(draw(st.lists(st.tuples(*[st.integers(0, len(points) - 1)] * 3),
+                                       min_size=count, max_size=count)))
+    seed = draw(st.integers(0, 2**32 - 1))
+    rng = np.random.default_rng(seed)
+    corners = points[triangles]
+    weights = rng.dirichlet(np.ones(3), size=len(triangles))
+    samples = np.concatenate([points, (corners[:, 0] + corners[:, 1]) / 2, np.einsum("tk,tkd->td", weights, corners),
+                              rng.uniform(-6, 6, size=(10, 3)), rng.normal(size=(3, 3)) * 1e3])
+    return points, triangles, samples
+
+
+@settings(max_examples=300, deadline=None)
+@given(mesh_and_samples())
+def test_distance_to_mesh_equals_the_reference_on_every_sample(case):
+    points, triangles, samples = case
+    expected = reference_distance(samples, points, triangles)
+    np.testing.assert_allclose(distance_to_mesh(samples, points, triangles), expected, rtol=1e-9, atol=1e-9)
+
+
+def test_distance_to_a_fine_mesh_equals_the_reference():
+    """Many small triangles (a wavy sheet, one collapsed) and samples on and off it: the
+    spatial search must find the nearest of thousands of triangles."""
+    from mzc.grid import ZGrid
+    from mzc.ops.triangulation import grid_to_mesh
+
+    y, x = np.mgrid[0:25, 0:30].astype(float)
+    mesh = grid_to_mesh(ZGrid(np.sin(x / 3) * np.cos(y / 4) * 2, 0.5, 0.5))
+    points, triangles = mesh.points, mesh.triangles.copy()
+    triangles[7] = triangles[7, 0]
+    rng = np.random.default_rng(5)
+    samples = np.concatenate([points[::37], rng.uniform(points.min(axis=0) - 3, points.max(axis=0) + 3, (150, 3))])
+    np.testing.assert_allclose(distance_to_mesh(samples, points, triangles),
+                               reference_distance(samples, points, triangles), rtol=1e-9, atol=1e-12)
