@@ -2,7 +2,10 @@
 
 import click
 
+from mzc.cli.densify import DEFAULT_METHOD, METHODS
 from mzc.cli.options import jump_angle_option
+from mzc.cli.triangulate import FORMATS
+from mzc.limits import MAX_INSERTED
 
 SOURCES_HELP = """SOURCES are files, folders (walked recursively for the job's files), glob
 patterns ('scans/**/*.ply', quoted) and lists of paths (@LIST, one per line; @- reads
@@ -81,9 +84,6 @@ measures each decoded surface against its mesh (RMS and Hausdorff, as 'mzc diff 
   mzc batch encode @todo.txt -o archive/ --dwt2d --max-error 0.1 --scheduler tcp://head:8786"""
 
 
-FORMATS = ("ply", "obj", "stl", "vtk", "off")
-
-
 @click.command("decode", help=f"""Decode every mzc file of SOURCES into a mesh in DEST.
 
 Each file is decoded, densified with -n/--densify N rows between planes when asked (as 'mzc
@@ -93,9 +93,9 @@ densify'), and triangulated (as 'mzc triangulate') into --format.
 
 \b
   mzc batch decode archive/ -o meshes/ --densify 3 --format ply""")
-@click.option("-n", "--densify", type=click.IntRange(0, 20), default=0, show_default=True, metavar="N",
+@click.option("-n", "--densify", type=click.IntRange(0, MAX_INSERTED), default=0, show_default=True, metavar="N",
               help="Rows to insert between each pair of rows (mzc densify -n).")
-@click.option("--method", type=click.Choice(("thesis", "laplace", "biharmonic")), default="biharmonic",
+@click.option("--method", type=click.Choice(METHODS), default=DEFAULT_METHOD,
               show_default=True, help="How densify fills the inserted rows.")
 @click.option("--format", "file_format", type=click.Choice(FORMATS), default="ply", show_default=True,
               help="Mesh format of the outputs.")
