@@ -313,8 +313,12 @@ class Replaced:
             raise
 
     def publish(self):
-        """Give the file a hidden name beside the target (unless it has one) and rename it over the target."""
+        """Link the unnamed file straight to a target that does not exist; otherwise give it a hidden
+        name beside the target (unless it has one) and rename that over the target. Only a SIGKILL
+        between that link and the rename, which nothing can catch, leaves the hidden name behind."""
         try:
+            if self.temp is None and link_unnamed(self.fd, self.target):
+                return
             if self.temp is None:
                 self.temp = hidden_link(self.fd, os.path.dirname(self.target))
             os.replace(self.temp, self.target)
@@ -351,25 +355,32 @@ def new_file(directory):
     return fd, name
 
 
-def hidden_link(fd, directory):
-    """Link the unnamed file ``fd`` to a fresh hidden name in ``directory`` (remembered for signal
-    cleanup) and return that name; /proc/self/fd lets an unprivileged process link it."""
-    folder = os.open(directory, os.O_PATH | os.O_DIRECTORY | os.O_CLOEXEC)   # a dir_fd makes os.link follow
+def link_unnamed(fd, path):
+    """Give the unnamed file ``fd`` the name ``path``; False, and nothing done, if a file has it.
+    /proc/self/fd lets an unprivileged process link it; a directory descriptor makes os.link follow."""
+    folder = os.open(os.path.dirname(path), os.O_PATH | os.O_DIRECTORY | os.O_CLOEXEC)
     try:
-        while True:
-            base = HIDDEN_PREFIX + secrets.token_hex(6)
-            name = os.path.join(directory, base)
-            remember(name)
-            try:
-                os.link(f"/proc/self/fd/{fd}", base, dst_dir_fd=folder)
-                return name
-            except FileExistsError:
-                forget(name)
-            except OSError:
-                forget(name)
-                raise
+        os.link(f"/proc/self/fd/{fd}", os.path.basename(path), dst_dir_fd=folder)
+        return True
+    except FileExistsError:
+        return False
     finally:
         os.close(folder)
+
+
+def hidden_link(fd, directory):
+    """Link the unnamed file ``fd`` to a fresh hidden name in ``directory`` (remembered for signal
+    cleanup) and return that name."""
+    while True:
+        name = os.path.join(directory, HIDDEN_PREFIX + secrets.token_hex(6))
+        remember(name)
+        try:
+            if link_unnamed(fd, name):
+                return name
+        except OSError:
+            forget(name)
+            raise
+        forget(name)
 
 
 def keep_mode_and_owner(fd, info):
