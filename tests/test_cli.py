@@ -71,6 +71,7 @@ IMPORT_SETS = [
     (["decode", "{coded}"], {"constriction"}),
     (["densify", "-n", "1", "{grid}"], {"scipy"}),                                      # the biharmonic solve
     (["triangulate", "{grid}"], set()),
+    (["triangulate", "{grid}", "-o", "{grid}.ply"], set()),                             # our own PLY writer
     (["info", "{coded}"], set()),
     (["diff", "{grid}", "{grid}"], set()),
 ]

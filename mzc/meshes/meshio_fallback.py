@@ -1,4 +1,4 @@
-"""VTK and OFF through meshio, and the writers of PLY and STL.
+"""VTK and OFF through meshio, and the writer of ascii STL.
 
 meshio wants file names, so bytes go through an in-memory file (a memfd on Linux, which
 not even SIGKILL leaves on disk; a temporary file elsewhere); meshio is imported only when
@@ -122,16 +122,14 @@ def surface_triangles(cells) -> np.ndarray:
 
 
 def write_as(kind: str, mesh: Mesh) -> bytes:
-    """The bytes of ``mesh`` written by meshio as ``kind`` (PLY binary); STL needs triangles."""
+    """The bytes of ``mesh`` written by meshio as ``kind`` (stl, vtk or off); STL needs triangles."""
     import meshio
 
     if kind == "stl" and not len(mesh.triangles):
         raise MzcError("STL cannot hold a point cloud (no triangles)")
-    # int32 indices: PLY has no 64-bit integers, and meshio would warn on stderr.
-    cells = [("triangle", mesh.triangles.astype(np.int32))] if len(mesh.triangles) else []
-    options = {"binary": True} if kind == "ply" else {}
+    cells = [("triangle", mesh.triangles.astype(np.int32))] if len(mesh.triangles) else []   # as mzc has always written
     with temporary_name(kind) as name:
         with quiet():
-            meshio.write(name, meshio.Mesh(mesh.points, cells), file_format=kind, **options)
+            meshio.write(name, meshio.Mesh(mesh.points, cells), file_format=kind)
         with open(name, "rb") as handle:
             return handle.read()
