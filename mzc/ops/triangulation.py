@@ -64,13 +64,12 @@ def jump_edges(grid, angle=None, points=None):
 def is_jump(start, end, projection, cosine, angle):
     """Per edge from ``start`` to ``end`` (grid-frame points, NaN where invalid): True where it
     lies within the angle whose cosine is ``cosine`` of the node line through its midpoint."""
-    edge = end - start
     if angle <= 0:
-        return np.zeros(edge.shape[:-1], dtype=bool)
-    line = projections.directions_through(projection, (start + end) / 2)
+        return np.zeros(start.shape[:-1], dtype=bool)
+    ex, ey, ez = (end[..., i] - start[..., i] for i in range(3))
+    lx, ly, lz = projections.directions_through(projection, *((start[..., i] + end[..., i]) / 2 for i in range(3)))
     with np.errstate(invalid="ignore"):
-        along_line = np.abs(np.einsum("...i,...i->...", edge, line))
-        return along_line > cosine * np.linalg.norm(edge, axis=-1)
+        return np.abs(ex * lx + ey * ly + ez * lz) > cosine * np.sqrt(ex * ex + ey * ey + ez * ez)
 
 
 def grid_triangles(valid, periodic=False, jumps=None):
