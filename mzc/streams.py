@@ -76,10 +76,12 @@ def read_input(path):
         raise MzcError("is a directory, not a file", source=path) from None
     except PermissionError:
         raise MzcError("permission denied", source=path) from None
+    except OSError as error:   # an I/O error, a loop of links, a name too long...
+        raise failure(error, path) from None
 
 
 def failure(error, path):
-    """An OSError met while writing ``path`` as a one-line MzcError (``no space left on device``)."""
+    """An OSError met while reading or writing ``path`` as a one-line MzcError (``no space left on device``)."""
     message = error.strerror or type(error).__name__
     return MzcError(message[:1].lower() + message[1:], source=path)
 

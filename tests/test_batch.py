@@ -189,7 +189,7 @@ def test_bad_items_become_failed_rows_with_their_one_line_error(tmp_path):
                                 for n in ("empty.ply", "words.obj", "gone.ply")])
     assert [r["status"] for r in rows] == ["failed"] * 3
     assert "empty input" in rows[0]["error"] and "words.obj:1" in rows[1]["error"]
-    assert "gone.ply: cannot read" in rows[2]["error"]
+    assert "gone.ply: no such file" in rows[2]["error"]
     assert all("\n" not in r["error"] for r in rows) and not (tmp_path / "out").exists()
 
 

@@ -21,6 +21,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from mzc.errors import MzcError, MzcWarning, about
+from mzc.streams import read_input, write_output
 
 ACTIONS = ("encode", "decode")
 
@@ -82,7 +83,7 @@ def run_item(job, item, previous=None):
         warnings.simplefilter("always", MzcWarning)
         try:
             with timings.stage("read"):
-                data = read_bytes(item.source)
+                data = read_input(item.source)
             row.update(input_bytes=len(data), input_sha256=hashlib.sha256(data).hexdigest())
             if still_done(job, row, previous):
                 return {**previous, "skipped": True}
@@ -99,15 +100,6 @@ def run_item(job, item, previous=None):
     warned = "; ".join(dict.fromkeys(str(w.message) for w in caught if issubclass(w.category, MzcWarning)))
     row.update(warning=warned, seconds=time.perf_counter() - started, timings=timings.text())
     return row
-
-
-def read_bytes(path):
-    """The bytes of an input file, or an MzcError naming it."""
-    try:
-        with open(path, "rb") as file:
-            return file.read()
-    except OSError as error:
-        raise MzcError(f"cannot read: {error.strerror or error}", source=path) from None
 
 
 def still_done(job, row, previous):
@@ -185,7 +177,6 @@ def decode_item(job, item, data, row, timings):
 
 def write_item(job, item, output):
     """Write an item's output under the destination (atomically, folders made as needed)."""
-    from mzc.streams import write_output
 
     path = os.path.join(job.dest, item.output)
     try:

@@ -3,7 +3,7 @@
 import click
 
 from mzc.cli.densify import DEFAULT_METHOD, METHODS
-from mzc.cli.options import jump_angle_option
+from mzc.cli.options import jump_angle_option, with_options
 from mzc.cli.triangulate import FORMATS
 from mzc.limits import MAX_INSERTED
 
@@ -29,13 +29,6 @@ batch_options = [
 ]
 
 
-def with_options(options, command):
-    """``command`` with click ``options`` (decorators) applied in the order listed."""
-    for option in reversed(options):
-        command = option(command)
-    return command
-
-
 def build_command():
     """The ``mzc batch`` group: encode (built from the codec registry, like ``mzc encode``) and decode."""
     group = click.Group("batch", help="Run slice+encode or decode+triangulate over whole archives, on Dask.")
@@ -47,17 +40,15 @@ def build_command():
 def build_encode():
     """``mzc batch encode``: slice and encode every mesh, with the options of slice and encode."""
     from mzc.cli.encode import chosen_codec, codec_flag, codec_options, tuning_options
-    from mzc.cli.slice import SLICE_OPTIONS, check_slice_options
+    from mzc.cli.slice import SLICE_NAMES, SLICE_OPTIONS, check_slice_options
     from mzc.codecs import codec_names, get_codec
 
     codecs = [get_codec(name) for name in codec_names()]
-    slice_names = ("d1", "d2", "rows", "cols", "thesis_grid", "align", "projection", "view", "center", "axis",
-                   "units")
 
     def run(sources, dest, scheduler, workers, chunk_size, verify, **values):
         from mzc.api import batch_encode
 
-        slicing = {name: values.pop(name) for name in slice_names}
+        slicing = {name: values.pop(name) for name in SLICE_NAMES}
         check_slice_options(slicing["d1"], slicing["d2"], slicing["rows"], slicing["cols"])
         codec = chosen_codec(codecs, values)
         options = codec_options(codec, values)

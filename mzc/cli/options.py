@@ -41,6 +41,13 @@ precision_option = click.option("--precision", type=click.IntRange(0, 17), metav
                                 help="With --plain: round the written heights to DIGITS decimals [default: exact].")
 
 
+def with_options(options, command):
+    """``command`` with click ``options`` (decorators) applied in the order listed."""
+    for option in reversed(options):
+        command = option(command)
+    return command
+
+
 def zgrid_output_options(command):
     """``command`` with --plain, --float32 and --precision, how it writes its z-grid's body."""
     return plain_option(float32_option(precision_option(command)))

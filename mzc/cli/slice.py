@@ -2,7 +2,7 @@
 
 import click
 
-from mzc.cli.options import input_argument, output_option, write_grid, zgrid_body, zgrid_output_options
+from mzc.cli.options import input_argument, output_option, with_options, write_grid, zgrid_body, zgrid_output_options
 
 
 def one_word(value):
@@ -48,9 +48,10 @@ SLICE_OPTIONS = [   # the grid's options, shared with 'mzc batch encode'
 
 def slice_options(command):
     """``command`` with the slicing options (SLICE_OPTIONS) added."""
-    for option in reversed(SLICE_OPTIONS):
-        command = option(command)
-    return command
+    return with_options(SLICE_OPTIONS, command)
+
+
+SLICE_NAMES = tuple(param.name for param in slice_options(click.Command("slicing")).params)
 
 
 def check_slice_options(d1, d2, rows, cols):
