@@ -56,6 +56,11 @@ def is_stdio(path):
     return path is None or str(path) == "-"
 
 
+def is_terminal(path):
+    """True when ``path`` means stdout and stdout is a terminal (where binary data is no use)."""
+    return is_stdio(path) and sys.stdout is not None and sys.stdout.isatty()
+
+
 def display_name(path):
     """The name used for ``path`` in error messages."""
     return STDIN_NAME if is_stdio(path) else str(path)

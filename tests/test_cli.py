@@ -257,3 +257,39 @@ def test_body_options_that_contradict_each_other_are_usage_errors(mzc, bump_grid
     result = mzc("decode", *options, input=bump_grid)
     assert result.returncode == 2 and message in result.stderr.decode()
     assert result.stdout == b""
+
+
+def run_on_terminal(arguments):
+    """(exit status, what reached the terminal, stderr) of ``mzc ARGUMENTS`` with stdout a pseudo-terminal."""
+    import pty
+
+    leader, follower = pty.openpty()
+    process = subprocess.Popen([sys.executable, "-m", "mzc", *map(str, arguments)], stdout=follower,
+                               stderr=subprocess.PIPE)
+    os.close(follower)
+    shown = b""
+    try:
+        while chunk := os.read(leader, 1 << 16):
+            shown += chunk
+    except OSError:   # EIO: the program closed the terminal's other end and everything is read
+        pass
+    finally:
+        os.close(leader)
+    error = process.stderr.read().decode()
+    return process.wait(timeout=120), shown, error
+
+
+def test_a_terminal_gets_text_and_no_compressed_bytes(sample_files):
+    """On a terminal, a z-grid comes as the text of --plain (raw is for pipes and files), and
+    encode refuses to print compressed bytes, as gzip does; --float32 asked for raw still gets it."""
+    status, shown, _ = run_on_terminal(["decode", sample_files["coded"]])
+    text = shown.replace(b"\r\n", b"\n").decode("ascii")   # a terminal shows each newline as CR LF
+    assert status == 0 and text.startswith("mzc-zgrid 1.0\n") and "\nraw " not in text
+    assert zgrid.read(text.encode(), "terminal").z.shape == zgrid.read(
+        subprocess.run([sys.executable, "-m", "mzc", "decode", sample_files["coded"]], capture_output=True,
+                       check=True).stdout, "pipe").z.shape
+    status, shown, _ = run_on_terminal(["decode", sample_files["coded"], "--float32"])
+    assert status == 0 and shown.startswith(b"mzc-zgrid 3.0")
+    status, shown, error = run_on_terminal(["encode", "--dwt2d", "--rmse", "0.05", sample_files["grid"]])
+    assert status == 1 and shown == b""
+    assert error == "mzc: <stdout>: compressed data is not written to a terminal: redirect it or give -o FILE\n"

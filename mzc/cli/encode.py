@@ -121,11 +121,14 @@ def build_command():
     codecs = [get_codec(name) for name in codec_names()]
 
     def run(input, output, **values):
-        from mzc.errors import about
-        from mzc.streams import check_not_input, display_name, write_output
+        from mzc.errors import MzcError, about
+        from mzc.streams import STDOUT_NAME, check_not_input, display_name, is_terminal, write_output
 
         codec = chosen_codec(codecs, values)
         options = codec_options(codec, values)
+        if is_terminal(output):   # as gzip and xz do: the bytes would only garble the screen
+            raise MzcError("compressed data is not written to a terminal: redirect it or give -o FILE",
+                           source=STDOUT_NAME)
         check_not_input(output, input)
         grid = read_grid(input)
         with about(display_name(input), f"encoding it with {codec.name}"):

@@ -64,8 +64,11 @@ def zgrid_body(plain, float32, precision=None):
 
 
 def write_grid(grid, path, body):
-    """Write ``grid`` as a z-grid to ``path`` or stdout, its body as ``body`` (zgrid_body) says."""
+    """Write ``grid`` as a z-grid to ``path`` or stdout, its body as ``body`` (zgrid_body) says;
+    to a terminal the default raw body is written as text (--plain), for people to read."""
     from mzc.formats import zgrid
-    from mzc.streams import write_output
+    from mzc.streams import is_terminal, write_output
 
+    if is_terminal(path) and body == {"raw": "float64"}:
+        body = {"precision": None}
     write_output(path, zgrid.write(grid, **body))
