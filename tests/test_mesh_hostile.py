@@ -303,6 +303,7 @@ HOSTILE = {
     "OBJ negative index before the first": ("m.obj", obj().replace(b"f 1 3 4", b"f 1 3 -5"), "does not exist"),
     "OBJ index 0": ("m.obj", obj().replace(b"f 1 3 4", b"f 1 3 0"), "does not exist"),
     "OBJ binary": ("m.obj", obj() + b"\0", "binary data"),
+    "OBJ NUL in a vertex": ("m.obj", obj().replace(b"v 1 0 0", b"v 1 0\x00 0"), "2: binary data (a NUL byte)"),
     "OBJ without v": ("m.obj", b"f 1 2 3\n", "no 'v' lines"),
     "xyz two columns": ("m.xyz", b"1 2\n", "at least 3 numbers"),
     "ascii STL without endsolid": ("text.stl", ascii_stl().replace(b"endsolid square", b""), "endsolid"),

@@ -73,6 +73,8 @@ f -4 -1 -3
 """,
     "crlf and tabs": PLAIN_OBJ.replace("\n", "\r\n").replace("v ", "v\t"),
     "vertex colours, indented lines": PLAIN_OBJ.replace("v 0 0 0", "  v 0 0 0 0.1 0.2 0.3"),
+    "odd bytes in comments (ZBrush writes a NUL)": "# ZBrush OBJ\x00 export \xff\x01\n" + PLAIN_OBJ.replace(
+        "f 1 2 3", "f 1 2 3 # \x00\x7f"),
 }
 
 

@@ -13,7 +13,7 @@ import numpy as np
 
 from mzc.errors import MzcError
 from mzc.meshes import Mesh
-from mzc.meshes.common import fan_triangulate_ragged, is_text
+from mzc.meshes.common import fan_triangulate_ragged
 from mzc.numbers import is_number
 
 NAME = "obj"
@@ -31,9 +31,10 @@ def read(data: bytes, source: str) -> Mesh:
     """Read Wavefront OBJ: ``v`` and ``f`` lines in any dialect (v/vt/vn, negative indices,
     polygons, CRLF or CR line ends, trailing comments); every other statement (vt, vn, o, g, s, usemtl,
     l, ...) is ignored. Works on whole byte arrays: no Python loop per vertex or face."""
-    if not is_text(data):
-        raise MzcError("binary data where OBJ text was expected", source=source)
     tokens = ObjTokens(data)
+    binary = tokens.first_nul_line()
+    if binary is not None:
+        raise MzcError("binary data (a NUL byte) where OBJ text was expected", source=source, line=binary + 1)
     vertex_lines, face_lines = tokens.lines_of("v"), tokens.lines_of("f")
     if len(vertex_lines) == 0:
         raise MzcError("no 'v' lines: the OBJ file has no vertices", source=source)
@@ -45,14 +46,14 @@ def read(data: bytes, source: str) -> Mesh:
 class ObjTokens:
     """The whitespace-separated tokens of OBJ bytes: where each starts and ends, and its line.
 
-    Comments (``#`` to the end of the line) are blanked first. A line ends at ``\n``, or at
+    Comments (``#`` to the end of the line, whatever bytes they hold) are blanked first. A line ends at ``\n``, or at
     ``\r`` not followed by ``\n``.
     """
 
     def __init__(self, data):
         text = np.frombuffer(data, dtype=np.uint8)
         line_end = (text == ord("\n")) | ((text == ord("\r")) & (np.r_[text[1:], 0] != ord("\n")))
-        newlines = np.flatnonzero(line_end)
+        self.newlines = newlines = np.flatnonzero(line_end)
         if b"#" in data:
             after_hash = last_index(text == ord("#")) > last_index(line_end)
             text = np.where(after_hash, ord(" "), text).astype(np.uint8)
@@ -65,6 +66,12 @@ class ObjTokens:
         self.token_of_byte = np.cumsum(begins, dtype=np.int32) - 1  # -1 before the first token
         self.line = np.searchsorted(newlines, self.starts)
         self.first_on_line = np.r_[True, self.line[1:] != self.line[:-1]]
+
+    def first_nul_line(self):
+        """The index (0-based) of the first line holding a NUL byte outside a comment, or None:
+        exporters put any bytes in comments (ZBrush a NUL), but a NUL elsewhere means binary data."""
+        nul = np.flatnonzero(self.text == 0)
+        return int(np.searchsorted(self.newlines, nul[0])) if len(nul) else None
 
     def lines_of(self, keyword):
         """Sorted line indices (0-based) whose first token is the one-letter ``keyword``."""
