@@ -39,6 +39,21 @@ def ascii_ply(eol="\n", rows=None, **header):
     return ply_header("ascii", eol=eol, **header) + (eol.join(rows) + eol).encode()
 
 
+def exporter_ply():
+    """A binary PLY as MeshLab-like exporters write it: vertex normals and RGBA colours, faces
+    with texture coordinates and a colour, and an edge and a material element after them."""
+    header = "\n".join([
+        "ply", "format binary_little_endian 1.0", "comment exported", "element vertex 4",
+        *[f"property float {name}" for name in ("x", "y", "z", "nx", "ny", "nz")],
+        *[f"property uchar {name}" for name in ("red", "green", "blue", "alpha")],
+        "element face 2", "property list uchar int vertex_indices", "property list uchar float texcoord",
+        "property uchar red", "element edge 1", "property int vertex1", "property int vertex2",
+        "element material 1", "property uchar ambient_red", "end_header", ""]).encode()
+    vertices = b"".join(struct.pack("<6f4B", *p, 0, 0, 1, 200, 100, 50, 255) for p in POINTS)
+    faces = b"".join(struct.pack("<B3iB6fB", 3, *t, 6, *[0.5] * 6, 7) for t in TRIANGLES)
+    return header + vertices + faces + struct.pack("<2iB", 0, 1, 9)
+
+
 def binary_ply(order="<", faces_body=None, **header):
     fmt = "binary_little_endian" if order == "<" else "binary_big_endian"
     if faces_body is None:
@@ -281,8 +296,9 @@ HOSTILE = {
                          "bad PLY property"),
     "property before element": ("m.ply", ascii_ply(extra=("property float w",)), "bad PLY header line"),
     "element without properties": ("m.ply", ascii_ply(extra=("element ghost 10",)), "no properties"),
-    "unknown element": ("m.ply", ascii_ply().replace(b"end_header", b"element cube 1\nproperty float side\nend_header")
-                        + b"1\n", "element 'cube'"),
+    "unknown element and no faces": ("m.ply", ascii_ply(faces=0, rows=[" ".join(f"{v:g}" for v in p) for p in POINTS])
+                                     .replace(b"end_header", b"element cube 1\nproperty float side\nend_header")
+                                     + b"1\n", "element 'cube'"),
     "x as a list": ("m.ply", ascii_ply().replace(b"property float x", b"property list uchar float x"),
                     "element vertex"),
     "scalar face indices": ("m.ply", ascii_ply(face_property="property int vertex_indices",
@@ -348,6 +364,7 @@ READ_CORRECTLY = {
                                           faces_body=b"".join(struct.pack("<B3f", 3, *t) for t in TRIANGLES)), 2),
     "a quad and a triangle": ("m.ply", binary_ply(faces=2, faces_body=struct.pack("<B4i", 4, 0, 1, 2, 3)
                                                   + struct.pack("<B3i", 3, 0, 1, 2)), 3),
+    "edges and a material beside the faces, colours, normals, texcoords": ("m.ply", exporter_ply(), 2),
     "OBJ forward reference": ("m.obj", b"f 1 2 3\nv 0 0 0\nv 1 0 0.5\nv 1 1 1\nv 0 1 0.25\nf 1 3 4\n", 2),
     "OBJ # at the end": ("m.obj", obj() + b"# end", 2),
     "STL with a solid header": ("m.stl", binary_stl(header=b"solid square"), 2),

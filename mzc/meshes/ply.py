@@ -289,11 +289,13 @@ def element_columns(element, runs, order):
 def ply_mesh(elements, tables, source):
     """Build the Mesh from the 'vertex', 'face' and 'tristrips' elements of a parsed PLY file.
 
-    Any other element holding records is refused by name: read as a bare cloud, a file whose
-    surface lives in an element mzc does not know would be re-triangulated into noise. A
-    cloud keeps the normals its vertices carry (nx, ny, nz)."""
+    Other elements (``edge``, ``material``, ...) are skipped beside faces or strips; without
+    them such an element holding records is refused by name: read as a bare cloud, a file
+    whose surface lives in an element mzc does not know would be re-triangulated into noise.
+    A cloud keeps the normals its vertices carry (nx, ny, nz)."""
     unknown = [element for element in elements if element.name not in PLY_ELEMENTS and element.count]
-    if unknown:
+    has_surface = any(element.name in ("face", "tristrips") and element.count for element in elements)
+    if unknown and not has_surface:
         raise MzcError(f"PLY element '{unknown[0].name}' ({unknown[0].count} records) is not one mzc reads "
                        f"({', '.join(PLY_ELEMENTS)})", source=source)
     vertex = tables.get("vertex", {})
