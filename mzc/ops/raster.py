@@ -39,8 +39,15 @@ def non_degenerate(points, triangles):
     """The triangles whose xy projection has an area (tested relative to their own size)."""
     a, b, c = (points[triangles[:, i], :2] for i in range(3))
     doubled_area = np.abs(cross2(b - a, c - a))
-    scale = np.maximum(np.abs(b - a).max(axis=1), np.abs(c - a).max(axis=1)) ** 2
+    scale = np.maximum(of_each_row(np.max, np.abs(b - a)), of_each_row(np.max, np.abs(c - a))) ** 2
     return triangles[doubled_area > 1e-12 * scale]
+
+
+def of_each_row(reduction, values):
+    """``reduction`` (np.min, np.max or np.ptp) of each row of an (n, k) array with few columns
+    (a triangle's corners): numpy reduces such short rows about 30x slower than it reduces
+    the first axis of a transposed copy, which gives the same values."""
+    return reduction(np.ascontiguousarray(values.T), axis=0)
 
 
 def cross2(u, v):
@@ -52,8 +59,8 @@ def index_range(coordinate, nodes):
     """(2, m) first and last node index inside each triangle's [min, max] of ``coordinate``."""
     step = nodes[1] - nodes[0] if len(nodes) > 1 else 1.0
     slack = 1e-7  # in node steps: a node exactly on the box edge is always a candidate
-    low = np.ceil((coordinate.min(axis=1) - nodes[0]) / step - slack)
-    high = np.floor((coordinate.max(axis=1) - nodes[0]) / step + slack)
+    low = np.ceil((of_each_row(np.min, coordinate) - nodes[0]) / step - slack)
+    high = np.floor((of_each_row(np.max, coordinate) - nodes[0]) / step + slack)
     return np.stack([np.clip(low, 0, len(nodes)), np.clip(high, -1, len(nodes) - 1)]).astype(np.int64)
 
 

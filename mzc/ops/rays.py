@@ -13,7 +13,7 @@ the grid's azimuth window. Each candidate gets an exact ray-triangle test.
 
 import numpy as np
 
-from mzc.ops.raster import BARYCENTRIC_TOLERANCE, candidate_chunks, candidate_nodes, index_range
+from mzc.ops.raster import BARYCENTRIC_TOLERANCE, candidate_chunks, candidate_nodes, index_range, of_each_row
 
 TURN = 2 * np.pi
 
@@ -52,9 +52,9 @@ def candidate_boxes(corners, projection, radius, u_start):
     turn = TURN * radius
     u = u_start + np.mod(radius * np.arctan2(x, z) - u_start, turn)
     around = around_axis(x, z)
-    straddles = ~around & (np.ptp(u, axis=1) > 0.5 * turn)
+    straddles = ~around & (of_each_row(np.ptp, u) > 0.5 * turn)
     u = np.where(straddles[:, None] & (u < u_start + 0.5 * turn), u + turn, u)
-    u_box = np.stack([u.min(axis=1), u.max(axis=1)], axis=1)
+    u_box = np.stack([of_each_row(np.min, u), of_each_row(np.max, u)], axis=1)
     v_box = v_bounds(corners, projection, radius, around, u_box)
     u_box[around] = [-np.inf, np.inf]
     boxes = np.stack([u_box, v_box], axis=1)
@@ -82,13 +82,13 @@ def v_bounds(corners, projection, radius, around, u_box):
     from the axis, and moving a corner outwards moves the chord out).
     """
     y = corners[..., 1]
-    low, high = y.min(axis=1), y.max(axis=1)
+    low, high = of_each_row(np.min, y), of_each_row(np.max, y)
     if projection == "cylindrical":
         return np.stack([low, high], axis=1)
     distance = np.hypot(corners[..., 0], corners[..., 2])
     spread = np.minimum((u_box[:, 1] - u_box[:, 0]) / radius, np.pi)
-    near = np.where(around, 0.0, distance.min(axis=1) * np.cos(spread / 2))
-    far = distance.max(axis=1)
+    near = np.where(around, 0.0, of_each_row(np.min, distance) * np.cos(spread / 2))
+    far = of_each_row(np.max, distance)
     top = np.where(high >= 0, np.arctan2(high, near), np.arctan2(high, far))
     bottom = np.where(low <= 0, np.arctan2(low, near), np.arctan2(low, far))
     return radius * np.stack([bottom, top], axis=1)

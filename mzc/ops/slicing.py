@@ -13,6 +13,8 @@ import numpy as np
 from mzc.errors import MzcError
 from mzc.grid import ZGrid
 from mzc.limits import MAX_DIMENSION, check_grid_size, length_problem
+from mzc.ops.raster import of_each_row, rasterize
+from mzc.ops.rays import cast
 
 DEFAULT_ROWS = 72           # the thesis cuts a face with about 70 horizontal planes (--thesis-grid)
 COLUMN_STEP_RATIO = 10      # and uses about 10x as many vertical planes: d2 = d1/10
@@ -81,7 +83,7 @@ def triangulate_point_cloud(points_xy, long_edge_factor=LONG_EDGE_FACTOR):
         raise MzcError("the point cloud is degenerate in xy (all points on a line?)") from None
     corners = points_xy[triangles]
     edges = np.linalg.norm(corners - np.roll(corners, 1, axis=1), axis=2)
-    return triangles[edges.max(axis=1) <= long_edge_factor * np.median(edges)]
+    return triangles[of_each_row(np.max, edges) <= long_edge_factor * np.median(edges)]
 
 
 # --------------------------------------------------------------------------- slicing
@@ -238,11 +240,7 @@ def values_along(projection, radius, local, triangles, xs, ys):
     """Outermost hits of the node lines (u in xs, v in ys) on a grid-frame mesh: the front-most
     height for planar grids, the farthest distance along each ray for central ones."""
     if projection == "planar":
-        from mzc.ops.raster import rasterize
-
         return rasterize(local, triangles, xs, ys)
-    from mzc.ops.rays import cast
-
     return cast(local, triangles, projection, radius, xs, ys)
 
 
