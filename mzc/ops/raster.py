@@ -50,6 +50,12 @@ def of_each_row(reduction, values):
     return reduction(np.ascontiguousarray(values.T), axis=0)
 
 
+def lengths(vectors):
+    """The Euclidean length of each row of (n, k) ``vectors``: np.linalg.norm(axis=1)'s values,
+    summed as of_each_row sums (the same order, so the same floats)."""
+    return np.sqrt(of_each_row(np.sum, vectors * vectors))
+
+
 def cross2(u, v):
     """z component of the cross product of rows of 2D vectors."""
     return u[:, 0] * v[:, 1] - u[:, 1] * v[:, 0]

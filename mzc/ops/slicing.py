@@ -13,7 +13,7 @@ import numpy as np
 from mzc.errors import MzcError
 from mzc.grid import ZGrid
 from mzc.limits import MAX_DIMENSION, check_grid_size, length_problem
-from mzc.ops.raster import of_each_row, rasterize
+from mzc.ops.raster import lengths, of_each_row, rasterize
 from mzc.ops.rays import cast
 
 DEFAULT_ROWS = 72           # the thesis cuts a face with about 70 horizontal planes (--thesis-grid)
@@ -82,7 +82,7 @@ def triangulate_point_cloud(points_xy, long_edge_factor=LONG_EDGE_FACTOR):
     except QhullError:
         raise MzcError("the point cloud is degenerate in xy (all points on a line?)") from None
     corners = points_xy[triangles]
-    edges = np.linalg.norm(corners - np.roll(corners, 1, axis=1), axis=2)
+    edges = lengths((corners - np.roll(corners, 1, axis=1)).reshape(-1, 2)).reshape(-1, 3)
     return triangles[of_each_row(np.max, edges) <= long_edge_factor * np.median(edges)]
 
 
@@ -197,7 +197,7 @@ def data_spacing(points, triangles):
     corners = points[np.asarray(triangles, dtype=np.int64)]
     if not len(corners):
         raise MzcError("the surface has no triangles to measure its sampling: give --d1 and --d2")
-    edges = np.linalg.norm(corners - np.roll(corners, 1, axis=1), axis=2)
+    edges = lengths((corners - np.roll(corners, 1, axis=1)).reshape(-1, corners.shape[-1]))
     longest = float(np.ptp(points, axis=0).max())
     return float(min(DATA_SPACING_FRACTION * np.median(edges), longest / MIN_NODES_ACROSS))
 

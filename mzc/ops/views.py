@@ -35,6 +35,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from mzc.errors import MzcError
+from mzc.ops.raster import lengths
 
 FACING_COSINE = 0.5          # 60 degrees between the normal and the node line
 PLANAR_MARGIN = 0.05         # a central projection must see 5% more of the area than planar
@@ -142,7 +143,7 @@ class Facets:
             triangles = triangles[rng.choice(len(triangles), SCORE_TRIANGLES, replace=False)]
         corners = points[triangles]
         normal = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
-        doubled = np.linalg.norm(normal, axis=1)
+        doubled = lengths(normal)
         keep = doubled > 0
         return cls(corners[keep].mean(axis=1), normal[keep] / doubled[keep, None], doubled[keep], points)
 
@@ -153,7 +154,7 @@ class Facets:
         count = min(SCORE_TRIANGLES, len(points))
         chosen = rng.choice(len(points), count, replace=False) if len(points) > count else np.arange(count)
         normal = normals[chosen] if normals is not None else cloud_normals(points, chosen)
-        length = np.linalg.norm(normal, axis=1)
+        length = lengths(normal)
         keep = length > 0
         return cls(points[chosen][keep], normal[keep] / length[keep, None], np.ones(keep.sum()), points,
                    oriented=normals is not None)
@@ -200,7 +201,7 @@ class Facets:
         offset = self.centroid - centre
         if kind == "cylindrical":
             offset = offset - np.outer(offset @ axis, axis)
-        return offset, np.linalg.norm(offset, axis=1)
+        return offset, lengths(offset)
 
 
 def central_candidate(surface, kind, rotation, center, axis):
@@ -309,7 +310,7 @@ def central_view(points, kind, centre, axis, view):
     middle = np.radians(np.round(np.degrees(middle)))   # whole degrees: no turn at all when near the view
     front = reference if middle == 0 else np.cos(middle) * reference + np.sin(middle) * side
     rotation = np.column_stack([np.cross(axis, front), axis, front])
-    distance = np.linalg.norm(across if kind == "cylindrical" else offset, axis=1).mean()
+    distance = lengths(across if kind == "cylindrical" else offset).mean()
     radius = float(rounded(distance, distance)) if distance > 0 else 0.0
     if not radius > 0:
         raise MzcError("the surface has no extent around the centre", field="center")
