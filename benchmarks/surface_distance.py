@@ -9,6 +9,8 @@
    peak resident memory (``os.wait4``) are reported: a wavy sheet against a perturbed copy,
    and a bumpy torus (closed, up to four layers over a point, so no height field) against
    a perturbed copy.
+3. Every face against the next one, 20,000 samples per side, old and new, and whether the
+   figures agree.
 
     python benchmarks/surface_distance.py [--faces DIR] [--rounds N] [--out FILE.md]
 """
@@ -77,6 +79,28 @@ def face_rows(faces, rounds):
             "largest_relative_difference": worst, "figures": figures["new"]}
 
 
+def all_faces_rows(faces, old, samples=20_000):
+    """Every face against the next one (the 13 faces in a ring), ``samples`` per side: old
+    and new seconds and the largest relative difference of their figures."""
+    from mzc.measure import metrics
+    from mzc.meshes import read_mesh
+
+    paths = sorted(faces.glob("*.ply")) + sorted(faces.glob("*.obj"))
+    meshes = [read_mesh(path) for path in paths]
+    rows = []
+    for index, path in enumerate(paths):
+        a, b = meshes[index], meshes[(index + 1) % len(paths)]
+        pair, figures, seconds = ((a.points, a.triangles), (b.points, b.triangles)), {}, {}
+        for name, module in (("old", old), ("new", metrics)):
+            start = time.perf_counter()
+            figures[name] = module.surface_distance(*pair, samples=samples)
+            seconds[name] = time.perf_counter() - start
+        worst = max(abs(figures["new"][k] - v) / max(abs(v), 1e-300) for k, v in figures["old"].items())
+        rows.append({"a": path.name, "b": paths[(index + 1) % len(paths)].name, "old_s": seconds["old"],
+                     "new_s": seconds["new"], "largest_relative_difference": worst, "rms": figures["new"]["rms"]})
+    return rows
+
+
 def wavy_sheet(side, rng, perturb):
     """A side x side grid of a wavy sheet, 100 x 100 units, optionally with its heights jittered."""
     from mzc.grid import ZGrid
@@ -136,7 +160,7 @@ def large_row(shape, side):
             "cpu_s": usage.ru_utime + usage.ru_stime}
 
 
-def markdown(face, large):
+def markdown(face, large, faces):
     lines = ["# Point-to-surface distance (`mzc diff --surface`): speed and memory", "",
              "Written by `benchmarks/surface_distance.py`. The machine is shared (2 cores), so times",
              "are noisy: the old and new methods ran alternately in one process and the ratio is the",
@@ -164,6 +188,10 @@ def markdown(face, large):
         lines.append(f"| {row['shape']} vs perturbed copy | {row['vertices'][0]:,} | {row['triangles'][0]:,} | "
                      f"{row['make_s']:.1f} | {row['distance_s']:.1f} | {row['cpu_s']:.1f} | {row['peak_rss_mb']:.0f} | "
                      f"{row['figures']['rms']:.4g} | {row['figures']['hausdorff']:.4g} |")
+    lines += ["", "## Every face against the next (20,000 samples per side)", "",
+              "| A | B | main (s) | this branch (s) | largest relative difference | rms |", "|---|---|---|---|---|---|"]
+    lines += [f"| {row['a']} | {row['b']} | {row['old_s']:.2f} | {row['new_s']:.2f} | "
+              f"{row['largest_relative_difference']:.1e} | {row['rms']:.4g} |" for row in faces]
     lines += ["", f"Load average at the end: {os.getloadavg()[0]:.1f} on {os.cpu_count()} cores."]
     return "\n".join(lines) + "\n"
 
@@ -182,7 +210,9 @@ def main():
     print(json.dumps(large, indent=1), flush=True)
     face = face_rows(args.faces, args.rounds)
     print(json.dumps(face, indent=1), flush=True)
-    args.out.write_text(markdown(face, large))
+    faces = all_faces_rows(args.faces, old_metrics())
+    print(json.dumps(faces, indent=1), flush=True)
+    args.out.write_text(markdown(face, large, faces))
 
 
 if __name__ == "__main__":
