@@ -8,7 +8,7 @@ of Metro: area-weighted random samples on each surface, exact distance to the ot
 
 import numpy as np
 
-NEAREST_CANDIDATES = 4
+PAIRS = 1_000_000   # sample-candidate pairs per batch: bounds the memory
 
 
 def grid_error_stats(reference, other):
@@ -92,45 +92,80 @@ def _cross(u, v):
     return np.stack([u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]])
 
 
-def distance_to_mesh(samples, points, triangles, chunk=50_000):
+def distance_to_mesh(samples, points, triangles, pairs=PAIRS):
     """Exact distance from each sample to the mesh: the minimum over all its triangles.
 
-    The triangles with the nearest centroids give an upper bound u. A triangle can only
-    come closer than u if its centroid lies within u plus its own radius (centroid to
-    farthest corner), so triangles are grouped by radius (powers of two) and each group
-    is searched within u plus its largest radius; of those found, only the triangles whose
-    own bound (centroid distance minus radius) is within u are measured exactly.
+    A triangle whose centroid is D from a point, R its radius (centroid to farthest
+    corner), is at least D - R from it. Each sample's triangle with the nearest centroid
+    (one KD-tree over all centroids) gives an upper bound u on its distance. Triangles are
+    grouped by radius (``radius_groups``, within a factor of two), one KD-tree per group:
+    only a triangle of group g whose centroid lies within u + R_g, R_g the group's largest
+    radius, can be nearer than u, so the sample counts those centroids (``return_length``,
+    no lists) and takes exactly that many nearest ones. Of these, those whose own bounds
+    (D - R, and the distance to the triangle's bounding box, which is much tighter for the
+    long thin triangles of a densified grid) are within the best so far are measured
+    exactly. Every triangle that could be nearest is measured, so the answer is exact, and
+    the groups keep a few large triangles from widening the search around the many small.
+
+    The samples are handled in the order of their nearest centroid, so that neighbouring
+    samples gather neighbouring triangles, and in batches of at most ``pairs``
+    sample-triangle pairs, which bounds the memory whatever the mesh.
     """
     from scipy.spatial import cKDTree
 
-    corners = points[triangles]
-    rows = np.ascontiguousarray(corners.transpose(1, 2, 0))
-    centroids = corners.mean(axis=1)
-    radius = np.linalg.norm(corners - centroids[:, None], axis=2).max(axis=1)
-    nearest_tree = cKDTree(centroids)
+    samples = np.asarray(samples, dtype=float).reshape(-1, 3)
+    rows = corner_rows(points, triangles)
+    boxes = np.stack([rows.min(axis=0), rows.max(axis=0)])
+    centre = rows.mean(axis=0)
+    radius = np.sqrt(np.maximum.reduce([_dot(corner - centre, corner - centre) for corner in rows]))
+    centroids = centre.T
+    everything = cKDTree(centroids, balanced_tree=False, compact_nodes=False)
+    _, nearest = everything.query(samples, workers=-1)
+    order = np.argsort(nearest, kind="stable")
+    samples, nearest = samples[order], nearest[order]
+    best = np.full(len(samples), np.inf)
+    _measure(best, samples, np.arange(len(samples)), nearest, rows, boxes, pairs)
     groups = radius_groups(radius)
-    trees = [(ids, cKDTree(centroids[ids]), radius[ids].max()) for ids in groups]
+    for ids in groups:
+        tree = everything if len(groups) == 1 else cKDTree(centroids[ids], balanced_tree=False, compact_nodes=False)
+        reach = _widen(radius[ids].max())
+        count = tree.query_ball_point(samples, _widen(best + reach), return_length=True, workers=-1)
+        todo = np.flatnonzero((count > 0) & (best > 0))
+        level = np.ceil(np.log2(count[todo])).astype(int)
+        todo = todo[np.argsort(level, kind="stable")]
+        level = np.sort(level)
+        for value in np.unique(level):
+            within = todo[np.searchsorted(level, value):np.searchsorted(level, value, side="right")]
+            step = max(1, pairs >> value)
+            for start in range(0, len(within), step):
+                which = within[start:start + step]
+                k = int(count[which].max())
+                d, j = tree.query(samples[which], k=k, distance_upper_bound=_widen(_widen(best[which].max() + reach)),
+                                  workers=-1)
+                d, j = d.reshape(len(which), k), ids[np.minimum(j, len(ids) - 1).reshape(len(which), k)]
+                row, column = np.nonzero(d - radius[j] <= _widen(best[which])[:, None])
+                _measure(best, samples, which[row], j[row, column], rows, boxes, pairs)
     distances = np.empty(len(samples))
-    for start in range(0, len(samples), chunk):
-        block = samples[start:start + chunk]
-        k = min(NEAREST_CANDIDATES, len(triangles))
-        _, nearest = nearest_tree.query(block, k=k)
-        nearest = nearest.reshape(len(block), k)
-        bound = distances_to(block, np.repeat(np.arange(len(block)), k), nearest.ravel(), rows)
-        best = bound.reshape(len(block), k).min(axis=1)
-        for ids, tree, largest in trees:
-            found = tree.query_ball_point(block, r=best + largest, workers=-1, return_sorted=False)
-            counts = np.fromiter(map(len, found), dtype=np.int64, count=len(block))
-            if counts.sum() == 0:
-                continue
-            which = np.repeat(np.arange(len(block)), counts)
-            candidates = ids[np.concatenate(found).astype(np.int64)]
-            reach = np.linalg.norm(block[which] - centroids[candidates], axis=1) - radius[candidates]
-            close = reach <= best[which] * (1 + 1e-9)
-            which, candidates = which[close], candidates[close]
-            np.minimum.at(best, which, distances_to(block, which, candidates, rows))
-        distances[start:start + chunk] = best
+    distances[order] = best
     return distances
+
+
+def _measure(best, samples, which, candidates, rows, boxes, pairs):
+    """Lower ``best[which]`` to the exact distances of samples[which] to the triangles
+    ``candidates`` (corners ``rows``: corner, coordinate, triangle), in batches of ``pairs``;
+    a pair whose bounding-box distance exceeds the best so far is not measured."""
+    for start in range(0, len(which), pairs):
+        sample, triangle = which[start:start + pairs], candidates[start:start + pairs]
+        p = samples[sample].T
+        gap = np.maximum(np.maximum(boxes[0][:, triangle] - p, p - boxes[1][:, triangle]), 0)
+        close = _dot(gap, gap) <= _widen(best[sample]) ** 2
+        sample, triangle = sample[close], triangle[close]
+        np.minimum.at(best, sample, distances_to(samples, sample, triangle, rows))
+
+
+def _widen(bound):
+    """``bound`` raised by a billionth: the slack for rounding in the bounds compared to it."""
+    return bound * (1 + 1e-9)
 
 
 def radius_groups(radius):
@@ -138,6 +173,14 @@ def radius_groups(radius):
     smallest = max(radius.min(), radius.max() * 1e-9, np.finfo(float).tiny)
     level = np.floor(np.log2(np.maximum(radius, smallest) / smallest)).astype(int)
     return [np.flatnonzero(level == value) for value in np.unique(level)]
+
+
+def corner_rows(points, triangles):
+    """The corners of every triangle as an array (3 corners, 3 coordinates, triangles), the
+    layout that ``distances_to`` gathers fastest, made one coordinate row at a time."""
+    coordinates = np.asarray(points, dtype=float).T
+    triangles = np.asarray(triangles)
+    return np.stack([coordinates[:, triangles[:, corner]] for corner in range(3)])
 
 
 def distances_to(samples, sample_index, triangle_index, rows):
@@ -154,6 +197,14 @@ def surface_distance(mesh_a, mesh_b, samples=100_000, seed=0, keep_a=None, keep_
     other. ``keep_a``/``keep_b`` optionally restrict which samples count (a boolean
     function of the sample points and their triangle indices), e.g. to a height-field part.
     Returns RMS, mean and Hausdorff (max) distances, each way and symmetric.
+
+    Each distance is exact (``distance_to_mesh``), so the only error is the sampling's: RMS
+    and mean are Monte Carlo estimates over the area, whose standard error is the spread of
+    the distances over the square root of the sample count, whatever the number of
+    triangles. With the default 100,000 samples per side that is under 1% of the RMS and
+    0.4% of the mean for f18 against its dwt2d-decoded mesh, so the count need not grow with
+    the mesh. The Hausdorff distance is the largest sampled distance: a lower bound of the
+    true one, which a narrow spike can exceed.
     """
     return surface_distance_parts(mesh_a, mesh_b, {"all": (keep_a, keep_b)}, samples, seed)["all"]
 
@@ -182,7 +233,7 @@ def heightfield_filters(points_a, triangles_a, min_normal_z=HEIGHTFIELD_NORMAL_Z
     normals = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
     part = (normals[:, 2] > min_normal_z * np.linalg.norm(normals, axis=1)) & front_most(corners)
     tree = cKDTree(corners.mean(axis=1))
-    rows = np.ascontiguousarray(corners.transpose(1, 2, 0))
+    rows = corner_rows(points_a, triangles_a)
     k = min(HEIGHTFIELD_CANDIDATES, len(corners))
 
     def keep_a(samples, triangle_index):
