@@ -85,7 +85,8 @@ def write_terrain(path, millions, seed=15):
 
 
 def run(command):
-    """(wall seconds, peak RSS in MB) of one subprocess; raises when it fails."""
+    """(wall seconds, peak RSS in MB, CPU seconds) of one subprocess; raises when it fails. The
+    CPU time (user + system) is the steadier measure on a shared machine."""
     start = time.perf_counter()
     process = subprocess.Popen(command, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
     _, status, usage = os.wait4(process.pid, 0)
@@ -95,11 +96,11 @@ def run(command):
     process.stderr.close()
     if process.returncode:
         raise RuntimeError(f"{shlex.join(command)} failed ({process.returncode}): {error.strip()[-500:]}")
-    return wall, usage.ru_maxrss / 1024   # ru_maxrss is in KiB on Linux
+    return wall, usage.ru_maxrss / 1024, usage.ru_utime + usage.ru_stime   # ru_maxrss is in KiB on Linux
 
 
 def measure(millions, mzc, folder, stages):
-    """{stage: (seconds, MB)} for one size, plus the grid's shape."""
+    """(the grid's shape, {stage: (seconds, MB, CPU seconds)}) for one size."""
     grid, packed, decoded, dense = (folder / name for name in ("in.zg", "in.mzw2", "out.zg", "dense.zg"))
     shape = write_terrain(grid, millions)
     commands = {
@@ -110,7 +111,8 @@ def measure(millions, mzc, folder, stages):
     results = {}
     for stage in stages:
         results[stage] = run(commands[stage])
-        print(f"  {millions:g} M {stage}: {results[stage][0]:.1f} s, {results[stage][1]:.0f} MB", file=sys.stderr)
+        wall, mb, cpu = results[stage]
+        print(f"  {millions:g} M {stage}: {wall:.1f} s ({cpu:.1f} s CPU), {mb:.0f} MB", file=sys.stderr, flush=True)
     if "encode" in stages:
         results["bytes"] = packed.stat().st_size
     for path in (grid, packed, decoded, dense):
@@ -124,21 +126,23 @@ def exponent(small, large, nodes_small, nodes_large):
 
 
 def table(rows, stages):
-    """The markdown table: one line per size, time, peak memory and exponents per stage."""
-    head = ["nodes", "shape"] + [f"{stage} {what}" for stage in stages for what in ("s", "MB", "exp t", "exp mem")]
+    """The markdown table: one line per size; per stage wall time, CPU time, peak memory and
+    the exponents of CPU time and memory since the size before (a last line: over the range)."""
+    head = ["nodes", "shape"] + [f"{stage} {what}" for stage in stages
+                                 for what in ("s", "CPU s", "MB", "exp CPU", "exp MB")]
     lines = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
     previous = None
     for shape, results in rows:
         nodes = shape[0] * shape[1]
         cells = [f"{nodes / 1e6:.2f} M", f"{shape[0]}x{shape[1]}"]
         for stage in stages:
-            seconds, mb = results[stage]
+            seconds, mb, cpu = results[stage]
             if previous is None:
                 growth = ["", ""]
             else:
                 before_nodes, before = previous
-                growth = [f"{exponent(before[stage][k], results[stage][k], before_nodes, nodes):.2f}" for k in (0, 1)]
-            cells += [f"{seconds:.1f}", f"{mb:.0f}", *growth]
+                growth = [f"{exponent(before[stage][k], results[stage][k], before_nodes, nodes):.2f}" for k in (2, 1)]
+            cells += [f"{seconds:.1f}", f"{cpu:.1f}", f"{mb:.0f}", *growth]
         lines.append("| " + " | ".join(cells) + " |")
         previous = (nodes, results)
     if len(rows) > 2:   # the growth over the whole range run
@@ -146,7 +150,7 @@ def table(rows, stages):
         span = (first_shape[0] * first_shape[1], last_shape[0] * last_shape[1])
         cells = [f"{span[0] / 1e6:.2f}-{span[1] / 1e6:.2f} M", ""]
         for stage in stages:
-            cells += ["", "", *(f"{exponent(first[stage][k], last[stage][k], *span):.2f}" for k in (0, 1))]
+            cells += ["", "", "", *(f"{exponent(first[stage][k], last[stage][k], *span):.2f}" for k in (2, 1))]
         lines.append("| " + " | ".join(cells) + " |")
     return "\n".join(lines)
 
