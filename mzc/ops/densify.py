@@ -35,6 +35,11 @@ smoothed across a jump along a row (a jump in either row of the gap): for ``thes
 ``laplace`` its columns are run ends, for ``biharmonic`` no stencil spans it. So a person
 in front of a wall gets no sheet of inserted nodes between them.
 
+Big grids. The gaps are solved in strips of rows (``strips``): exactly for ``thesis`` and
+``laplace``, whose gaps are independent, and with a halo of gaps for ``biharmonic``, whose
+strips then equal the whole-grid solve within its tolerance; a grid within one strip (a
+face) is solved whole. So the memory beyond the dense result is bounded and the time linear.
+
 Central grids are densified in their own coordinates (rows inserted in v, values along
 the rays). A grid whose columns make a full turn is periodic: it is padded with copies of
 its own columns, wrapped round, on both sides, densified, and cut back, so every column,
@@ -81,7 +86,8 @@ def strip_jumps(grid, low, high, jump_angle, pad):
     Found on those rows alone, so their node points (24 bytes a node, and several times
     that in passing) take a strip's memory, not the grid's. Each edge's test sees only its
     two nodes, whose points are computed from the grid's own row positions: the same jumps
-    as the whole grid's.
+    as the whole grid's (only a spherical grid's pole rows, found with a tolerance from the
+    strip's own row positions, could differ, for a row within rounding of that tolerance).
     """
     from mzc import projections
     from mzc.ops.triangulation import jump_edges
