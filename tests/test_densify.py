@@ -185,6 +185,56 @@ def test_holes_stay_holes_and_original_rows_are_untouched(method):
     np.testing.assert_array_equal(inserted_valid, np.repeat(both[:, None, :], N, axis=1))
 
 
+def holey_grid(rows, cols, seed):
+    """A smooth random surface with ragged edges, interior holes (some spanning several rows)
+    and random depth-jump breaks: (z, breaks)."""
+    rng = np.random.default_rng(seed)
+    y, x = np.mgrid[:rows, :cols]
+    z = np.sin(x / 7 + rng.uniform(0, 6)) * np.cos(y / 5) * 20 + rng.normal(scale=0.3, size=(rows, cols))
+    z[((x - cols / 2) / (cols / 2)) ** 2 + ((y - rows / 2) / (rows / 2)) ** 2 > 1.1] = np.nan
+    for r, c, radius in zip(rng.integers(0, rows, 6), rng.integers(0, cols, 6), rng.uniform(0.5, 3, 6)):
+        z[(y - r) ** 2 + (x - c) ** 2 <= radius**2] = np.nan
+    z[5:9, 10] = np.nan       # a hole across several strip boundaries
+    breaks = rng.random((rows - 1, cols)) < 0.02, rng.random((rows, cols - 1)) < 0.02
+    return z, breaks
+
+
+@pytest.mark.parametrize("method", ["thesis", "laplace"])
+@pytest.mark.parametrize("gaps_a_strip", [1, 2, 5])
+def test_strips_of_independent_gaps_equal_the_whole_grid_exactly(method, gaps_a_strip):
+    """thesis (fixed sweeps) and laplace solve each gap alone: strips change no bit."""
+    z, breaks = holey_grid(23, 31, 3)
+    whole = densify(z, N, D1, D2, method=method, breaks=breaks)
+    stripped = densify(z, N, D1, D2, method=method, breaks=breaks, strip=gaps_a_strip * N * 31)
+    np.testing.assert_array_equal(stripped, whole)
+
+
+def test_thesis_with_a_tolerance_is_one_strip():
+    """Its sweeps stop when no node of the whole grid moves by tol: strips would stop earlier."""
+    z, breaks = holey_grid(23, 31, 4)
+    whole = densify(z, N, D1, D2, method="thesis", tol=1e-3, breaks=breaks)
+    np.testing.assert_array_equal(densify(z, N, D1, D2, method="thesis", tol=1e-3, breaks=breaks, strip=1), whole)
+
+
+@pytest.mark.parametrize("n", [1, 3, 7])
+@pytest.mark.parametrize("gaps_a_strip", [1, 4, 10])
+def test_biharmonic_strips_equal_the_whole_grid_within_its_tolerance(n, gaps_a_strip):
+    """The halo brings every strip to the whole-grid solve within the solve's own tolerance."""
+    z, breaks = holey_grid(80, 37, 5)
+    whole = densify(z, n, D1, D2, breaks=breaks)
+    stripped = densify(z, n, D1, D2, breaks=breaks, strip=gaps_a_strip * n * 37)
+    np.testing.assert_array_equal(np.isnan(stripped), np.isnan(whole))
+    np.testing.assert_array_equal(stripped[:: n + 1], z)
+    np.testing.assert_allclose(stripped, whole, rtol=0, atol=1e-10 * np.nanmax(np.abs(z)))
+
+
+def test_a_grid_within_one_strip_is_solved_whole():
+    """The default strip holds a face (golden outputs unchanged): equal to a huge strip bit for bit."""
+    z, breaks = holey_grid(80, 37, 6)
+    np.testing.assert_array_equal(densify(z, 3, D1, D2, breaks=breaks), densify(z, 3, D1, D2, breaks=breaks,
+                                                                                 strip=10**12))
+
+
 @pytest.mark.parametrize("method", METHODS)
 def test_rows_that_do_not_overlap_insert_nothing(method):
     z = np.full((3, 30), np.nan)

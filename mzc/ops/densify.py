@@ -35,6 +35,11 @@ smoothed across a jump along a row (a jump in either row of the gap): for ``thes
 ``laplace`` its columns are run ends, for ``biharmonic`` no stencil spans it. So a person
 in front of a wall gets no sheet of inserted nodes between them.
 
+Big grids. The gaps are solved in strips of rows (``strips``): exactly for ``thesis`` and
+``laplace``, whose gaps are independent, and with a halo of gaps for ``biharmonic``, whose
+strips then equal the whole-grid solve within its tolerance; a grid within one strip (a
+face) is solved whole. So the memory beyond the dense result is bounded and the time linear.
+
 Central grids are densified in their own coordinates (rows inserted in v, values along
 the rays). A grid whose columns make a full turn is periodic: it is padded with copies of
 its own columns, wrapped round, on both sides, densified, and cut back, so every column,
@@ -53,26 +58,49 @@ METHODS = ("thesis", "laplace", "biharmonic")
 DEFAULT_METHOD = "biharmonic"
 DEFAULT_ITERATIONS = 100   # the thesis's fixed Jacobi count (§6.2.3)
 WRAP_DECAY = 9.0           # periodic padding of the converged solves, in gap heights
+STRIP_NODES = 1 << 21      # inserted nodes solved at a time, halo aside (biharmonic: ~300 bytes each)
+BIHARMONIC_HALO = 24       # gaps solved beyond each side of a biharmonic strip (densify.strips)
 
 
-def densify_grid(grid, n, method=DEFAULT_METHOD, iterations=DEFAULT_ITERATIONS, tol=None, jump_angle=None):
+def densify_grid(grid, n, method=DEFAULT_METHOD, iterations=DEFAULT_ITERATIONS, tol=None, jump_angle=None,
+                 strip=STRIP_NODES):
     """``grid`` (a ZGrid) with ``n`` rows inserted between each pair of rows; row step d1/(n+1).
 
     No row is inserted across a depth jump of ``jump_angle`` degrees (default the
     triangulation's JUMP_ANGLE; 0 ignores jumps), and no row is smoothed across one (module
     docstring). A periodic grid (a full turn) is densified with its columns wrapped round.
+    ``strip``: as ``densify``'s; the jumps are found strip by strip too.
     """
-    from mzc.ops.triangulation import jump_edges
-
-    jumps = jump_edges(grid, jump_angle)
     cols = grid.shape[1]
     pad = wrap_width(grid, method, iterations, tol) if grid.periodic else 0
-    z, across, along = grid.z, jumps.across[:, :cols], jumps.along
-    if pad:
-        z, across = (np.pad(a, ((0, 0), (pad, pad)), mode="wrap") for a in (z, across))
-        along = np.take(along, np.arange(-pad, cols + pad - 1), axis=1, mode="wrap")
-    dense = densify(z, n, grid.d1, grid.d2, method=method, iterations=iterations, tol=tol, breaks=(across, along))
+    z = np.pad(grid.z, ((0, 0), (pad, pad)), mode="wrap") if pad else grid.z
+    breaks = lambda low, high: strip_jumps(grid, low, high, jump_angle, pad)  # noqa: E731
+    dense = densify(z, n, grid.d1, grid.d2, method=method, iterations=iterations, tol=tol, breaks=breaks, strip=strip)
     return grid.with_z(dense[:, pad:pad + cols], d1=grid.d1 / (n + 1))
+
+
+def strip_jumps(grid, low, high, jump_angle, pad):
+    """(across, along) depth jumps (``triangulation.jump_edges``) of original rows low..high
+    of ``grid``, its columns padded by ``pad`` on each side, wrapped round.
+
+    Found on those rows alone, so their node points (24 bytes a node, and several times
+    that in passing) take a strip's memory, not the grid's. Each edge's test sees only its
+    two nodes, whose points are computed from the grid's own row positions: the same jumps
+    as the whole grid's (only a spherical grid's pole rows, found with a tolerance from the
+    strip's own row positions, could differ, for a row within rounding of that tolerance).
+    """
+    from mzc import projections
+    from mzc.ops.triangulation import jump_edges
+
+    cols, ys = grid.shape[1], grid.ys()
+    part = grid.with_z(grid.z[low:high + 1], origin=(grid.origin[0], ys[low]))
+    u, v = np.meshgrid(grid.xs(), ys[low:high + 1])
+    jumps = jump_edges(part, jump_angle, projections.to_points(grid.projection, grid.radius, u, v, part.z))
+    across, along = jumps.across[:, :cols], jumps.along
+    if pad:
+        across = np.pad(across, ((0, 0), (pad, pad)), mode="wrap")
+        along = np.take(along, np.arange(-pad, cols + pad - 1), axis=1, mode="wrap")
+    return across, along
 
 
 def wrap_width(grid, method, iterations, tol):
@@ -85,28 +113,66 @@ def wrap_width(grid, method, iterations, tol):
     return min(cols, int(np.ceil(WRAP_DECAY * grid.d1 / grid.d2)) + 1)
 
 
-def densify(z, n, d1, d2, method=DEFAULT_METHOD, iterations=DEFAULT_ITERATIONS, tol=None, breaks=None):
+def densify(z, n, d1, d2, method=DEFAULT_METHOD, iterations=DEFAULT_ITERATIONS, tol=None, breaks=None,
+            strip=STRIP_NODES):
     """Heights ``z`` (rows x cols, NaN = invalid) with ``n`` rows inserted between each pair of rows.
 
     ``d1`` and ``d2`` are the row and column steps of ``z``. Returns (k1-1)(n+1)+1 rows
     (k1 rows when k1 < 2); original row r is dense row r*(n+1), bit for bit.
     ``iterations`` and ``tol`` drive the ``thesis`` Jacobi sweeps only. ``breaks`` =
     (across (rows-1, cols), along (rows, cols-1)) marks the edges between neighbouring
-    nodes that nothing is inserted or smoothed across (depth jumps); none by default.
+    nodes that nothing is inserted or smoothed across (depth jumps), or a function giving
+    them for original rows low..high, ``breaks(low, high)``; none by default. The gaps are
+    solved in strips of about ``strip`` inserted nodes (``strips``), so the memory beyond
+    the dense result stays bounded and the time linear on big grids.
     """
     z = np.asarray(z, dtype=float)
     check_request(z, n, d1, d2, method, iterations, tol)
     if n == 0 or z.shape[0] < 2:
         return z.copy()
     step = d1 / (n + 1)
-    gaps = Gaps(z, breaks)
-    if method == "thesis":
-        inserted = thesis_inserted(z, n, gaps, iterations, tol)
-    elif method == "laplace":
-        inserted = laplace_inserted(z, n, gaps, step, d2)
-    else:
-        inserted = biharmonic_inserted(z, n, gaps, step, d2)
-    return interleave(z, inserted)
+    dense = np.empty(((len(z) - 1) * (n + 1) + 1, z.shape[1]))
+    dense[::n + 1] = z
+    inserted_rows = dense[:-1].reshape(len(z) - 1, n + 1, -1)[:, 1:]   # a view: (gaps, n, cols)
+    if breaks is not None and not callable(breaks):
+        across, along = breaks
+        breaks = lambda low, high: (across[low:high], along[low:high + 1])  # noqa: E731
+    for first, last, low, high in strips(len(z) - 1, n * z.shape[1], strip, method, tol):
+        part = z[low:high + 1]
+        gaps = Gaps(part, None if breaks is None else breaks(low, high))
+        if method == "thesis":
+            inserted = thesis_inserted(part, n, gaps, iterations, tol)
+        elif method == "laplace":
+            inserted = laplace_inserted(part, n, gaps, step, d2)
+        else:
+            inserted = biharmonic_inserted(part, n, gaps, step, d2)
+        inserted_rows[first:last] = inserted[first - low:last - low]
+    return dense
+
+
+def strips(gaps, per_gap, strip, method, tol):
+    """(first, last, low, high) per strip: gaps first..last-1 are taken from a solve of gaps
+    low..high-1 (original rows low..high), about ``strip`` inserted nodes (``per_gap`` a gap)
+    plus a halo.
+
+    ``thesis`` and ``laplace`` solve every gap on its own, so strips without a halo are
+    exact, except that ``thesis`` with a ``tol`` stops all gaps at once (when no node of
+    the grid moves by ``tol``) and is solved in one strip. ``biharmonic`` couples the gaps
+    through the original rows; the influence of the plate beyond a strip falls by a
+    factor of about 4-6 per gap (n = 1..7), so a halo of BIHARMONIC_HALO gaps on each side
+    brings the strips to the whole-grid solve within that solve's own tolerance (its
+    conjugate gradients stop at a relative residual of 1e-12): measured on grids with
+    holes and jumps, strips of 1-10 gaps differ from it by at most 1e-12 of the largest
+    height for n = 1 and 3, 5e-12 for n = 7, 3e-11 for n = 20 (3e-8 with a halo of 8).
+    """
+    if method == "thesis" and tol is not None:
+        yield 0, gaps, 0, gaps
+        return
+    halo = BIHARMONIC_HALO if method == "biharmonic" else 0
+    size = max(1, strip // max(1, per_gap))
+    for first in range(0, gaps, size):
+        last = min(gaps, first + size)
+        yield first, last, max(0, first - halo), min(gaps, last + halo)
 
 
 def check_request(z, n, d1, d2, method, iterations, tol):
