@@ -126,6 +126,25 @@ def jumpy_grids():
     return planar, tube
 
 
+@pytest.mark.parametrize("strip", [1, 5, 64, 200, 10**9])
+def test_jumps_found_in_strips_of_rows_are_the_whole_grids(monkeypatch, strip):
+    """jump_edges without points makes them a strip of rows at a time: the same Jumps, with the
+    rows where strips meet, a periodic seam, one- and two-row grids and a spherical pole."""
+    from mzc.ops import triangulation
+
+    step = np.radians(2) * 100                  # rows from the equator to the pole, 2 degrees apart
+    values = 100 + 400.0 * (np.add.outer(np.arange(46), np.arange(40)) % 7 == 0)
+    cap = ZGrid(values, step, step, origin=(-np.radians(40) * 100, 0.0), projection="spherical", radius=100)
+    assert cap.pole_rows()[-1] and jump_edges(cap, None, cap.node_points()).across.any()
+    grids = [*jumpy_grids(), cap, cap.with_z(cap.z[:1]), cap.with_z(cap.z[:2])]
+    wholes = [jump_edges(grid, None, grid.node_points()) for grid in grids]
+    monkeypatch.setattr(triangulation, "JUMP_STRIP_NODES", strip)
+    for grid, whole in zip(grids, wholes):
+        stripped = jump_edges(grid)
+        for edges in ("across", "along", "diagonal"):
+            np.testing.assert_array_equal(getattr(stripped, edges), getattr(whole, edges))
+
+
 @pytest.mark.parametrize("method", ["biharmonic", "laplace", "thesis"])
 def test_densify_in_strips_finds_the_jumps_of_the_whole_grid(method):
     """Strips of one and of three gaps (jumps found strip by strip) give the whole grid's result:

@@ -89,13 +89,11 @@ def strip_jumps(grid, low, high, jump_angle, pad):
     as the whole grid's (only a spherical grid's pole rows, found with a tolerance from the
     strip's own row positions, could differ, for a row within rounding of that tolerance).
     """
-    from mzc import projections
     from mzc.ops.triangulation import jump_edges
 
-    cols, ys = grid.shape[1], grid.ys()
-    part = grid.with_z(grid.z[low:high + 1], origin=(grid.origin[0], ys[low]))
-    u, v = np.meshgrid(grid.xs(), ys[low:high + 1])
-    jumps = jump_edges(part, jump_angle, projections.to_points(grid.projection, grid.radius, u, v, part.z))
+    cols, rows = grid.shape[1], slice(low, high + 1)
+    part = grid.with_z(grid.z[rows], origin=(grid.origin[0], grid.ys()[low]))
+    jumps = jump_edges(part, jump_angle, grid.node_points(rows))
     across, along = jumps.across[:, :cols], jumps.along
     if pad:
         across = np.pad(across, ((0, 0), (pad, pad)), mode="wrap")

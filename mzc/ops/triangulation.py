@@ -31,6 +31,7 @@ if TYPE_CHECKING:
     from mzc.grid import ZGrid
 
 JUMP_ANGLE = 3.0   # degrees between an edge and the node line below which the edge is a jump
+JUMP_STRIP_NODES = 1 << 20   # nodes whose points jump_edges makes at a time when it is given none
 
 
 @dataclass
@@ -49,16 +50,34 @@ def jump_edges(grid, angle=None, points=None):
     """The Jumps of a ZGrid: edges between valid nodes within ``angle`` degrees (default
     JUMP_ANGLE) of the node line through their midpoint (none when ``angle`` is 0); edges
     along a pole row join nodes of one ray, which are one vertex, and are never jumps.
-    ``points``: the grid's ``node_points()`` when the caller has them already."""
+    ``points``: the grid's ``node_points()`` when the caller has them already; without, they
+    are made a strip of rows at a time (each edge's test sees only its two nodes, so the
+    jumps are the same), which keeps the memory a strip's (several times 24 bytes a node in
+    passing), not the grid's."""
     angle = JUMP_ANGLE if angle is None else angle
-    points = grid.node_points() if points is None else points
-    if grid.periodic:
+    if points is not None:
+        jumps = jumps_between(points, grid.projection, grid.periodic, angle)
+    else:
+        rows, step = grid.shape[0], max(1, JUMP_STRIP_NODES // grid.shape[1])
+        starts = range(0, max(rows - 1, 1), step)
+        parts = [jumps_between(grid.node_points(slice(low, min(low + step, rows - 1) + 1)), grid.projection,
+                               grid.periodic, angle) for low in starts]
+        last = len(parts) - 1
+        jumps = Jumps(across=np.concatenate([part.across for part in parts]),
+                      along=np.concatenate([part.along[: None if i == last else -1] for i, part in enumerate(parts)]),
+                      diagonal=np.concatenate([part.diagonal for part in parts]))
+    jumps.along[grid.pole_rows()] = False
+    return jumps
+
+
+def jumps_between(points, projection, periodic, angle):
+    """The Jumps of the edges between grid-frame node ``points`` (rows, cols, 3), pole rows aside."""
+    if periodic:
         points = np.concatenate([points, points[:, :1]], axis=1)
     cosine = np.cos(np.radians(angle))
-    along = is_jump(points[:, :-1], points[:, 1:], grid.projection, cosine, angle)
-    along[grid.pole_rows()] = False
-    return Jumps(across=is_jump(points[:-1], points[1:], grid.projection, cosine, angle), along=along,
-                 diagonal=is_jump(points[:-1, 1:], points[1:, :-1], grid.projection, cosine, angle))
+    return Jumps(across=is_jump(points[:-1], points[1:], projection, cosine, angle),
+                 along=is_jump(points[:, :-1], points[:, 1:], projection, cosine, angle),
+                 diagonal=is_jump(points[:-1, 1:], points[1:, :-1], projection, cosine, angle))
 
 
 def is_jump(start, end, projection, cosine, angle):
