@@ -6,7 +6,8 @@ the quantised wavelet bands (the transform of the version, ``wavelet2d.TRANSFORM
 detail steps scaled up where the surface leans from the node lines, magnitudes and signs
 each with their own contexts), and an optional correction layer of residuals that makes
 ``max_error`` hold at every valid node of the decoder's own reconstruction. All integers
-are entropy coded by mzc.codecs.dwt2d.entropy (magnitude classes through rANS, one model per context).
+are entropy coded by mzc.codecs.dwt2d.entropy (magnitude classes through rANS, one model per context),
+and decoded by the compiled row loop of mzc.codecs.dwt2d.native.
 """
 import numpy as np
 
@@ -111,6 +112,8 @@ def encode_mask(encoder, valid):
 
 def decode_mask(decoder, rows, cols):
     """The validity mask (rows x cols) from the payload; refuses impossible spans."""
+    from mzc.codecs.dwt2d.native import fill_spans  # here, not at the top: numba loads only to decode
+
     counts = np.cumsum(decoder.read(MASK_COUNT, rows))
     if counts.min() < 0 or counts.max() > (cols + 1) // 2:
         raise decoder.error(f"a mask row has a span count outside 0..{(cols + 1) // 2}")
@@ -118,22 +121,11 @@ def decode_mask(decoder, rows, cols):
     unchanged = lengths == np.concatenate([[0], lengths[:-1]])
     same = decoder.read(MASK_SAME, int(lengths[unchanged].sum()))
     new = decoder.read(MASK_NEW, int(lengths[~unchanged].sum()))
-    edges = np.zeros((rows, cols + 2), dtype=np.int64)
-    previous = np.zeros(0, dtype=np.int64)
-    used_same = used_new = 0
-    for r in range(rows):
-        n = int(lengths[r])
-        if unchanged[r]:
-            flips = previous + same[used_same:used_same + n]
-            used_same += n
-        else:
-            flips = np.cumsum(new[used_new:used_new + n] + 1) - 1
-            used_new += n
-        if n and (flips[0] < 0 or flips[-1] > cols or (np.diff(flips) <= 0).any()):
-            raise decoder.error(f"mask row {r + 1} has spans outside the row or out of order")
-        edges[r, flips] = np.where(np.arange(n) % 2 == 0, 1, -1)
-        previous = flips
-    return np.cumsum(edges, axis=1)[:, :cols] > 0
+    valid = np.zeros((rows, cols), dtype=bool)
+    bad = fill_spans(lengths, unchanged, same, new, valid)
+    if bad >= 0:
+        raise decoder.error(f"mask row {bad + 1} has spans outside the row or out of order")
+    return valid
 
 
 # --------------------------------------------------------------------------- bands
@@ -188,11 +180,6 @@ def sign_bits(values, predicted):
     return (np.sign(values) != np.where(predicted == 0, 1, predicted)).astype(np.int64)
 
 
-def with_signs(magnitudes, bits, predicted):
-    """Inverse of sign_bits: the signed values."""
-    return magnitudes * np.where(predicted == 0, 1, predicted) * (1 - 2 * bits)
-
-
 def neighbours(above, above2):
     """Causal activity from the row above (up, and half of up-left and up-right) and half the row two above."""
     n = np.abs(above).astype(np.float64)
@@ -245,41 +232,6 @@ def encode_corrections(encoder, k, valid):
     encoder.add(correction_model(ks), k[rows, cols])
 
 
-def decode_rows(decoder, where, active, thresholds, model, signs=None):
-    """Inverse of the row-by-row context coding: a grid of integers, 0 outside ``where``.
-
-    Each row comes in two passes, its even columns then its odd ones. With ``signs`` =
-    (parent map, orientation), as for detail bands, a pass is magnitudes followed by the
-    signs of the nonzero ones (see encode_bands); without, each value carries its sign in
-    the raw bits.
-    """
-    out = np.zeros(where.shape, dtype=np.int64)
-    zero = np.zeros(where.shape[1], dtype=np.int64)
-    odd_columns = np.arange(where.shape[1]) % 2 == 1
-    passes = (where & ~odd_columns, where & odd_columns)
-    for r in np.flatnonzero(where.any(axis=1)):
-        above = out[r - 1] if r >= 1 else zero
-        near = active[r] + neighbours(above, out[r - 2] if r >= 2 else zero)
-        for odd, cells in enumerate(passes):
-            part = np.flatnonzero(cells[r])
-            if not len(part):
-                continue
-            context = np.digitize(near[part] + (beside(np.abs(out[r]))[part] if odd else 0), thresholds)
-            order = np.argsort(context, kind="stable")   # by context, left to right within one
-            out[r, part[order]] = decoder.read_mixed(model(context[order]), signed=signs is None)
-            if signs is None:
-                continue
-            signed = part[out[r, part] != 0]
-            if len(signed):
-                sign_context, predicted = sign_prediction(above[signed], signs[0][r, signed],
-                                                          beside(np.sign(out[r]))[signed], signs[1], odd)
-                bits = decoder.read_mixed(sign_model(sign_context), signed=False)
-                if bits.max(initial=0) > 1:
-                    raise decoder.error("a sign symbol is not 0 or 1")
-                out[r, signed] = with_signs(out[r, signed], bits, predicted)
-    return out
-
-
 def encode_bands(encoder, qflat, relevant, steps):
     """The approximation as planar differences, then each detail band row by row, each row in
     two passes (even columns, odd columns): the pass's magnitudes by context, then the signs
@@ -307,8 +259,9 @@ def decode_bands(decoder, relevant, steps):
     qflat = [np.cumsum(np.cumsum(residual, axis=0), axis=1)]
     for index in range(1, len(relevant)):
         placeholder = qflat + [np.zeros(relevant[index].shape, dtype=np.int64)]
-        band = decode_rows(decoder, relevant[index], activity(placeholder, index, steps), THRESHOLDS,
-                           detail_model, signs=(parent_map(placeholder, index), (index - 1) % 3))
+        band = decoder.read_rows(relevant[index], activity(placeholder, index, steps), THRESHOLDS, detail_model(0),
+                                 signs=(parent_map(placeholder, index), SIGN_WEIGHTS[(index - 1) % 3], sign_model(0),
+                                        SIGN_CONTEXTS))
         qflat.append(band)
     return qflat
 
@@ -540,7 +493,7 @@ def read(data, source="<bytes>"):
         steps = band_steps(geometry, steps, [q.shape for q in qflat], qflat[0], slope_limit)
         z = transform.inverse(w2.dequantise(qflat, steps), (rows, cols), wavelet, levels, geometry.periodic)
         if correction > 0:
-            k = decode_rows(decoder, valid, np.zeros(valid.shape), CORRECTION_THRESHOLDS, correction_model)
+            k = decoder.read_rows(valid, np.zeros(valid.shape), CORRECTION_THRESHOLDS, correction_model(0))
             z[valid] += correction * k[valid]
     decoder.check_end()
     if not np.isfinite(z[valid]).all():
