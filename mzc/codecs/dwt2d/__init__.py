@@ -9,6 +9,8 @@ each with their own contexts), and an optional correction layer of residuals tha
 are entropy coded by mzc.codecs.dwt2d.entropy (magnitude classes through rANS, one model per context),
 and decoded by the compiled row loop of mzc.codecs.dwt2d.native.
 """
+import functools
+
 import numpy as np
 
 from mzc.codecs.base import Codec, Option
@@ -292,10 +294,15 @@ class Prepared:
         self.bands = w2.flatten(self.transform.forward(self.filled, wavelet, self.levels, periodic))
         self.magnitudes, self.signs = [np.abs(b) for b in self.bands], [np.sign(b) for b in self.bands]
         self.relevant = w2.flatten(self.transform.relevance(self.valid, wavelet, self.levels, periodic))
+
+    @functools.cached_property
+    def areas(self):
+        """(1/cos t, metric area) at the valid nodes, which surface_rms weighs errors by: only
+        the rmse target needs them (the depth jumps they avoid took a sixth of an encode)."""
         from mzc.ops.triangulation import jump_edges
 
-        lean, metric = w2.node_areas(self.filled, self.geometry, jump_edges(grid))
-        self.lean, self.metric = lean[self.valid], metric[self.valid]
+        lean, metric = w2.node_areas(self.filled, self.geometry, jump_edges(self.grid))
+        return lean[self.valid], metric[self.valid]
 
     def decoded(self, step, deadzone=DEADZONE):
         """(integer bands as coded, the decoder's wavelet-only reconstruction) for one detail step."""
@@ -355,7 +362,8 @@ class Prepared:
         error = (decoded - self.grid.z)[self.valid]
         if not error.size:
             return 0.0
-        return float(np.sqrt(np.sum(error ** 2 * self.metric / self.lean) / np.sum(self.metric * self.lean)))
+        lean, metric = self.areas
+        return float(np.sqrt(np.sum(error ** 2 * metric / lean) / np.sum(metric * lean)))
 
     def height_range(self):
         """Spread of the valid heights (at least 1e-6): scales the step searches."""

@@ -39,9 +39,12 @@ def raw_bits(values, cls, signed):
     width = cls - 1 + signed
     low = np.abs(values) - (np.int64(1) << (cls - 1))
     word = ((values < 0).astype(np.int64) << (cls - 1)) * signed | low
-    position = np.arange(int(width.max()))[None, :]
-    bits = (word[:, None] >> (width[:, None] - 1 - position).clip(0)) & 1
-    return bits[position < width[:, None]].astype(np.uint8)
+    # bit j of the output belongs to word ``owner`` and sits ``shift`` places from its end: work in
+    # proportion to the bits, most values having one or none (a values x widest-word matrix was not)
+    ends = np.cumsum(width)
+    owner = np.repeat(np.arange(len(width)), width)
+    shift = ends[owner] - 1 - np.arange(int(ends[-1]))
+    return ((word[owner] >> shift) & 1).astype(np.uint8)
 
 
 # --------------------------------------------------------------------------- tables
