@@ -1,5 +1,6 @@
 """The mzc-dwt2d codec: error bounds on real faces, exact masks, rate targets, hostile input, the spec example."""
 
+import re
 from functools import cache
 
 import numpy as np
@@ -9,7 +10,7 @@ from hypothesis import strategies as st
 
 from mzc.codecs import dwt2d
 from mzc.codecs.dwt2d import wavelet as w2
-from mzc.codecs.dwt2d.entropy import TABLE_BITS, Decoder
+from mzc.codecs.dwt2d.entropy import TABLE_BITS, Decoder, Encoder
 from mzc.errors import MzcError
 from mzc.formats import read_any
 from mzc.grid import ZGrid
@@ -231,19 +232,77 @@ def test_random_grids_meet_the_rmse_target(grid, target, limit):
     assert surface_rms(grid, data) <= target if grid.valid.any() else True
 
 
+@settings(max_examples=150, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(small_grids(), st.sampled_from([{"max_error": 0.05}, {"max_error": 0.5}, {"rmse": 0.05}, {"rmse": 0.5},
+                                       {"size": 120}, {"size": 600}]),
+       st.sampled_from([None, 0, 1, 3]), st.sampled_from(["bior4.4", "bior2.2"]), st.booleans())
+def test_random_grids_decode_to_exactly_what_the_encoder_says(grid, target, levels, wavelet, central):
+    """The decoder (its compiled row loop) gets, bit for bit, the heights the encoder computed
+    as the decoder's: on planar and cylindrical grids with holes, of odd sizes, every target."""
+    if central:   # the same values as distances along the rays of a cylinder
+        grid = ZGrid(z=50 + grid.z, d1=1, d2=1, projection="cylindrical", radius=50.0)
+    try:
+        data, heights = dwt2d.CODEC.encode_with_decoded(grid, level=levels, wavelet=wavelet, **target)
+    except MzcError as error:   # rmse and size refuse heights spanning 100x the width; and (a known
+        # fault of the size search, older than the native decoder) where the valid heights are one value,
+        # a file that fits at any step makes it search down to a step too small for them
+        flat = np.ptp(grid.z[grid.valid]) == 0 if grid.valid.any() else True
+        assert "cannot share one unit" in str(error) or ("size" in target and flat and "too small" in str(error))
+        return
+    decoded = dwt2d.read(data)
+    np.testing.assert_array_equal(decoded.z, heights)
+    assert np.array_equal(decoded.valid, grid.valid)
+
+
+def one_coefficient_payload(magnitude, *sign_symbols):
+    """A payload of one detail magnitude (context 0, model 4) and then ``sign_symbols`` (model 5)."""
+    encoder = Encoder()
+    encoder.add(4, [magnitude], signed=False)
+    if sign_symbols:
+        encoder.add(5, sign_symbols, signed=False)
+    return encoder.finish()
+
+
+def read_one_coefficient(payload):
+    """The 1 x 1 band of ``one_coefficient_payload``, its sign symbol read with model 5 (D weights, no parent)."""
+    decoder = Decoder(payload, "t")
+    band = decoder.read_rows(np.ones((1, 1), dtype=bool), np.zeros((1, 1)), dwt2d.THRESHOLDS, 4,
+                             signs=(np.zeros((1, 1), dtype=np.int64), dwt2d.SIGN_WEIGHTS[2], 5, dwt2d.SIGN_CONTEXTS))
+    decoder.check_end()
+    return band
+
+
+@pytest.mark.parametrize("payload, problem", [
+    (one_coefficient_payload(1, 2), "a sign symbol is not 0 or 1"),
+    (one_coefficient_payload(1), "the payload has no model table 5"),
+    (one_coefficient_payload(2, 0)[:-1], "payload ends inside the raw bits"),   # magnitude 2's one raw bit
+    (one_coefficient_payload(1, 1) + b"\x00", "1 byte(s) after the end of the payload"),
+])
+def test_the_row_decoder_refuses_what_no_encoder_writes(payload, problem):
+    assert read_one_coefficient(one_coefficient_payload(1, 1)).tolist() == [[-1]]   # 1: not the predicted +
+    assert read_one_coefficient(one_coefficient_payload(2, 0)).tolist() == [[2]]
+    with pytest.raises(MzcError, match=re.escape(problem)):
+        read_one_coefficient(payload)
+
+
 @cache
-def fuzz_base():
-    """A small encoded grid with holes and two levels, to corrupt."""
+def fuzz_base(version="3.1"):
+    """A small encoded grid with holes and two levels, to corrupt: as written (3.1, whose checksum
+    refuses almost every damaged file) or as 3.0, without one, so damage reaches the payload decoder."""
     rng = np.random.default_rng(7)
     z = rng.normal(size=(12, 17)).cumsum(axis=0)
     z[rng.random(z.shape) < 0.3] = np.nan
-    return dwt2d.write(ZGrid(z=z, d1=1, d2=1), max_error=0.05, level=2)
+    data = dwt2d.write(ZGrid(z=z, d1=1, d2=1), max_error=0.05, level=2)
+    if version == "3.0":
+        data = re.sub(rb"(?m)^crc32 [0-9a-f]{8}\n", b"", data).replace(b"mzc-dwt2d 3.1\n", b"mzc-dwt2d 3.0\n")
+    return data
 
 
+@pytest.mark.parametrize("version", ["3.1", "3.0"])
 @settings(max_examples=400, deadline=None, derandomize=True)
-@given(st.data())
-def test_corrupt_or_truncated_payloads_raise_only_mzc_errors(data):
-    original = fuzz_base()
+@given(data=st.data())
+def test_corrupt_or_truncated_payloads_raise_only_mzc_errors(version, data):
+    original = fuzz_base(version)
     body = original.index(b"\ndata\n") + 6
     damaged = bytearray(original)
     if data.draw(st.booleans()):
@@ -334,3 +393,4 @@ def test_spec_rans_description_matches_the_coder():
             state = (state << 32) | words.pop()
         found.append(s)
     assert found == [1, 0, 1, 1]            # span-count changes 1, 0, 1, -1
+    assert decoder.read(0, 4).tolist() == [1, 0, 1, -1]   # the decoder's own arithmetic agrees

@@ -6,8 +6,11 @@ the quantised wavelet bands (the transform of the version, ``wavelet2d.TRANSFORM
 detail steps scaled up where the surface leans from the node lines, magnitudes and signs
 each with their own contexts), and an optional correction layer of residuals that makes
 ``max_error`` hold at every valid node of the decoder's own reconstruction. All integers
-are entropy coded by mzc.codecs.dwt2d.entropy (magnitude classes through rANS, one model per context).
+are entropy coded by mzc.codecs.dwt2d.entropy (magnitude classes through rANS, one model per context),
+and decoded by the compiled row loop of mzc.codecs.dwt2d.native.
 """
+import functools
+
 import numpy as np
 
 from mzc.codecs.base import Codec, Option
@@ -111,6 +114,8 @@ def encode_mask(encoder, valid):
 
 def decode_mask(decoder, rows, cols):
     """The validity mask (rows x cols) from the payload; refuses impossible spans."""
+    from mzc.codecs.dwt2d.native import fill_spans  # here, not at the top: numba loads only to decode
+
     counts = np.cumsum(decoder.read(MASK_COUNT, rows))
     if counts.min() < 0 or counts.max() > (cols + 1) // 2:
         raise decoder.error(f"a mask row has a span count outside 0..{(cols + 1) // 2}")
@@ -118,22 +123,11 @@ def decode_mask(decoder, rows, cols):
     unchanged = lengths == np.concatenate([[0], lengths[:-1]])
     same = decoder.read(MASK_SAME, int(lengths[unchanged].sum()))
     new = decoder.read(MASK_NEW, int(lengths[~unchanged].sum()))
-    edges = np.zeros((rows, cols + 2), dtype=np.int64)
-    previous = np.zeros(0, dtype=np.int64)
-    used_same = used_new = 0
-    for r in range(rows):
-        n = int(lengths[r])
-        if unchanged[r]:
-            flips = previous + same[used_same:used_same + n]
-            used_same += n
-        else:
-            flips = np.cumsum(new[used_new:used_new + n] + 1) - 1
-            used_new += n
-        if n and (flips[0] < 0 or flips[-1] > cols or (np.diff(flips) <= 0).any()):
-            raise decoder.error(f"mask row {r + 1} has spans outside the row or out of order")
-        edges[r, flips] = np.where(np.arange(n) % 2 == 0, 1, -1)
-        previous = flips
-    return np.cumsum(edges, axis=1)[:, :cols] > 0
+    valid = np.zeros((rows, cols), dtype=bool)
+    bad = fill_spans(lengths, unchanged, same, new, valid)
+    if bad >= 0:
+        raise decoder.error(f"mask row {bad + 1} has spans outside the row or out of order")
+    return valid
 
 
 # --------------------------------------------------------------------------- bands
@@ -188,11 +182,6 @@ def sign_bits(values, predicted):
     return (np.sign(values) != np.where(predicted == 0, 1, predicted)).astype(np.int64)
 
 
-def with_signs(magnitudes, bits, predicted):
-    """Inverse of sign_bits: the signed values."""
-    return magnitudes * np.where(predicted == 0, 1, predicted) * (1 - 2 * bits)
-
-
 def neighbours(above, above2):
     """Causal activity from the row above (up, and half of up-left and up-right) and half the row two above."""
     n = np.abs(above).astype(np.float64)
@@ -229,12 +218,18 @@ def contexts(band, active, thresholds=THRESHOLDS):
                        thresholds)
 
 
+def pass_index(rows, cols):
+    """The pass of each cell: row by row, its even columns (2r) then its odd ones (2r + 1)."""
+    return 2 * rows + cols % 2
+
+
 def row_order(where, context):
     """(rows, cols, contexts) of the True cells of ``where``: row by row, even columns then odd
-    ones, by context, left to right."""
+    ones, by context, left to right (np.nonzero lists them left to right already, so one stable
+    sort by pass and context does it: a 4-key lexsort took a third of an encode's entropy coding)."""
     rows, cols = np.nonzero(where)
     ks = context[rows, cols]
-    order = np.lexsort((cols, ks, cols % 2, rows))
+    order = np.argsort(pass_index(rows, cols) * (ks.max(initial=0) + 1) + ks, kind="stable")
     return rows[order], cols[order], ks[order]
 
 
@@ -243,41 +238,6 @@ def encode_corrections(encoder, k, valid):
     columns), by context of the rows above and (odd columns) the neighbours beside."""
     rows, cols, ks = row_order(valid, contexts(k, np.zeros(k.shape), CORRECTION_THRESHOLDS))
     encoder.add(correction_model(ks), k[rows, cols])
-
-
-def decode_rows(decoder, where, active, thresholds, model, signs=None):
-    """Inverse of the row-by-row context coding: a grid of integers, 0 outside ``where``.
-
-    Each row comes in two passes, its even columns then its odd ones. With ``signs`` =
-    (parent map, orientation), as for detail bands, a pass is magnitudes followed by the
-    signs of the nonzero ones (see encode_bands); without, each value carries its sign in
-    the raw bits.
-    """
-    out = np.zeros(where.shape, dtype=np.int64)
-    zero = np.zeros(where.shape[1], dtype=np.int64)
-    odd_columns = np.arange(where.shape[1]) % 2 == 1
-    passes = (where & ~odd_columns, where & odd_columns)
-    for r in np.flatnonzero(where.any(axis=1)):
-        above = out[r - 1] if r >= 1 else zero
-        near = active[r] + neighbours(above, out[r - 2] if r >= 2 else zero)
-        for odd, cells in enumerate(passes):
-            part = np.flatnonzero(cells[r])
-            if not len(part):
-                continue
-            context = np.digitize(near[part] + (beside(np.abs(out[r]))[part] if odd else 0), thresholds)
-            order = np.argsort(context, kind="stable")   # by context, left to right within one
-            out[r, part[order]] = decoder.read_mixed(model(context[order]), signed=signs is None)
-            if signs is None:
-                continue
-            signed = part[out[r, part] != 0]
-            if len(signed):
-                sign_context, predicted = sign_prediction(above[signed], signs[0][r, signed],
-                                                          beside(np.sign(out[r]))[signed], signs[1], odd)
-                bits = decoder.read_mixed(sign_model(sign_context), signed=False)
-                if bits.max(initial=0) > 1:
-                    raise decoder.error("a sign symbol is not 0 or 1")
-                out[r, signed] = with_signs(out[r, signed], bits, predicted)
-    return out
 
 
 def encode_bands(encoder, qflat, relevant, steps):
@@ -292,9 +252,9 @@ def encode_bands(encoder, qflat, relevant, steps):
         sign_context, predicted = sign_prediction(shifted_down(band, 1), parent_map(qflat, index),
                                                   beside(np.sign(band)), (index - 1) % 3, odd)
         signed_rows, signed_cols = np.nonzero(band)
-        order = np.lexsort((np.concatenate([cols, signed_cols]), np.concatenate([ks, np.zeros_like(signed_cols)]),
-                            np.repeat([0, 1], [len(rows), len(signed_rows)]),
-                            np.concatenate([cols, signed_cols]) % 2, np.concatenate([rows, signed_rows])))
+        # each pass's magnitudes (in row_order's order), then its signs (left to right, as np.nonzero lists them)
+        order = np.argsort(np.concatenate([2 * pass_index(rows, cols), 2 * pass_index(signed_rows, signed_cols) + 1]),
+                           kind="stable")
         models = np.concatenate([detail_model(ks), sign_model(sign_context[signed_rows, signed_cols])])
         values = np.concatenate([np.abs(band[rows, cols]),
                                  sign_bits(band[signed_rows, signed_cols], predicted[signed_rows, signed_cols])])
@@ -307,8 +267,9 @@ def decode_bands(decoder, relevant, steps):
     qflat = [np.cumsum(np.cumsum(residual, axis=0), axis=1)]
     for index in range(1, len(relevant)):
         placeholder = qflat + [np.zeros(relevant[index].shape, dtype=np.int64)]
-        band = decode_rows(decoder, relevant[index], activity(placeholder, index, steps), THRESHOLDS,
-                           detail_model, signs=(parent_map(placeholder, index), (index - 1) % 3))
+        band = decoder.read_rows(relevant[index], activity(placeholder, index, steps), THRESHOLDS, detail_model(0),
+                                 signs=(parent_map(placeholder, index), SIGN_WEIGHTS[(index - 1) % 3], sign_model(0),
+                                        SIGN_CONTEXTS))
         qflat.append(band)
     return qflat
 
@@ -317,7 +278,8 @@ def decode_bands(decoder, relevant, steps):
 
 
 class Prepared:
-    """Everything about one grid that does not depend on the steps: mask, fill, transform."""
+    """Everything about one grid that does not depend on the steps: mask, fill, transform (and
+    each band's magnitudes and signs, for quantising it at every step the rate control tries)."""
 
     def __init__(self, grid, wavelet, levels, slope_limit):
         self.transform = w2.TRANSFORMS[VERSION[0]]
@@ -330,16 +292,22 @@ class Prepared:
         self.filled = w2.laplace_fill(grid.z, self.valid, self.geometry.periodic)
         periodic = self.geometry.periodic
         self.bands = w2.flatten(self.transform.forward(self.filled, wavelet, self.levels, periodic))
+        self.magnitudes, self.signs = [np.abs(b) for b in self.bands], [np.sign(b) for b in self.bands]
         self.relevant = w2.flatten(self.transform.relevance(self.valid, wavelet, self.levels, periodic))
+
+    @functools.cached_property
+    def areas(self):
+        """(1/cos t, metric area) at the valid nodes, which surface_rms weighs errors by: only
+        the rmse target needs them (the depth jumps they avoid took a sixth of an encode)."""
         from mzc.ops.triangulation import jump_edges
 
-        lean, metric = w2.node_areas(self.filled, self.geometry, jump_edges(grid))
-        self.lean, self.metric = lean[self.valid], metric[self.valid]
+        lean, metric = w2.node_areas(self.filled, self.geometry, jump_edges(self.grid))
+        return lean[self.valid], metric[self.valid]
 
     def decoded(self, step, deadzone=DEADZONE):
         """(integer bands as coded, the decoder's wavelet-only reconstruction) for one detail step."""
         quantised = lambda index, band_step: np.where(  # noqa: E731
-            self.relevant[index], w2.quantise_band(self.bands[index], band_step, deadzone), 0)
+            self.relevant[index], w2.quantise_band(self.magnitudes[index], self.signs[index], band_step, deadzone), 0)
         written = header_steps(step, self.levels)
         qflat = [quantised(0, written[0])]
         steps = band_steps(self.geometry, written, [b.shape for b in self.bands], qflat[0], self.slope_limit)
@@ -394,7 +362,8 @@ class Prepared:
         error = (decoded - self.grid.z)[self.valid]
         if not error.size:
             return 0.0
-        return float(np.sqrt(np.sum(error ** 2 * self.metric / self.lean) / np.sum(self.metric * self.lean)))
+        lean, metric = self.areas
+        return float(np.sqrt(np.sum(error ** 2 * metric / lean) / np.sum(metric * lean)))
 
     def height_range(self):
         """Spread of the valid heights (at least 1e-6): scales the step searches."""
@@ -540,7 +509,7 @@ def read(data, source="<bytes>"):
         steps = band_steps(geometry, steps, [q.shape for q in qflat], qflat[0], slope_limit)
         z = transform.inverse(w2.dequantise(qflat, steps), (rows, cols), wavelet, levels, geometry.periodic)
         if correction > 0:
-            k = decode_rows(decoder, valid, np.zeros(valid.shape), CORRECTION_THRESHOLDS, correction_model)
+            k = decoder.read_rows(valid, np.zeros(valid.shape), CORRECTION_THRESHOLDS, correction_model(0))
             z[valid] += correction * k[valid]
     decoder.check_end()
     if not np.isfinite(z[valid]).all():

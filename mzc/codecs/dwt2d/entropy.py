@@ -6,12 +6,12 @@ below its leading one. Classes go through a static categorical model per context
 frequency table (summing to 2**TABLE_BITS) is sent in the payload as one 6-bit log-scale
 weight per class; raw bits go to a separate bit buffer. The classes are coded with the
 rANS coder of ``constriction`` (AnsCoder: 32-bit words, 64-bit state, 24-bit
-probabilities); spec/dwt2d.md gives the exact arithmetic, so a decoder needs no
-constriction. The encoder is vectorised per run of symbols whose tables have one class
-count; the decoder reads one such run per call.
+probabilities), vectorised per run of symbols whose tables have one class count.
+spec/dwt2d.md gives the exact arithmetic, and the decoder does it itself: its integers are
+decoded by the compiled loops of mzc.codecs.dwt2d.native (a row's contexts depend on the
+row decoded just before). So a decode does not load constriction, nor an encode numba.
 """
 
-import constriction
 import numpy as np
 
 from mzc.errors import MzcError
@@ -39,36 +39,12 @@ def raw_bits(values, cls, signed):
     width = cls - 1 + signed
     low = np.abs(values) - (np.int64(1) << (cls - 1))
     word = ((values < 0).astype(np.int64) << (cls - 1)) * signed | low
-    position = np.arange(int(width.max()))[None, :]
-    bits = (word[:, None] >> (width[:, None] - 1 - position).clip(0)) & 1
-    return bits[position < width[:, None]].astype(np.uint8)
-
-
-def values_from_bits(cls, bits, signed=True):
-    """Inverse of raw_bits for values of classes ``cls``, all signed or all not."""
-    if cls.max(initial=0) <= 1:             # most rows: magnitudes 0 and 1, a sign bit at most
-        values = cls.copy()
-        if signed:
-            values[cls == 1] -= 2 * bits[: np.count_nonzero(cls)]
-        return values
-    values = np.zeros(len(cls), dtype=np.int64)
-    nonzero = np.flatnonzero(cls > 0)
-    if not len(nonzero):
-        return values
-    k = cls[nonzero]
-    width = k - 1 + int(signed)
+    # bit j of the output belongs to word ``owner`` and sits ``shift`` places from its end: work in
+    # proportion to the bits, most values having one or none (a values x widest-word matrix was not)
     ends = np.cumsum(width)
-    total = int(ends[-1])
-    # each bit weighs 2**(bits of its word after it); the words are sums over their bits
-    weight = np.repeat(ends, width) - 1 - np.arange(total)
-    word = np.zeros(len(k), dtype=np.int64)
-    wide = width > 0
-    if total:
-        word[wide] = np.add.reduceat(bits[:total].astype(np.int64) << weight, (ends - width)[wide])
-    magnitude = (np.int64(1) << (k - 1)) | (word & ((np.int64(1) << (k - 1)) - 1))
-    negative = (word >> (k - 1)) & 1 if signed else 0
-    values[nonzero] = np.where(negative == 1, -magnitude, magnitude)
-    return values
+    owner = np.repeat(np.arange(len(width)), width)
+    shift = ends[owner] - 1 - np.arange(int(ends[-1]))
+    return ((word[owner] >> shift) & 1).astype(np.uint8)
 
 
 # --------------------------------------------------------------------------- tables
@@ -139,9 +115,6 @@ def family_weights(freq):
     return (np.asarray(freq, dtype=np.float64) * (1 << (ANS_PRECISION - TABLE_BITS))) - 1.0
 
 
-FAMILY = constriction.stream.model.Categorical(perfect=False)
-
-
 def weights_by_size(tables):
     """{class count: one row of family weights per table}, zeros for tables of another count:
     rows indexed by model id feed one coder call for a run of symbols of that count."""
@@ -156,7 +129,7 @@ class Encoder:
     """Collects integers with their model ids in decoding order, then writes one payload.
 
     ``same_size`` lists groups of model ids whose tables must have one class count, so a
-    decoder can mix them symbol by symbol (Decoder.read_mixed).
+    decoder can mix them symbol by symbol (Decoder.read_rows).
     """
 
     def __init__(self, same_size=()):
@@ -223,16 +196,21 @@ def ans_encode(tables, models, cls):
     """rANS words of the classes, model by model (encoded last-to-first so they decode first-to-last).
 
     Each run of symbols whose tables have one class count goes to the coder in one call,
-    with one row of weights per symbol.
+    with one row of weights per symbol (a face has about 3,000 runs: what can be taken
+    out of the loop is).
     """
+    import constriction  # here, not at the top: only the encoder uses it
+
     coder = constriction.stream.stack.AnsCoder()
+    family = constriction.stream.model.Categorical(perfect=False)
     weights = weights_by_size(tables)
     sizes = np.array([len(t) for t in tables], dtype=np.int64)[models]
+    symbols = cls.astype(np.int32)
     starts = np.flatnonzero(np.diff(sizes, prepend=-1))
     ends = np.append(starts[1:], len(sizes))
-    for start, end in zip(starts[::-1], ends[::-1]):
-        rows = weights[int(sizes[start])][models[start:end]]
-        coder.encode_reverse(cls[start:end].astype(np.int32), FAMILY, rows)
+    runs = list(zip(starts.tolist(), ends.tolist(), [weights[size] for size in sizes[starts].tolist()]))
+    for start, end, rows in reversed(runs):
+        coder.encode_reverse(symbols[start:end], family, rows[models[start:end]])
     return coder.get_compressed()
 
 
@@ -240,9 +218,16 @@ def ans_encode(tables, models, cls):
 
 
 class Decoder:
-    """Reads a payload written by Encoder.finish; every failure is an MzcError."""
+    """Reads a payload written by Encoder.finish; every failure is an MzcError.
+
+    Python parses the tables; the integers are decoded by mzc.codecs.dwt2d.native, whose
+    kernels update the rANS state x (``state``, uint64) and the ``cursor`` (words left,
+    next raw bit, an error detail) in place.
+    """
 
     def __init__(self, payload, source, same_size=()):
+        from mzc.codecs.dwt2d import native  # here, not at the top: the encoder needs no numba
+
         self.source = source
         self.data = memoryview(payload)
         self.position = 0
@@ -251,27 +236,53 @@ class Decoder:
         end = self.position + 4 * word_count
         if end > len(self.data):
             raise self.error("payload ends inside the rANS words")
-        words = np.frombuffer(self.data[self.position:end], dtype="<u4").astype(np.uint32)
-        if word_count and words[-1] == 0:
+        self.words = np.frombuffer(self.data[self.position:end], dtype="<u4").astype(np.uint32)
+        if word_count and self.words[-1] == 0:
             raise self.error("the last rANS word is zero")
-        self.coder = constriction.stream.stack.AnsCoder(words) if word_count else constriction.stream.stack.AnsCoder()
         self.bits = np.unpackbits(np.frombuffer(self.data[end:], dtype=np.uint8))
-        self.bit_position = 0
-        self.sizes = np.array([len(t) for t in self.tables], dtype=np.int64)
+        sizes = np.array([len(t) for t in self.tables], dtype=np.int64)
         for group in same_size:
-            present = self.sizes[[m for m in group if m < len(self.sizes)]]
+            present = sizes[[m for m in group if m < len(sizes)]]
             if (present != present[:1]).any():
                 raise self.error("tables mixed in one row have different class counts")
-        self.weights = weights_by_size(self.tables)
+        # one row per table: the cumulative frequencies, 2**TABLE_BITS from its last class on
+        self.cumulative = np.full((len(self.tables), MAX_CLASSES + 1), 1 << TABLE_BITS, dtype=np.int64)
+        for index, table in enumerate(self.tables):
+            self.cumulative[index, 1:len(table) + 1] = np.cumsum(table)
+            self.cumulative[index, 0] = 0
+        self.native = native
+        self.state, self.cursor = np.zeros(1, dtype=np.uint64), np.zeros(3, dtype=np.int64)
+        self.start()
+
+    def start(self):
+        """The initial state x: the last word, and the one before it while x < 2**32 (the spec's 'Start')."""
+        left, x = len(self.words), 0
+        if left:
+            left -= 1
+            x = int(self.words[left])
+            if x < 1 << 32 and left:
+                left -= 1
+                x = (x << 32) | int(self.words[left])
+        self.state[0], self.cursor[self.native.WORDS_LEFT] = x, left
 
     def error(self, message):
         return MzcError(message, source=self.source, field="data")
 
+    def check(self, code):
+        """Raise the MzcError that a kernel's error code stands for."""
+        native = self.native
+        if code == native.NO_TABLE:
+            raise self.error(f"the payload has no model table {int(self.cursor[native.DETAIL])}")
+        if code == native.RAW_BITS_END:
+            raise self.error("payload ends inside the raw bits")
+        if code == native.NOT_A_SIGN:
+            raise self.error("a sign symbol is not 0 or 1")
+
     def check_end(self):
         """Refuse a payload with data left once everything it declares is decoded: rANS words
-        not consumed, or a byte or more of raw bits past the last one read."""
-        extra = (len(self.bits) - self.bit_position) // 8
-        if extra or not self.coder.is_empty():
+        not consumed (x is 0 exactly when they are), or a byte or more of raw bits past the last one read."""
+        extra = (len(self.bits) - int(self.cursor[self.native.BIT_POSITION])) // 8
+        if extra or self.state[0] != 0:
             raise self.error(f"{extra} byte(s) after the end of the payload" if extra
                              else "rANS words left over after the last symbol")
 
@@ -314,24 +325,27 @@ class Decoder:
         return tables
 
     def read(self, model, count):
-        """``count`` values coded with context ``model``."""
-        return self.read_mixed(np.full(count, model, dtype=np.int64))
+        """``count`` (signed) values coded with context ``model``."""
+        out = np.zeros(count, dtype=np.int64)
+        if count:
+            if model >= len(self.tables):
+                raise self.error(f"the payload has no model table {model}")
+            self.check(self.native.read_values(self.state, self.cursor, self.words, self.bits, self.cumulative,
+                                               model, count, 1, out))
+        return out
 
-    def read_mixed(self, models, signed=True):
-        """One value per entry of ``models``: ids of one ``same_size`` group (checked when the
-        tables were read); unsigned values were written with ``signed=False``."""
-        models = np.asarray(models, dtype=np.int64)
-        if not len(models):
-            return np.zeros(0, dtype=np.int64)
-        if models.max() >= len(self.tables):
-            raise self.error(f"the payload has no model table {int(models.max())}")
-        try:
-            cls = self.coder.decode(FAMILY, self.weights[int(self.sizes[models[0]])][models]).astype(np.int64)
-        except Exception as exc:  # noqa: BLE001 - constriction raises its own types on a corrupt stream
-            raise self.error(f"corrupt rANS stream ({exc})") from None
-        need = int(cls.sum()) - (0 if signed else int(np.count_nonzero(cls)))
-        if self.bit_position + need > len(self.bits):
-            raise self.error("payload ends inside the raw bits")
-        values = values_from_bits(cls, self.bits[self.bit_position:self.bit_position + need], signed)
-        self.bit_position += need
-        return values
+    def read_rows(self, where, active, thresholds, first_model, signs=None):
+        """A grid of integers coded row by row, each row in two passes by context (its even
+        columns, then its odd ones; see native.decode_rows), 0 outside ``where``. ``active``
+        is each cell's activity from outside its band, ``first_model`` the model of context 0.
+        With ``signs`` = (parent map, the three sign weights, model of sign context 0, sign
+        contexts per column parity), as for detail bands, each pass's values are magnitudes
+        followed by the signs of the nonzero ones; without, each value carries its sign in the raw bits."""
+        out = np.zeros(where.shape, dtype=np.int64)
+        parent, weights, first_sign_model, sign_contexts = signs or (np.zeros((1, 1), np.int64), (0, 0, 0), -1, 1)
+        self.check(self.native.decode_rows(
+            self.state, self.cursor, self.words, self.bits, self.cumulative, np.ascontiguousarray(where, dtype=bool),
+            np.ascontiguousarray(active, dtype=np.float64), np.asarray(thresholds, dtype=np.float64), first_model,
+            np.ascontiguousarray(parent, dtype=np.int64), np.asarray(weights, dtype=np.int64), first_sign_model,
+            sign_contexts, out))
+        return out

@@ -39,10 +39,13 @@ def wraps(periodic, n):
 
 def following(values, count, periodic):
     """values[k + 1] for k < count: past the end the symmetric extension gives values[-1]
-    (x[n] mirrors x[n - 2]); a periodic one wraps to values[0]."""
+    (x[n] mirrors x[n - 2]); a periodic one wraps to values[0]. Slices, not index arrays:
+    the synthesis runs once per step the encoder's rate control tries."""
     if periodic:
         return np.roll(values, -1, axis=0)
-    return values[np.minimum(np.arange(1, count + 1), len(values) - 1)]
+    if count < len(values):
+        return values[1:count + 1]
+    return np.concatenate([values[1:count + 1], values[-1:].repeat(count + 1 - len(values), axis=0)])
 
 
 def preceding(values, count, periodic):
@@ -50,12 +53,14 @@ def preceding(values, count, periodic):
     (x[-1] mirrors x[1]); a periodic one wraps to values[-1]."""
     if periodic:
         return np.roll(values, 1, axis=0)
-    return values[np.maximum(np.arange(-1, count - 1), 0)]
+    return np.concatenate([values[:min(count, 1)], values[:max(count - 1, 0)]])
 
 
 def extended(values, count):
     """values[k] for k < count, repeating the last one past the end (x[n] mirrors x[n - 2])."""
-    return values[np.minimum(np.arange(count), len(values) - 1)]
+    if count <= len(values):
+        return values[:count]
+    return np.concatenate([values, values[-1:].repeat(count - len(values), axis=0)])
 
 
 def lift(even, odd, steps, cyclic, sign):

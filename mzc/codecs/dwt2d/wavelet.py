@@ -12,6 +12,7 @@ lifts with symmetric extension (``mzc.codecs.dwt2d.lifting``), 2.0 files are rea
 periodization, which joined a grid's opposite edges.
 """
 
+import functools
 import warnings
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -332,7 +333,8 @@ def slope_factors(approximation, levels, geometry, shapes, limit):
     lean = area_factor(values, (scale * geometry.d1, scale * geometry.d2), (h_u, h_v), geometry.periodic)
     with np.errstate(divide="ignore", invalid="ignore"):
         factor = np.fmin(limit, np.sqrt(lean / (h_u * h_v)))
-    return [resample(resample(factor, shape[0], 0), shape[1], 1) for shape in shapes]
+    down = {rows: resample(factor, rows, 0) for rows in {shape[0] for shape in shapes}}   # bands sharing a row count
+    return [resample(down[shape[0]], shape[1], 1) for shape in shapes]
 
 
 def coarse_metric(values, scale, geometry):
@@ -411,10 +413,21 @@ def resample(values, size, axis):
     n = values.shape[axis]
     if n == 1:
         return np.repeat(values, size, axis=axis)
+    low, high, weight, complement = resampling(n, size, axis, values.ndim)
+    return np.take(values, low, axis=axis) * complement + np.take(values, high, axis=axis) * weight
+
+
+@functools.lru_cache(maxsize=256)
+def resampling(n, size, axis, ndim):
+    """(lower input cell, upper one, weight of the upper, 1 - weight) of each output cell of
+    ``resample``: the same few shapes recur at every step the rate control tries."""
     position = np.clip((np.arange(size) + 0.5) * n / size - 0.5, 0, n - 1)
     low = np.minimum(position.astype(np.int64), n - 2)
-    weight = (position - low).reshape([-1 if a == axis else 1 for a in range(values.ndim)])
-    return np.take(values, low, axis=axis) * (1 - weight) + np.take(values, low + 1, axis=axis) * weight
+    weight = (position - low).reshape([-1 if a == axis else 1 for a in range(ndim)])
+    arrays = low, low + 1, weight, 1 - weight
+    for array in arrays:   # shared by every call
+        array.flags.writeable = False
+    return arrays
 
 
 def step_maps(steps, approximation_q, levels, geometry, shapes, limit):
@@ -433,13 +446,14 @@ def round_step(step):
     return float(f"{step:.4g}")
 
 
-def quantise_band(band, step, deadzone=0.5):
-    """Integers floor(|c|/step + 1 - deadzone) with c's sign (deadzone 0.5 = rounding);
-    ``step`` is one number or one per coefficient."""
-    scaled = np.abs(band) / step
+def quantise_band(magnitude, sign, step, deadzone=0.5):
+    """Integers floor(|c|/step + 1 - deadzone) with c's sign (deadzone 0.5 = rounding), from
+    ``magnitude`` |c| and ``sign`` sign(c) of a band (taken once: the rate control quantises
+    the same bands at every step it tries); ``step`` is one number or one per coefficient."""
+    scaled = magnitude / step
     if scaled.size and scaled.max() >= MAX_QUANTUM:
         raise MzcError(f"quantisation step {np.min(step):g} is too small for these heights")
-    return (np.sign(band) * np.floor(scaled + 1.0 - deadzone)).astype(np.int64)
+    return (sign * np.floor(scaled + 1.0 - deadzone)).astype(np.int64)
 
 
 def dequantise(qflat, steps):
