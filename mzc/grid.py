@@ -16,6 +16,7 @@ import numpy as np
 from mzc import projections
 from mzc.errors import MzcError
 from mzc.limits import length_problem
+from mzc.vectors import rotated
 
 IDENTITY_TRANSFORM = np.hstack([np.eye(3), np.zeros((3, 1))])
 TOKEN = re.compile(r"[^\s\x00-\x1f\x7f]{1,64}")   # one header token: no space, no control character
@@ -123,12 +124,12 @@ class ZGrid:
     def to_input_frame(self, points: np.ndarray) -> np.ndarray:
         """Map (..., 3) grid-frame points to the input surface's frame."""
         rotation, shift = self.transform[:, :3], self.transform[:, 3]
-        return points @ rotation.T + shift
+        return rotated(points, rotation) + shift
 
     def to_grid_frame(self, points: np.ndarray) -> np.ndarray:
         """Map (..., 3) input-frame points to the grid frame (inverse of to_input_frame)."""
         rotation, shift = self.transform[:, :3], self.transform[:, 3]
-        return (points - shift) @ rotation
+        return rotated(points - shift, rotation.T)
 
     def with_z(self, z: np.ndarray, **changes) -> "ZGrid":
         """A copy with new values (and any other fields changed)."""

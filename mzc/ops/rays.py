@@ -13,7 +13,8 @@ the grid's azimuth window. Each candidate gets an exact ray-triangle test.
 
 import numpy as np
 
-from mzc.ops.raster import BARYCENTRIC_TOLERANCE, candidate_chunks, candidate_nodes, index_range, of_each_row
+from mzc.ops.raster import BARYCENTRIC_TOLERANCE, candidate_chunks, candidate_nodes, index_range
+from mzc.vectors import of_each_row
 
 TURN = 2 * np.pi
 

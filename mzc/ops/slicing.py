@@ -13,8 +13,9 @@ import numpy as np
 from mzc.errors import MzcError
 from mzc.grid import ZGrid
 from mzc.limits import MAX_DIMENSION, check_grid_size, length_problem
-from mzc.ops.raster import lengths, of_each_row, rasterize
+from mzc.ops.raster import rasterize
 from mzc.ops.rays import cast
+from mzc.vectors import lengths, of_each_row, rotated
 
 DEFAULT_ROWS = 72           # the thesis cuts a face with about 70 horizontal planes (--thesis-grid)
 COLUMN_STEP_RATIO = 10      # and uses about 10x as many vertical planes: d2 = d1/10
@@ -135,7 +136,7 @@ def slice_in_frame(mesh, rotation, shift, d1=None, d2=None, rows=None, cols=None
     """
     from mzc.projections import to_nodes
 
-    local = (mesh.points - shift) @ rotation
+    local = rotated(mesh.points - shift, rotation.T)
     nodes = to_nodes(projection, radius, local)
     low, high = nodes[:, :2].min(axis=0), nodes[:, :2].max(axis=0)
     lattice = lattice_steps(nodes[:, :2]) if projection == "planar" else None

@@ -35,7 +35,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from mzc.errors import MzcError
-from mzc.ops.raster import lengths
+from mzc.vectors import dotted, lengths
 
 FACING_COSINE = 0.5          # 60 degrees between the normal and the node line
 PLANAR_MARGIN = 0.05         # a central projection must see 5% more of the area than planar
@@ -163,7 +163,7 @@ class Facets:
         """Which way along ``direction`` the surface faces: the sign of its area-weighted
         normal (its winding, or the normals a cloud's file gives); + when the normals are
         unoriented (a bare cloud: which side it was seen from is not in its points)."""
-        return float(np.dot(self.area, self.normal @ direction)) if self.oriented else 1.0
+        return float(np.dot(self.area, dotted(self.normal, direction))) if self.oriented else 1.0
 
     def share(self, rays):
         """Area share of the facets whose normal is within 60 degrees of their (unit) ray.
@@ -200,7 +200,7 @@ class Facets:
         """(offsets of the facets from the centre, or from the axis for a cylinder; their lengths)."""
         offset = self.centroid - centre
         if kind == "cylindrical":
-            offset = offset - np.outer(offset @ axis, axis)
+            offset = offset - dotted(offset, axis)[:, None] * axis
         return offset, lengths(offset)
 
 
@@ -303,10 +303,10 @@ def central_view(points, kind, centre, axis, view):
         raise MzcError("must be three finite numbers", field="center")
     offset = np.asarray(points, dtype=float) - centre
     axis = unit(axis, "axis")
-    across = offset - np.outer(offset @ axis, axis)
+    across = offset - dotted(offset, axis)[:, None] * axis
     reference = perpendicular(view, axis)
     side = np.cross(axis, reference)
-    middle, full_turn = azimuth_middle(np.arctan2(across @ side, across @ reference))
+    middle, full_turn = azimuth_middle(np.arctan2(dotted(across, side), dotted(across, reference)))
     middle = np.radians(np.round(np.degrees(middle)))   # whole degrees: no turn at all when near the view
     front = reference if middle == 0 else np.cos(middle) * reference + np.sin(middle) * side
     rotation = np.column_stack([np.cross(axis, front), axis, front])
