@@ -40,6 +40,7 @@ import sys
 import tempfile
 import threading
 import time
+import warnings
 from importlib import metadata
 from pathlib import Path
 
@@ -80,7 +81,7 @@ QUICK_SIZES = (0.01, 0.04)
 REPEATS = 5
 QUICK_REPEATS = 1
 SCALE_REPEATS_BELOW = 2.0       # sizes under this many M nodes are run 3 times (median), larger ones once
-STAGE_TIMEOUT = 400.0           # seconds per scaling stage
+STAGE_TIMEOUT = 600.0           # seconds per scaling stage
 MEMORY_CAP_GB = 12.0            # address-space cap of a scaling stage: fails cleanly instead of swamping the box
 TERRAIN_STEP = 0.5              # mm between the synthetic grid's nodes, as the face grids
 SEED = 15
@@ -244,12 +245,14 @@ def grid_psnr(grid, rmse=RMSE):
 
 
 def node_rms(reference, decoded):
-    """RMS distance between the nodes of a grid's mesh and those of its decoded mesh (the same
-    connectivity): the error a grid contender made, for context."""
-    points, triangles = reference
-    if len(decoded[0]) != len(points) or not np.array_equal(decoded[1], triangles):
-        return None
-    return float(np.sqrt(np.mean(np.sum((decoded[0] - points) ** 2, axis=1))))
+    """RMS distance (mm) from each vertex of a decoded grid mesh to the nearest vertex of the sliced
+    grid's mesh: the node error a grid contender made, for context. Nearest, not same-index,
+    since a decode may drop or keep a vertex the other mesh does not (a triangle more or
+    less at a depth jump); for errors well under the node spacing the nearest is the same node."""
+    from scipy.spatial import cKDTree
+
+    distances, _ = cKDTree(reference[0]).query(decoded[0])
+    return float(np.sqrt(np.mean(distances ** 2)))
 
 
 def api_tasks(mesh, grids, missing):
@@ -260,7 +263,9 @@ def api_tasks(mesh, grids, missing):
     node RMS error of each coder's output. Making the inputs also warms every import.
     """
     import mzc
+    from mzc.errors import MzcWarning
 
+    warnings.simplefilter("ignore", MzcWarning)   # the planar grid's "meets only 49% of the area": known
     table = {c.name: c for c in contenders.all_contenders()[0]}
     tasks, facts = {}, {}
     pair = (mesh.points, mesh.triangles)
@@ -636,8 +641,10 @@ def peer_section(d):
     draco = facts.get("Draco")
     lines = ["## Beside Draco, JPEG 2000 and SPERR (in process)", "",
              "Medians (min) of the rounds in ms; ratios are of medians, to Draco's encode and decode of the "
-             "original mesh. Bytes are the file as stored; RMS is the node error of the decoded grid's mesh "
-             "against the sliced grid's (mm; Draco's vertices are reordered, so none).", "",
+             "original mesh. Bytes are the file as stored; RMS (mm) is the node error: each decoded vertex's distance "
+             "to the nearest vertex of the sliced grid's mesh (none for Draco, which codes the original mesh). "
+             f"mzc's `--rmse {RMSE}` is a target for the distance between the surfaces, along their normals; the "
+             "node error, along the node lines, is larger where the surface leans from them.", "",
              "| coder | input | setting | bytes | RMS mm | encode ms | min | / Draco | decode ms | min | / Draco |",
              "|---|---|---|---|---|---|---|---|---|---|---|"]
 
