@@ -274,3 +274,72 @@ def test_draco_at_14_bits_beats_draco_at_8_bits(quick_run):
     for part in ("whole", "heightfield"):
         assert draco[14][part]["rms"] < draco[8][part]["rms"] / 10
     assert draco[14]["bytes"] > draco[8]["bytes"]
+
+
+# --------------------------------------------------------------------------- the speed benchmark
+
+SPEED = REPO / "benchmarks" / "speed.py"
+SPEED_SECTIONS = ("# mzc speed benchmark", "## Done-when checks", "## Method",
+                  "## Start-up and the five-filter pipeline", "## Every stage on f18",
+                  "## Beside Draco, JPEG 2000 and SPERR", "## Scaling")
+
+
+@pytest.fixture(scope="module")
+def speed_run(tmp_path_factory):
+    """benchmarks/speed.py --quick into a temporary folder, run once for the tests below."""
+    for package in ("DracoPy", "imagecodecs"):
+        pytest.importorskip(package)
+    face_path("f18.ply")
+    out = tmp_path_factory.mktemp("speed")
+    subprocess.run([sys.executable, str(SPEED), "--quick", "--out", str(out)], check=True, capture_output=True,
+                   timeout=120)
+    return (out / "speed-results.md").read_text(), json.loads((out / "speed-results.json").read_text())
+
+
+def test_speed_report_has_every_section_and_a_verdict_per_check(speed_run):
+    text, document = speed_run
+    positions = [text.index(section) for section in SPEED_SECTIONS]
+    assert positions == sorted(positions)
+    assert len(document["checks"]) == 11   # 2 pipeline, 2 Draco ratios, 3 memory, 4 exponents (quick: one grid)
+    for label, _measured, _ok in document["checks"]:
+        assert f"| {label} |" in text
+    assert document["commit"] and len(document["load"]) == 4
+
+
+def test_speed_figures_are_positive_numbers(speed_run):
+    _, document = speed_run
+    cli = document["cli"]
+    for row in ("python -c pass", 'python -c "import numpy"', "mzc --help", "pipeline default",
+                "default: slice", "default: encode", "default: decode", "default: densify -n 3",
+                "default: triangulate"):
+        assert cli[row]["ok"] == cli[row]["runs"] >= 1, (row, cli[row]["error"])
+        assert cli[row]["median_s"] > 0 and cli[row]["peak_mb"] > 0
+    assert all(row["median_s"] > 0 and row["min_s"] > 0 for row in document["api"].values())
+    assert {"Draco: encode", "Draco: decode", "default: encode", "default: decode", "default: SPERR encode",
+            "default: JPEG 2000 lossless decode"} <= set(document["api"])
+    assert all(fact["bytes"] > 0 for fact in document["facts"].values())
+    rows = document["scaling"]
+    assert len(rows) == 2 * 4
+    assert all(r["status"] == "ok" and r["wall_s"] > 0 and r["cpu_s"] > 0 and r["peak_mb"] > 0 for r in rows)
+
+
+def test_speed_records_a_failed_stage_as_a_row():
+    import speed
+
+    timeout = speed.run_command([sys.executable, "-c", "import time; time.sleep(30)"], timeout=0.5)
+    assert timeout["status"] == "timeout" and timeout["wall_s"] < 10
+    memory = speed.run_command([sys.executable, "-c", "import numpy; numpy.ones(2 * 10**9)"], memory_cap=1e9)
+    assert memory["status"] == "out of memory", memory
+    failed = speed.run_command([sys.executable, "-c", "raise SystemExit('no')"])
+    assert failed["status"] == "failed" and "no" in failed["error"]
+    ok = speed.run_command([sys.executable, "-c", "import numpy; numpy.ones(10**8)"])
+    assert ok["status"] == "ok" and 700 < ok["peak_mb"] < 1200   # the child's own 800 MB, not this process's
+
+
+def test_speed_terrain_is_a_seeded_grid_with_an_elliptic_mask():
+    import speed
+
+    grid = speed.terrain(40, 50, 3)
+    assert grid.shape == (40, 50) and np.array_equal(grid.z, speed.terrain(40, 50, 3).z, equal_nan=True)
+    assert 0.7 < grid.valid.mean() < 0.85 and grid.valid[20, 25] and not grid.valid[0, 0]
+    assert speed.grid_shape(25.0) == (4472, 5590)
