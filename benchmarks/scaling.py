@@ -73,13 +73,19 @@ def terrain(rows, cols, seed):
     return z
 
 
+def terrain_grid(rows, cols, seed):
+    """The ``terrain`` as a planar ZGrid, SPACING metres between nodes."""
+    from mzc.grid import ZGrid
+
+    return ZGrid(terrain(rows, cols, seed), SPACING, SPACING, units="m")
+
+
 def write_terrain(path, millions, seed=15):
     """Write a square terrain of about ``millions`` million nodes as a raw float64 z-grid; its shape."""
     from mzc.formats import zgrid
-    from mzc.grid import ZGrid
 
     side = int(round(math.sqrt(millions * 1e6)))
-    grid = ZGrid(terrain(side, side, seed), SPACING, SPACING, units="m")
+    grid = terrain_grid(side, side, seed)
     path.write_bytes(zgrid.write(grid, raw="float64"))
     return grid.z.shape
 

@@ -51,6 +51,8 @@ sys.path.insert(0, str(HERE))
 
 import contenders  # noqa: E402 - after the path to this folder
 from report import machine, run_stages  # noqa: E402
+from scaling import RMSE as TERRAIN_RMSE  # noqa: E402
+from scaling import terrain_grid  # noqa: E402
 
 FACES = HERE.parent.parent / "shared" / "data" / "faces"
 FACE = "f18.ply"
@@ -67,6 +69,7 @@ CHECKED_GRIDS = ("0.5 mm", "0.5 mm planar")   # the done-when conditions speak o
 QUICK_GRIDS = ("default",)      # the smallest grid: the quick run is a test of the harness
 RMSE = 0.05                     # mm: `mzc encode --dwt2d --rmse 0.05`
 ENCODE = ["--dwt2d", "--rmse", str(RMSE)]
+SCALE_ENCODE = ["--dwt2d", "--rmse", str(TERRAIN_RMSE)]   # the terrain is in metres
 DENSIFY = 3                     # rows inserted on f18 (the pipeline's -n 3)
 SCALE_DENSIFY = 1               # and at scale (-n 1)
 DRACO_BITS = 11                 # f18 spans 210 mm: steps of 0.1 mm, about the RMS error of --rmse 0.05
@@ -83,7 +86,6 @@ QUICK_REPEATS = 1
 SCALE_REPEATS_BELOW = 2.0       # sizes under this many M nodes are run 3 times (median), larger ones once
 STAGE_TIMEOUT = 600.0           # seconds per scaling stage
 MEMORY_CAP_GB = 12.0            # address-space cap of a scaling stage: fails cleanly instead of swamping the box
-TERRAIN_STEP = 0.5              # mm between the synthetic grid's nodes, as the face grids
 SEED = 15
 PACKAGES = ("numpy", "scipy", "PyWavelets", "constriction", "DracoPy", "imagecodecs")
 SCALE_STAGES = ("encode", "decode", f"densify -n {SCALE_DENSIFY}", "triangulate")
@@ -331,37 +333,6 @@ def api_rounds(tasks, repeats):
 # --------------------------------------------------------------------------- scaling
 
 
-def terrain(rows, cols, seed):
-    """A planar z-grid (``ZGrid``, 0.5 mm spacing) of ``rows`` x ``cols`` nodes that codes like a
-    scan: eight octaves of plane waves (wavelengths 200 mm down to 1.6 mm, amplitude
-    proportional to wavelength, random directions and phases), 0.01 mm of white noise, and
-    the nodes outside the inscribed ellipse invalid (about 21%), so the mask coder, the
-    fill and the spans work as on a face.
-
-    The spacing is fixed, not the extent: a larger grid is a larger scanned area with the
-    same detail per node, so time per node should stay flat. Vectorised: each wave
-    sin(kx x + ky y + p) is sin(kx x) cos(ky y + p) + cos(kx x) sin(ky y + p), two outer
-    products, so a 25 M-node grid takes seconds and about 1 GB.
-    """
-    from mzc.grid import ZGrid
-
-    rng = np.random.default_rng(seed)
-    y, x = TERRAIN_STEP * np.arange(rows), TERRAIN_STEP * np.arange(cols)
-    z = np.zeros((rows, cols))
-    for octave in range(8):
-        wavelength = 200.0 / 2 ** octave
-        k, angle, phase = 2 * np.pi / wavelength, rng.uniform(0, np.pi), rng.uniform(0, 2 * np.pi)
-        kx, ky = k * np.cos(angle), k * np.sin(angle)
-        amplitude = 0.1 * wavelength
-        z += np.outer(amplitude * np.cos(ky * y + phase), np.sin(kx * x))
-        z += np.outer(amplitude * np.sin(ky * y + phase), np.cos(kx * x))
-    z += rng.normal(0.0, 0.01, z.shape)
-    v = (np.arange(rows) - (rows - 1) / 2) / (rows / 2)
-    u = (np.arange(cols) - (cols - 1) / 2) / (cols / 2)
-    z[v[:, None] ** 2 + u[None, :] ** 2 > 1.0] = np.nan
-    return ZGrid(z, TERRAIN_STEP, TERRAIN_STEP, units="mm")
-
-
 def grid_shape(mnodes):
     """(rows, cols) of about ``mnodes`` million nodes, 4:5 as a face grid."""
     rows = max(2, round(math.sqrt(mnodes * 1e6 * 0.8)))
@@ -373,7 +344,7 @@ def scale_commands(folder):
     generated grid itself (the decoded one has the same nodes; this keeps them independent of
     a failed encode)."""
     grid, coded, back = folder / "grid.zg", folder / "grid.mzw2", folder / "back.zg"
-    return [("encode", mzc_command("encode", *ENCODE, grid, "-o", coded), grid),
+    return [("encode", mzc_command("encode", *SCALE_ENCODE, grid, "-o", coded), grid),
             ("decode", mzc_command("decode", coded, "-o", back), coded),
             (SCALE_STAGES[2], mzc_command("densify", "-n", SCALE_DENSIFY, grid, "-o", folder / "dense.zg"), grid),
             ("triangulate", mzc_command("triangulate", grid, "-o", folder / "mesh.ply"), grid)]
@@ -390,7 +361,7 @@ def scaling(sizes, folder, timeout, memory_cap, quick):
         shape = grid_shape(mnodes)
         progress(f"scaling {mnodes:g} M nodes {shape}: generating")
         start = time.perf_counter()
-        mzc.write(folder / "grid.zg", terrain(*shape, SEED))
+        mzc.write(folder / "grid.zg", terrain_grid(*shape, SEED))
         generated = time.perf_counter() - start
         gc.collect()
         repeats = 1 if quick or mnodes >= SCALE_REPEATS_BELOW else 3
@@ -582,9 +553,9 @@ def markdown(document):
         "by mzc's mask coder and the invalid nodes filled by mzc's harmonic fill before coding (the fill is "
         "timed on its own too); their decode, like Draco's, ends in a mesh, so mzc's `decode to mesh` "
         "(decode + triangulate) is the like-for-like figure, `decode` (to the z-grid) the issue's.",
-        f"- Scaling: `terrain(rows, cols, seed)` of this script (planar, {TERRAIN_STEP} mm spacing, eight octaves "
-        "of plane waves plus 0.01 mm of noise, the nodes outside the inscribed ellipse invalid), written as a raw "
-        f"z-grid; then `mzc encode {' '.join(ENCODE)}`, `mzc decode` of its output, `mzc densify -n "
+        "- Scaling: `terrain_grid(rows, cols, seed)` of `benchmarks/scaling.py` (planar, 1 m spacing, octaves "
+        "of smooth noise, a wobbly border and interior holes), written as a raw "
+        f"z-grid; then `mzc encode {' '.join(SCALE_ENCODE)}`, `mzc decode` of its output, `mzc densify -n "
         f"{SCALE_DENSIFY}` and `mzc triangulate -o mesh.ply` of the grid, each a process with a time limit of "
         f"{s['stage_timeout']:g} s and an address-space cap (RLIMIT_AS) of {s['memory_cap_gb']:g} GB; sizes under "
         f"{SCALE_REPEATS_BELOW:g} M nodes run 3 times (median), larger ones once. The exponent is the slope of "

@@ -336,10 +336,11 @@ def test_speed_records_a_failed_stage_as_a_row():
     assert ok["status"] == "ok" and 700 < ok["peak_mb"] < 1200   # the child's own 800 MB, not this process's
 
 
-def test_speed_terrain_is_a_seeded_grid_with_an_elliptic_mask():
+def test_the_terrain_is_a_seeded_grid_with_a_border_and_holes():
+    import scaling
     import speed
 
-    grid = speed.terrain(40, 50, 3)
-    assert grid.shape == (40, 50) and np.array_equal(grid.z, speed.terrain(40, 50, 3).z, equal_nan=True)
-    assert 0.7 < grid.valid.mean() < 0.85 and grid.valid[20, 25] and not grid.valid[0, 0]
+    grid = scaling.terrain_grid(300, 400, 3)
+    assert grid.shape == (300, 400) and np.array_equal(grid.z, scaling.terrain_grid(300, 400, 3).z, equal_nan=True)
+    assert 0.5 < grid.valid.mean() < 0.8 and grid.valid[150, 200] and not grid.valid[0, 0]
     assert speed.grid_shape(25.0) == (4472, 5590)
