@@ -241,9 +241,10 @@ def machine():
             f"Python {platform.python_version()}")
 
 
-def versions():
+def versions(packages=PACKAGES):
+    """{package: version} of ``packages``, "absent" for those not installed."""
     found = {}
-    for name in PACKAGES:
+    for name in packages:
         try:
             found[name] = metadata.version(name)
         except metadata.PackageNotFoundError:

@@ -41,7 +41,6 @@ import tempfile
 import threading
 import time
 import warnings
-from importlib import metadata
 from pathlib import Path
 
 import numpy as np
@@ -50,7 +49,7 @@ HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE))
 
 import contenders  # noqa: E402 - after the path to this folder
-from report import machine, run_stages  # noqa: E402
+from report import machine, run_stages, versions  # noqa: E402
 from scaling import RMSE as TERRAIN_RMSE  # noqa: E402
 from scaling import terrain_grid  # noqa: E402
 
@@ -87,7 +86,7 @@ SCALE_REPEATS_BELOW = 2.0       # sizes under this many M nodes are run 3 times 
 STAGE_TIMEOUT = 600.0           # seconds per scaling stage
 MEMORY_CAP_GB = 12.0            # address-space cap of a scaling stage: fails cleanly instead of swamping the box
 SEED = 15
-PACKAGES = ("numpy", "scipy", "PyWavelets", "constriction", "DracoPy", "imagecodecs")
+PACKAGES = ("numpy", "scipy", "PyWavelets", "constriction", "numba", "DracoPy", "imagecodecs")
 SCALE_STAGES = ("encode", "decode", f"densify -n {SCALE_DENSIFY}", "triangulate")
 MEMORY_STAGES = SCALE_STAGES[:3]   # the issue's memory condition: encode, decode, densify
 
@@ -484,17 +483,6 @@ def git_commit():
     return commit + (" + uncommitted changes" if git("status", "--porcelain", "--untracked-files=no") else "")
 
 
-def versions():
-    """{package: version} of mzc's numerics and the peers' packages."""
-    found = {}
-    for name in PACKAGES:
-        try:
-            found[name] = metadata.version(name)
-        except metadata.PackageNotFoundError:
-            found[name] = "absent"
-    return found
-
-
 def ms(seconds):
     return "n/a" if seconds is None else f"{1000 * seconds:.1f}"
 
@@ -734,7 +722,7 @@ def main(argv=None):
     grid_facts = {name: facts[f"{name}: mzc dwt2d --rmse {RMSE}"].pop("grid") for name in grids}
     document = {
         "generated": f"{datetime.datetime.now().astimezone():%Y-%m-%d %H:%M %Z}", "commit": git_commit(),
-        "machine": machine(), "versions": versions(), "load": load,
+        "machine": machine(), "versions": versions(PACKAGES), "load": load,
         "settings": {"argv": sys.argv[1:] if argv is None else list(argv), "quick": args.quick,
                      "repeats": args.repeats, "sizes": list(args.sizes), "stage_timeout": args.stage_timeout,
                      "memory_cap_gb": args.memory_cap_gb, "rmse": RMSE, "densify": DENSIFY,
