@@ -24,14 +24,13 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from mzc import projections
 from mzc.meshes import Mesh
 
 if TYPE_CHECKING:
     from mzc.grid import ZGrid
 
 JUMP_ANGLE = 3.0   # degrees between an edge and the node line below which the edge is a jump
-JUMP_STRIP_NODES = 1 << 20   # nodes whose points jump_edges makes at a time when it is given none
+STRIP_NODES = 1 << 20   # nodes whose edges jump_edges tests at a time
 
 
 @dataclass
@@ -46,49 +45,97 @@ class Jumps:
     diagonal: np.ndarray
 
 
-def jump_edges(grid, angle=None, points=None):
+def jump_edges(grid, angle=None):
     """The Jumps of a ZGrid: edges between valid nodes within ``angle`` degrees (default
     JUMP_ANGLE) of the node line through their midpoint (none when ``angle`` is 0); edges
     along a pole row join nodes of one ray, which are one vertex, and are never jumps.
-    ``points``: the grid's ``node_points()`` when the caller has them already; without, they
-    are made a strip of rows at a time (each edge's test sees only its two nodes, so the
-    jumps are the same), which keeps the memory a strip's (several times 24 bytes a node in
-    passing), not the grid's."""
+
+    Each edge's test reads its two nodes' values and where the grid puts their lines
+    (``is_jump``), so the grid is tested a strip of rows at a time (``row_strips``): the
+    temporaries are a strip's (several times 8 bytes a node), not the grid's."""
+    parts = [jumps_between(grid, low, high, angle) for low, high in row_strips(grid.shape)]
+    last = len(parts) - 1
+    return Jumps(across=np.concatenate([part.across for part in parts]),
+                 along=np.concatenate([part.along[: None if i == last else -1] for i, part in enumerate(parts)]),
+                 diagonal=np.concatenate([part.diagonal for part in parts]))
+
+
+def row_strips(shape):
+    """(low, high) per strip of about STRIP_NODES nodes: the cells between rows low and high
+    (the last strip's high is the last row; a grid of one row is one strip of no cells)."""
+    rows, step = shape[0], max(1, STRIP_NODES // shape[1])
+    return [(low, min(low + step, rows - 1)) for low in range(0, max(rows - 1, 1), step)]
+
+
+def jumps_between(grid, low, high, angle=None):
+    """The Jumps of the edges between rows low..high of ``grid`` (``jump_edges``)."""
     angle = JUMP_ANGLE if angle is None else angle
-    if points is not None:
-        jumps = jumps_between(points, grid.projection, grid.periodic, angle)
-    else:
-        rows, step = grid.shape[0], max(1, JUMP_STRIP_NODES // grid.shape[1])
-        starts = range(0, max(rows - 1, 1), step)
-        parts = [jumps_between(grid.node_points(slice(low, min(low + step, rows - 1) + 1)), grid.projection,
-                               grid.periodic, angle) for low in starts]
-        last = len(parts) - 1
-        jumps = Jumps(across=np.concatenate([part.across for part in parts]),
-                      along=np.concatenate([part.along[: None if i == last else -1] for i, part in enumerate(parts)]),
-                      diagonal=np.concatenate([part.diagonal for part in parts]))
-    jumps.along[grid.pole_rows()] = False
+    z = grid.z[low:high + 1]
+    if grid.periodic:
+        z = np.concatenate([z, z[:, :1]], axis=1)
+    if angle <= 0:
+        return Jumps(across=np.zeros((len(z) - 1, z.shape[1]), dtype=bool),
+                     along=np.zeros((len(z), z.shape[1] - 1), dtype=bool),
+                     diagonal=np.zeros((len(z) - 1, z.shape[1] - 1), dtype=bool))
+    chords = EdgeChords.of(grid, grid.ys()[low:high + 1])
+    cosine2 = np.cos(np.radians(angle)) ** 2
+    jumps = Jumps(across=is_jump(z[:-1], z[1:], chords.across, cosine2),
+                  along=is_jump(z[:, :-1], z[:, 1:], chords.along, cosine2),
+                  diagonal=is_jump(z[:-1, 1:], z[1:, :-1], chords.diagonal, cosine2))
+    jumps.along[grid.pole_rows()[low:high + 1]] = False
     return jumps
 
 
-def jumps_between(points, projection, periodic, angle):
-    """The Jumps of the edges between grid-frame node ``points`` (rows, cols, 3), pole rows aside."""
-    if periodic:
-        points = np.concatenate([points, points[:, :1]], axis=1)
-    cosine = np.cos(np.radians(angle))
-    return Jumps(across=is_jump(points[:-1], points[1:], projection, cosine, angle),
-                 along=is_jump(points[:, :-1], points[:, 1:], projection, cosine, angle),
-                 diagonal=is_jump(points[:-1, 1:], points[1:, :-1], projection, cosine, angle))
+@dataclass
+class EdgeChords:
+    """The grid's geometry as each kind of edge sees it: (spread, rise) for edges ``across``
+    rows, ``along`` them and along the cells' ``diagonal``s, each a number or a column of one
+    per row (per row pair), such that the edge between nodes of values a and b has
+
+        |e|^2 = (b - a)^2 + a b spread + rise   and   4 |m|^2 = (a + b)^2 - a b spread,
+
+    m the part of its midpoint that fixes the node line through it (its projection on the xz
+    plane for cylindrical grids, the point itself for spherical ones; None on planar grids,
+    whose lines are all +z). For central grids spread = 2 - 2 cos(angle between the rays)
+    and rise the squared step along the axis; for planar ones rise is the squared step
+    across the lines."""
+
+    across: tuple
+    along: tuple
+    diagonal: tuple
+
+    @classmethod
+    def of(cls, grid, ys):
+        """The chords of ``grid``'s edges between the rows at ``ys``."""
+        d1, d2 = grid.d1, grid.d2
+        if grid.projection == "planar":
+            return cls(across=(None, d1 * d1), along=(None, d2 * d2), diagonal=(None, d1 * d1 + d2 * d2))
+        turn = 4 * np.sin(d2 / grid.radius / 2) ** 2             # 2 - 2 cos of the columns' angle
+        if grid.projection == "cylindrical":
+            return cls(across=(0.0, d1 * d1), along=(turn, 0.0), diagonal=(turn, d1 * d1))
+        ring = np.cos(ys / grid.radius)[:, None]                 # spherical: rows are cones of elevation ys / R
+        tilt = 4 * np.sin(d1 / grid.radius / 2) ** 2
+        return cls(across=(tilt, 0.0), along=(ring * ring * turn, 0.0),
+                   diagonal=(tilt + ring[:-1] * ring[1:] * turn, 0.0))
 
 
-def is_jump(start, end, projection, cosine, angle):
-    """Per edge from ``start`` to ``end`` (grid-frame points, NaN where invalid): True where it
-    lies within the angle whose cosine is ``cosine`` of the node line through its midpoint."""
-    if angle <= 0:
-        return np.zeros(start.shape[:-1], dtype=bool)
-    ex, ey, ez = (end[..., i] - start[..., i] for i in range(3))
-    lx, ly, lz = projections.directions_through(projection, *((start[..., i] + end[..., i]) / 2 for i in range(3)))
-    with np.errstate(invalid="ignore"):
-        return np.abs(ex * lx + ey * ly + ez * lz) > cosine * np.sqrt(ex * ex + ey * ey + ez * ez)
+def is_jump(start, end, chord, cosine2):
+    """Per edge between nodes of values ``start`` and ``end`` (NaN where invalid), whose
+    geometry is ``chord`` = (spread, rise) (``EdgeChords``): True where the edge e lies within
+    the angle whose squared cosine is ``cosine2`` of the node line through its midpoint m.
+
+    With a, b the values, e . m = (b^2 - a^2) / 2 (both points lie at their value's distance
+    along their lines), so |e . d(m)| > cos(A) |e| (spec/zgrid.md) becomes
+    (b^2 - a^2)^2 > cos^2(A) |e|^2 4 |m|^2, and on planar grids (b - a)^2 > cos^2(A) |e|^2:
+    no points, square roots or divisions, and the same edges as the test on the points but
+    for an edge within rounding of the angle."""
+    spread, rise = chord
+    delta = end - start
+    if spread is None:
+        return delta * delta > cosine2 * (delta * delta + rise)
+    total = end + start
+    product = start * end * spread
+    return (delta * total) ** 2 > cosine2 * (delta * delta + product + rise) * (total * total - product)
 
 
 def grid_triangles(valid, periodic=False, jumps=None):
@@ -117,7 +164,7 @@ def grid_to_mesh(grid: "ZGrid", jump_angle: float | None = None) -> Mesh:
     JUMP_ANGLE; 0 keeps them all)."""
     valid = grid.valid
     nodes = grid.node_points()
-    triangles = grid_triangles(valid, grid.periodic, jump_edges(grid, jump_angle, nodes))
+    triangles = grid_triangles(valid, grid.periodic, jump_edges(grid, jump_angle))
     points = nodes.reshape(-1, 3)
     triangles = merge_poles(triangles, points, valid, grid.pole_rows())
     used = np.zeros(valid.size, dtype=bool)
