@@ -31,13 +31,23 @@ FULL_TURN_TOLERANCE = 1e-9   # relative: columns spanning 2 pi R0 this closely m
 def to_points(projection, radius, u, v, value):
     """Grid-frame points (..., 3) of nodes at (u, v) holding ``value`` (NaN stays NaN); the
     arrays broadcast, so a row of u and a column of v give a grid's nodes."""
+    return stacked(point_components(projection, radius, u, v, value))
+
+
+def point_components(projection, radius, u, v, value):
+    """(x, y, z): the grid-frame coordinates of ``to_points``, each as an array that broadcasts
+    to the shape of u, v and value together."""
     u, v, value = (np.asarray(a, dtype=float) for a in (u, v, value))
     if projection == "planar":
-        return np.stack(np.broadcast_arrays(u, v, value), axis=-1)
-    points = value[..., None] * ray_directions(projection, radius, u, v)
-    if projection == "cylindrical":
-        points[..., 1] = v
-    return points
+        return u, v, value
+    dx, dy, dz = ray_components(projection, radius, u, v)
+    return value * dx, v if projection == "cylindrical" else value * dy, value * dz
+
+
+def stacked(components, shape=()):
+    """(..., 3) from three arrays that broadcast together (and to ``shape``)."""
+    shape = np.broadcast_shapes(shape, *(np.shape(component) for component in components))
+    return np.stack([np.broadcast_to(component, shape) for component in components], axis=-1)
 
 
 def to_nodes(projection, radius, points):
@@ -54,21 +64,23 @@ def to_nodes(projection, radius, points):
 
 
 def ray_directions(projection, radius, u, v):
-    """Unit directions (..., 3) of the node lines at (u, v): +z for planar grids. The angles'
-    sines and cosines are taken before u and v broadcast (a row of u and a column of v: one
-    of each per column and per row, not per node)."""
+    """Unit directions (..., 3) of the node lines at (u, v): +z for planar grids."""
     u, v = np.asarray(u, dtype=float), np.asarray(v, dtype=float)
-    shape = np.broadcast_shapes(u.shape, v.shape)
+    return stacked(ray_components(projection, radius, u, v), np.broadcast_shapes(u.shape, v.shape))
+
+
+def ray_components(projection, radius, u, v):
+    """(dx, dy, dz): the components of ``ray_directions``, each as an array that broadcasts to
+    the shape of u and v. The angles' sines and cosines are taken before u and v broadcast (a
+    row of u and a column of v: one of each per column and per row, not per node)."""
     if projection == "planar":
-        return np.broadcast_to(np.array([0.0, 0.0, 1.0]), shape + (3,)).copy()
+        return np.zeros(()), np.zeros(()), np.ones(())
     azimuth = u / radius
     if projection == "cylindrical":
-        components = (np.sin(azimuth), np.zeros(()), np.cos(azimuth))
-    else:
-        elevation = v / radius
-        ring = np.cos(elevation)
-        components = (ring * np.sin(azimuth), np.sin(elevation), ring * np.cos(azimuth))
-    return np.stack([np.broadcast_to(component, shape) for component in components], axis=-1)
+        return np.sin(azimuth), np.zeros(()), np.cos(azimuth)
+    elevation = v / radius
+    ring = np.cos(elevation)
+    return ring * np.sin(azimuth), np.sin(elevation), ring * np.cos(azimuth)
 
 
 def ray_origins(projection, v):

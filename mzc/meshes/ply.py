@@ -39,24 +39,30 @@ def read(data: bytes, source: str) -> Mesh:
     return ply_mesh(elements, tables, source)
 
 
-def write(mesh: Mesh) -> bytes:
+def write(mesh: Mesh) -> bytearray:
     """Binary little-endian PLY bytes of ``mesh``: double x y z per vertex, then (unless it is a
     point cloud) a face element of uint8 counts and int32 indices, the layout meshio writes and
     every PLY reader knows, without meshio's import or the time stamp it puts in a comment (the
-    same mesh gives the same bytes)."""
-    header = ["ply", "format binary_little_endian 1.0", f"element vertex {len(mesh.points)}",
+    same mesh gives the same bytes). The vertices and faces are written straight into the one
+    buffer of the file (a bytearray): no copy of either, and no second copy to join them."""
+    points, triangles = mesh.points, mesh.triangles
+    header = ["ply", "format binary_little_endian 1.0", f"element vertex {len(points)}",
               "property double x", "property double y", "property double z"]
-    if len(mesh.points) > np.iinfo(np.int32).max:
-        raise MzcError(f"PLY's int32 indices cannot number {len(mesh.points)} vertices")
-    body = [np.ascontiguousarray(mesh.points, dtype="<f8").tobytes()]
-    if len(mesh.triangles):
-        header += [f"element face {len(mesh.triangles)}", "property list uint8 int32 vertex_indices"]
-        faces = np.empty(len(mesh.triangles), dtype=[("count", "u1"), ("indices", "<i4", (3,))])
-        faces["count"], faces["indices"] = 3, mesh.triangles
-        body.append(faces.tobytes())
-    return "\n".join(header + ["end_header", ""]).encode("ascii") + b"".join(body)
+    if len(points) > np.iinfo(np.int32).max:
+        raise MzcError(f"PLY's int32 indices cannot number {len(points)} vertices")
+    if len(triangles):
+        header += [f"element face {len(triangles)}", "property list uint8 int32 vertex_indices"]
+    head = "\n".join(header + ["end_header", ""]).encode("ascii")
+    data = bytearray(len(head) + FACE_RECORD.itemsize * len(triangles) + 24 * len(points))
+    data[:len(head)] = head
+    np.frombuffer(data, dtype="<f8", count=points.size, offset=len(head)).reshape(points.shape)[...] = points
+    if len(triangles):
+        faces = np.frombuffer(data, dtype=FACE_RECORD, count=len(triangles), offset=len(head) + 24 * len(points))
+        faces["count"], faces["indices"] = 3, triangles
+    return data
 
 
+FACE_RECORD = np.dtype([("count", "u1"), ("indices", "<i4", (3,))])   # a triangle as PLY writes it: 13 bytes
 PLY_TYPES = {
     "char": "i1", "int8": "i1", "uchar": "u1", "uint8": "u1", "short": "i2", "int16": "i2",
     "ushort": "u2", "uint16": "u2", "int": "i4", "int32": "i4", "uint": "u4", "uint32": "u4",

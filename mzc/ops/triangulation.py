@@ -24,13 +24,14 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from mzc.meshes import Mesh
+from mzc import projections
 
 if TYPE_CHECKING:
     from mzc.grid import ZGrid
+    from mzc.meshes import Mesh
 
 JUMP_ANGLE = 3.0   # degrees between an edge and the node line below which the edge is a jump
-STRIP_NODES = 1 << 20   # nodes whose edges jump_edges tests at a time
+STRIP_NODES = 1 << 20   # nodes whose edges, triangles or points are made at a time
 
 
 @dataclass
@@ -139,50 +140,107 @@ def is_jump(start, end, chord, cosine2):
 
 
 def grid_triangles(valid, periodic=False, jumps=None):
-    """Triangles (m, 3) over the flat node indices of a (rows, cols) validity mask; with
-    ``periodic`` the cells between the last column and the first too; with ``jumps`` (a
-    Jumps) only the triangles none of whose edges is a jump."""
+    """Triangles (m, 3) over the flat node indices of a (rows, cols) validity mask: those of
+    ``cell_triangles``, 1-2-3 first."""
+    return np.concatenate(cell_triangles(valid, periodic, jumps))
+
+
+def cell_triangles(valid, periodic=False, jumps=None):
+    """(first, second): the triangles 1-2-3 and 2-4-3 (each (m, 3), cell by cell, row by row)
+    over the flat node indices of a (rows, cols) validity mask, wherever their corners are
+    valid; with ``periodic`` the cells between the last column and the first too; with
+    ``jumps`` (a Jumps) only the triangles none of whose edges is a jump."""
     rows, cols = valid.shape
-    index = np.arange(rows * cols).reshape(rows, cols)
     if periodic:
-        index, valid = np.hstack([index, index[:, :1]]), np.hstack([valid, valid[:, :1]])
-    corner1, corner2 = index[:-1, :-1], index[:-1, 1:]
-    corner3, corner4 = index[1:, :-1], index[1:, 1:]
+        valid = np.hstack([valid, valid[:, :1]])
     keep_first = valid[:-1, :-1] & valid[:-1, 1:] & valid[1:, :-1]
     keep_second = valid[:-1, 1:] & valid[1:, 1:] & valid[1:, :-1]
     if jumps is not None:
         keep_first &= ~(jumps.along[:-1] | jumps.across[:, :-1] | jumps.diagonal)
         keep_second &= ~(jumps.across[:, 1:] | jumps.along[1:] | jumps.diagonal)
-    first = np.stack([corner1, corner2, corner3], axis=-1)[keep_first]
-    second = np.stack([corner2, corner4, corner3], axis=-1)[keep_second]
-    return np.concatenate([first, second]).reshape(-1, 3)
+
+    def corners(keep, which):
+        cell = np.flatnonzero(keep)
+        row, col = np.divmod(cell, keep.shape[1])
+        corner1 = row * cols + col
+        corner2 = corner1 + 1 if not periodic else row * cols + (col + 1) % cols
+        triangles = np.empty((len(cell), 3), dtype=np.int64)
+        triangles[:, 0], triangles[:, 1], triangles[:, 2] = (corner1, corner2, corner1 + cols) if which == 0 else \
+            (corner2, corner2 + cols, corner1 + cols)
+        return triangles
+
+    return corners(keep_first, 0), corners(keep_second, 1)
 
 
-def grid_to_mesh(grid: "ZGrid", jump_angle: float | None = None) -> Mesh:
+def grid_to_mesh(grid: "ZGrid", jump_angle: float | None = None) -> "Mesh":
     """The Mesh of a ZGrid (its ``grid`` set to it): valid nodes in the input frame, unused
     nodes dropped, no triangle across a depth jump of ``jump_angle`` degrees (default
-    JUMP_ANGLE; 0 keeps them all)."""
-    valid = grid.valid
-    nodes = grid.node_points()
-    triangles = grid_triangles(valid, grid.periodic, jump_edges(grid, jump_angle))
-    points = nodes.reshape(-1, 3)
-    triangles = merge_poles(triangles, points, valid, grid.pole_rows())
+    JUMP_ANGLE; 0 keeps them all); the triangles 1-2-3 of every cell first, row by row, then
+    the triangles 2-4-3.
+
+    Made a strip of rows at a time (``row_strips``): the triangles of each strip's cells,
+    then the points of the nodes they use, written into the mesh's arrays, so that the
+    memory beside the mesh is a strip's and the time linear in the nodes."""
+    from mzc.meshes import Mesh  # here: densify and encode find jumps without the mesh modules
+
+    valid, poles = grid.valid, grid.pole_rows()
+    parts = [strip_triangles(grid, valid, poles, low, high, jump_angle) for low, high in row_strips(grid.shape)]
     used = np.zeros(valid.size, dtype=bool)
-    used[triangles.ravel()] = True
+    for part in parts:
+        for triangles in part:
+            used[triangles.ravel()] = True
     new_index = np.cumsum(used) - 1
-    return Mesh(grid.to_input_frame(points[used]), new_index[triangles], grid=grid)
+    triangles = np.empty((sum(len(triangles) for part in parts for triangles in part), 3), dtype=np.int64)
+    done = 0
+    for which in (0, 1):
+        for part in parts:
+            piece, part[which] = part[which], None            # each strip's copy freed as the mesh's fills
+            triangles[done:done + len(piece)] = new_index[piece]
+            done += len(piece)
+    return Mesh(used_points(grid, valid, poles, used), triangles, grid=grid)
 
 
-def merge_poles(triangles, points, valid, poles):
-    """Triangles with the valid nodes of each pole row made one vertex (their mean point,
-    written into ``points``) and the triangles that collapse to an edge dropped."""
-    cols = valid.shape[1]
-    for row in np.flatnonzero(poles):
-        nodes = row * cols + np.flatnonzero(valid[row])
-        if not len(nodes):
-            continue
-        points[nodes[0]] = points[nodes].mean(axis=0)
-        triangles = np.where(np.isin(triangles, nodes), nodes[0], triangles)
-    distinct = ((triangles[:, 0] != triangles[:, 1]) & (triangles[:, 1] != triangles[:, 2])
-                & (triangles[:, 0] != triangles[:, 2]))
-    return triangles[distinct]
+def strip_triangles(grid, valid, poles, low, high, jump_angle):
+    """[first, second]: the triangles (``cell_triangles``) of the cells between rows low and
+    high of ``grid``, over the grid's flat node indices, the valid nodes of a pole row made
+    its first valid node and the triangles that this collapses to an edge dropped."""
+    cols = grid.shape[1]
+    jumps = jumps_between(grid, low, high, jump_angle)
+    parts = [triangles + low * cols for triangles in cell_triangles(valid[low:high + 1], grid.periodic, jumps)]
+    merged = False
+    for row in low + np.flatnonzero(poles[low:high + 1]):
+        valid_columns = np.flatnonzero(valid[row])
+        if len(valid_columns):
+            parts = [np.where((t >= row * cols) & (t < (row + 1) * cols), row * cols + valid_columns[0], t)
+                     for t in parts]
+            merged = True
+    if merged or cols == 1:   # a periodic grid of one column joins each node to itself
+        parts = [t[(t[:, 0] != t[:, 1]) & (t[:, 1] != t[:, 2]) & (t[:, 0] != t[:, 2])] for t in parts]
+    return parts
+
+
+def used_points(grid, valid, poles, used):
+    """(used nodes, 3): the input-frame points of the ``used`` nodes in node order, the first
+    valid node of a pole row at the mean of the points of that row's valid nodes; computed a
+    strip of rows at a time, coordinate by coordinate (the components of the points a strip
+    chooses are gathered into rows of one array, which the frame's rotation reads as is)."""
+    rows, cols = grid.shape
+    points = np.empty((int(used.sum()), 3))
+    done, step = 0, max(1, STRIP_NODES // cols)
+    for low in range(0, rows, step):
+        strip = slice(low, min(low + step, rows))
+        shape = grid.z[strip].shape
+        coordinates = [np.broadcast_to(c, shape) for c in projections.point_components(
+            grid.projection, grid.radius, grid.xs()[None, :], grid.ys()[strip, None], grid.z[strip])]
+        chosen = used[strip.start * cols:strip.stop * cols].reshape(shape)
+        components = np.empty((3, np.count_nonzero(chosen)))
+        for component, coordinate in zip(components, coordinates):
+            component[:] = coordinate[chosen]
+        for row in np.flatnonzero(poles[strip]):
+            on_row = np.flatnonzero(valid[low + row])
+            if len(on_row) and chosen[row, on_row[0]]:
+                mean = np.stack([coordinate[row, on_row] for coordinate in coordinates], axis=-1).mean(axis=0)
+                components[:, np.count_nonzero(chosen.ravel()[:row * cols + on_row[0]])] = mean
+        points[done:done + components.shape[1]] = grid.to_input_frame(components.T)
+        done += components.shape[1]
+    return points
