@@ -33,11 +33,9 @@ output name gets:
 
 import errno
 import os
-import secrets
 import signal
 import stat
 import sys
-import tempfile
 
 from mzc.errors import MzcError
 
@@ -356,6 +354,8 @@ def new_file(directory):
         except OSError as error:
             if error.errno not in NO_TMPFILE:
                 raise
+    import tempfile  # here, not at the top: only where O_TMPFILE is refused (its imports cost every command)
+
     fd, name = tempfile.mkstemp(prefix=HIDDEN_PREFIX, dir=directory)
     remember(name)
     os.fchmod(fd, mode & ~current_umask())   # mkstemp makes it 0600; a new file should follow the umask
@@ -379,7 +379,7 @@ def hidden_link(fd, directory):
     """Link the unnamed file ``fd`` to a fresh hidden name in ``directory`` (remembered for signal
     cleanup) and return that name."""
     while True:
-        name = os.path.join(directory, HIDDEN_PREFIX + secrets.token_hex(6))
+        name = os.path.join(directory, HIDDEN_PREFIX + os.urandom(6).hex())
         remember(name)
         try:
             if link_unnamed(fd, name):
