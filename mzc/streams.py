@@ -191,7 +191,11 @@ def check_distinct(outputs):
 
 
 def write_output(path, data):
-    """Write ``data`` (bytes) to ``path`` whole or not at all, or to stdout when ``path`` is ``-``/None."""
+    """Write ``data`` to ``path`` whole or not at all, or to stdout when ``path`` is ``-``/None.
+
+    ``data`` is bytes-like, or an iterable of bytes-like chunks: a new file is written as the
+    chunks are made (the file's bytes are never all in memory); stdout, devices and files
+    written in place get them only once all are made, so a failure writes nothing there."""
     write_outputs((path, data))
 
 
@@ -210,15 +214,21 @@ def write_outputs(*outputs):
 
 
 def stage(path, data):
-    """The output object that will write ``data`` to ``path``, prepared as far as it can be."""
+    """The output object that will write ``data`` (``write_output``'s) to ``path``, prepared as
+    far as it can be."""
     if is_stdio(path):
-        return Stdout(data)
+        return Stdout(whole(data))
     how, target, info = destination(path)
     kind = {"through": Through, "in place": InPlace, "replace": Replaced}[how]
     try:
-        return kind(path, target, info, data)
+        return kind(path, target, info, data if kind is Replaced else whole(data))
     except OSError as error:
         raise failure(error, path) from None
+
+
+def whole(data):
+    """``data`` as one bytes-like object: itself, or its chunks joined."""
+    return data if isinstance(data, (bytes, bytearray, memoryview)) else b"".join(data)
 
 
 class Stdout:
@@ -301,7 +311,8 @@ class InPlace:
 
 
 class Replaced:
-    """A new file written and synced beside the target now, renamed over it when published."""
+    """A new file written (chunk by chunk, as they are made) and synced beside the target now,
+    renamed over it when published."""
 
     ORDER = 3
 
@@ -309,7 +320,8 @@ class Replaced:
         self.path, self.target = path, target
         self.fd, self.temp = new_file(os.path.dirname(target))
         try:
-            write_all(self.fd, data)
+            for chunk in [data] if isinstance(data, (bytes, bytearray, memoryview)) else data:
+                write_all(self.fd, chunk)
             if info is not None:
                 keep_mode_and_owner(self.fd, info)
             os.fsync(self.fd)

@@ -10,6 +10,7 @@ it declares and how many the file holds), and data after the last element is ref
 """
 
 import re
+from collections.abc import Iterator
 from dataclasses import dataclass, field
 from typing import NamedTuple
 
@@ -39,27 +40,30 @@ def read(data: bytes, source: str) -> Mesh:
     return ply_mesh(elements, tables, source)
 
 
-def write(mesh: Mesh) -> bytearray:
-    """Binary little-endian PLY bytes of ``mesh``: double x y z per vertex, then (unless it is a
-    point cloud) a face element of uint8 counts and int32 indices, the layout meshio writes and
-    every PLY reader knows, without meshio's import or the time stamp it puts in a comment (the
-    same mesh gives the same bytes). The vertices and faces are written straight into the one
-    buffer of the file (a bytearray): no copy of either, and no second copy to join them."""
-    points, triangles = mesh.points, mesh.triangles
-    header = ["ply", "format binary_little_endian 1.0", f"element vertex {len(points)}",
+def write(mesh: Mesh) -> Iterator:
+    """Binary little-endian PLY of ``mesh`` as chunks of bytes (its ``parts``, which a grid's
+    mesh makes a strip at a time; ``mzc.streams`` writes them as they come): double x y z per
+    vertex, then (unless it is a point cloud) a face element of uint8 counts and int32
+    indices, the layout meshio writes and every PLY reader knows, without meshio's import or
+    the time stamp it puts in a comment (the same mesh gives the same bytes)."""
+    vertex_count, triangle_count, point_chunks, triangle_chunks = mesh.parts()
+    header = ["ply", "format binary_little_endian 1.0", f"element vertex {vertex_count}",
               "property double x", "property double y", "property double z"]
-    if len(points) > np.iinfo(np.int32).max:
-        raise MzcError(f"PLY's int32 indices cannot number {len(points)} vertices")
-    if len(triangles):
-        header += [f"element face {len(triangles)}", "property list uint8 int32 vertex_indices"]
-    head = "\n".join(header + ["end_header", ""]).encode("ascii")
-    data = bytearray(len(head) + FACE_RECORD.itemsize * len(triangles) + 24 * len(points))
-    data[:len(head)] = head
-    np.frombuffer(data, dtype="<f8", count=points.size, offset=len(head)).reshape(points.shape)[...] = points
-    if len(triangles):
-        faces = np.frombuffer(data, dtype=FACE_RECORD, count=len(triangles), offset=len(head) + 24 * len(points))
-        faces["count"], faces["indices"] = 3, triangles
-    return data
+    if vertex_count > np.iinfo(np.int32).max:
+        raise MzcError(f"PLY's int32 indices cannot number {vertex_count} vertices")
+    if triangle_count:
+        header += [f"element face {triangle_count}", "property list uint8 int32 vertex_indices"]
+
+    def chunks():
+        yield "\n".join(header + ["end_header", ""]).encode("ascii")
+        for points in point_chunks:
+            yield np.ascontiguousarray(points, dtype="<f8").reshape(-1).view(np.uint8)
+        for triangles in triangle_chunks if triangle_count else ():
+            faces = np.empty(len(triangles), dtype=FACE_RECORD)
+            faces["count"], faces["indices"] = 3, triangles
+            yield faces.view(np.uint8)
+
+    return chunks()
 
 
 FACE_RECORD = np.dtype([("count", "u1"), ("indices", "<i4", (3,))])   # a triangle as PLY writes it: 13 bytes

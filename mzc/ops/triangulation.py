@@ -31,7 +31,7 @@ if TYPE_CHECKING:
     from mzc.meshes import Mesh
 
 JUMP_ANGLE = 3.0   # degrees between an edge and the node line below which the edge is a jump
-STRIP_NODES = 1 << 20   # nodes whose edges, triangles or points are made at a time
+STRIP_NODES = 1 << 16   # nodes whose edges, triangles or points are made at a time (half a MB a value)
 
 
 @dataclass
@@ -142,105 +142,152 @@ def is_jump(start, end, chord, cosine2):
 def grid_triangles(valid, periodic=False, jumps=None):
     """Triangles (m, 3) over the flat node indices of a (rows, cols) validity mask: those of
     ``cell_triangles``, 1-2-3 first."""
-    return np.concatenate(cell_triangles(valid, periodic, jumps))
+    kept = kept_cells(valid, periodic, jumps)
+    return np.concatenate([corners(kept, which, valid.shape[1], periodic) for which in (0, 1)])
 
 
-def cell_triangles(valid, periodic=False, jumps=None):
-    """(first, second): the triangles 1-2-3 and 2-4-3 (each (m, 3), cell by cell, row by row)
-    over the flat node indices of a (rows, cols) validity mask, wherever their corners are
-    valid; with ``periodic`` the cells between the last column and the first too; with
-    ``jumps`` (a Jumps) only the triangles none of whose edges is a jump."""
-    rows, cols = valid.shape
+def kept_cells(valid, periodic=False, jumps=None):
+    """(rows-1, cells per row, 2): per cell, whether its triangles 1-2-3 and 2-4-3 are made over
+    a (rows, cols) validity mask: where their corners are valid (with ``periodic`` the cells
+    between the last column and the first too) and, with ``jumps`` (a Jumps), none of their
+    edges is a jump."""
     if periodic:
         valid = np.hstack([valid, valid[:, :1]])
-    keep_first = valid[:-1, :-1] & valid[:-1, 1:] & valid[1:, :-1]
-    keep_second = valid[:-1, 1:] & valid[1:, 1:] & valid[1:, :-1]
+    kept = np.empty((len(valid) - 1, valid.shape[1] - 1, 2), dtype=bool)
+    np.logical_and(valid[:-1, :-1] & valid[:-1, 1:], valid[1:, :-1], out=kept[..., 0])
+    np.logical_and(valid[:-1, 1:] & valid[1:, 1:], valid[1:, :-1], out=kept[..., 1])
     if jumps is not None:
-        keep_first &= ~(jumps.along[:-1] | jumps.across[:, :-1] | jumps.diagonal)
-        keep_second &= ~(jumps.across[:, 1:] | jumps.along[1:] | jumps.diagonal)
+        kept[..., 0] &= ~(jumps.along[:-1] | jumps.across[:, :-1] | jumps.diagonal)
+        kept[..., 1] &= ~(jumps.across[:, 1:] | jumps.along[1:] | jumps.diagonal)
+    return kept
 
-    def corners(keep, which):
-        cell = np.flatnonzero(keep)
-        row, col = np.divmod(cell, keep.shape[1])
-        corner1 = row * cols + col
-        corner2 = corner1 + 1 if not periodic else row * cols + (col + 1) % cols
-        triangles = np.empty((len(cell), 3), dtype=np.int64)
-        triangles[:, 0], triangles[:, 1], triangles[:, 2] = (corner1, corner2, corner1 + cols) if which == 0 else \
-            (corner2, corner2 + cols, corner1 + cols)
-        return triangles
 
-    return corners(keep_first, 0), corners(keep_second, 1)
+def corners(kept, which, cols, periodic):
+    """(m, 3): the triangles 1-2-3 (``which`` 0) or 2-4-3 (1) of the ``kept`` cells (``kept_cells``),
+    cell by cell, row by row, over the flat node indices of a grid of ``cols`` columns."""
+    cell = np.flatnonzero(kept[..., which])
+    row, col = np.divmod(cell, kept.shape[1])
+    corner1 = row * cols + col
+    corner2 = corner1 + 1 if not periodic else row * cols + (col + 1) % cols
+    triangles = np.empty((len(cell), 3), dtype=np.int64)
+    triangles[:, 0], triangles[:, 1], triangles[:, 2] = (corner1, corner2, corner1 + cols) if which == 0 else \
+        (corner2, corner2 + cols, corner1 + cols)
+    return triangles
 
 
 def grid_to_mesh(grid: "ZGrid", jump_angle: float | None = None) -> "Mesh":
-    """The Mesh of a ZGrid (its ``grid`` set to it): valid nodes in the input frame, unused
-    nodes dropped, no triangle across a depth jump of ``jump_angle`` degrees (default
-    JUMP_ANGLE; 0 keeps them all); the triangles 1-2-3 of every cell first, row by row, then
-    the triangles 2-4-3.
+    """The Mesh of a ZGrid (its ``grid`` set to it): ``GridMesh``'s, whole."""
+    return GridMesh(grid, jump_angle).mesh()
 
-    Made a strip of rows at a time (``row_strips``): the triangles of each strip's cells,
-    then the points of the nodes they use, written into the mesh's arrays, so that the
-    memory beside the mesh is a strip's and the time linear in the nodes."""
-    from mzc.meshes import Mesh  # here: densify and encode find jumps without the mesh modules
 
-    valid, poles = grid.valid, grid.pole_rows()
-    parts = [strip_triangles(grid, valid, poles, low, high, jump_angle) for low, high in row_strips(grid.shape)]
-    used = np.zeros(valid.size, dtype=bool)
-    for part in parts:
-        for triangles in part:
-            used[triangles.ravel()] = True
-    new_index = np.cumsum(used) - 1
-    triangles = np.empty((sum(len(triangles) for part in parts for triangles in part), 3), dtype=np.int64)
+class GridMesh:
+    """The mesh of a ZGrid, made a strip of rows at a time (``row_strips``), for writers that
+    stream it (``parts``): its valid nodes in the input frame, unused nodes dropped; the
+    triangles 1-2-3 of every cell first, row by row, then the triangles 2-4-3; none across a
+    depth jump of ``jump_angle`` degrees (default JUMP_ANGLE; 0 keeps them all); the valid
+    nodes of a pole row one vertex (the first, at their mean point) and the triangles this
+    collapses to an edge dropped.
+
+    Made when it is read: each strip's jumps (from the values) and kept cells first, the
+    nodes their triangles use and the counts; then, a strip at a time, the points and the
+    triangles. So the memory beside the grid is a strip's and two bytes a cell, and a file
+    written from the parts holds no copy of the mesh (the points and triangles of ``mesh()``
+    or of the attributes are its arrays, made on first use)."""
+
+    def __init__(self, grid, jump_angle=None):
+        self.grid = grid
+        self.valid, self.poles = grid.valid, grid.pole_rows()
+        self.strips = row_strips(grid.shape)
+        self.kept = [kept_cells(self.valid[low:high + 1], grid.periodic, jumps_between(grid, low, high, jump_angle))
+                     for low, high in self.strips]
+        self.used = np.zeros(self.valid.size, dtype=bool)
+        self.triangle_count = 0
+        for index in range(len(self.strips)):
+            for which in (0, 1):
+                triangles = self.strip_triangles(index, which)
+                self.used[triangles.ravel()] = True
+                self.triangle_count += len(triangles)
+        self.vertex_count = int(np.count_nonzero(self.used))
+        self.whole = None
+
+    def strip_triangles(self, index, which):
+        """The triangles 1-2-3 (``which`` 0) or 2-4-3 (1) of strip ``index`` over the grid's flat
+        node indices, pole rows merged."""
+        low, high = self.strips[index]
+        cols = self.grid.shape[1]
+        triangles = corners(self.kept[index], which, cols, self.grid.periodic) + low * cols
+        merged = False
+        for row in low + np.flatnonzero(self.poles[low:high + 1]):
+            valid_columns = np.flatnonzero(self.valid[row])
+            if len(valid_columns):
+                on_row = (triangles >= row * cols) & (triangles < (row + 1) * cols)
+                triangles[on_row] = row * cols + valid_columns[0]
+                merged = True
+        if merged or cols == 1:   # a periodic grid of one column joins each node to itself
+            triangles = triangles[(triangles[:, 0] != triangles[:, 1]) & (triangles[:, 1] != triangles[:, 2])
+                                  & (triangles[:, 0] != triangles[:, 2])]
+        return triangles
+
+    def triangle_chunks(self):
+        """The triangles over the used nodes' numbers, a strip at a time: 1-2-3, then 2-4-3."""
+        rows, cols = self.grid.shape
+        before = np.r_[0, np.cumsum(np.count_nonzero(self.used.reshape(rows, cols), axis=1))]   # used, by row
+        for which in (0, 1):
+            for index, (low, high) in enumerate(self.strips):
+                number = before[low] - 1 + np.cumsum(self.used[low * cols:(high + 1) * cols])
+                yield number[self.strip_triangles(index, which) - low * cols]
+
+    def point_chunks(self):
+        """(k, 3) input-frame points of the used nodes, in node order, a strip of rows at a
+        time, coordinate by coordinate (the components of the points a strip chooses are
+        gathered into the rows of one array, which the frame's rotation reads as it is)."""
+        grid, (rows, cols) = self.grid, self.grid.shape
+        step = max(1, STRIP_NODES // cols)
+        for low in range(0, rows, step):
+            strip = slice(low, min(low + step, rows))
+            shape = grid.z[strip].shape
+            coordinates = [np.broadcast_to(c, shape) for c in projections.point_components(
+                grid.projection, grid.radius, grid.xs()[None, :], grid.ys()[strip, None], grid.z[strip])]
+            chosen = self.used[strip.start * cols:strip.stop * cols].reshape(shape)
+            components = np.empty((3, np.count_nonzero(chosen)))
+            for component, coordinate in zip(components, coordinates):
+                component[:] = coordinate[chosen]
+            for row in np.flatnonzero(self.poles[strip]):
+                on_row = np.flatnonzero(self.valid[low + row])
+                if len(on_row) and chosen[row, on_row[0]]:
+                    mean = np.stack([coordinate[row, on_row] for coordinate in coordinates], axis=-1).mean(axis=0)
+                    components[:, np.count_nonzero(chosen.ravel()[:row * cols + on_row[0]])] = mean
+            yield grid.to_input_frame(components.T)
+
+    def parts(self):
+        """(vertex count, triangle count, point chunks, triangle chunks), as ``Mesh.parts``."""
+        return self.vertex_count, self.triangle_count, self.point_chunks(), self.triangle_chunks()
+
+    def mesh(self):
+        """The whole Mesh (its ``grid`` set), made on first use."""
+        from mzc.meshes import Mesh  # here: densify and encode find jumps without the mesh modules
+
+        if self.whole is None:
+            self.whole = Mesh(filled(self.point_chunks(), self.vertex_count, np.float64),
+                              filled(self.triangle_chunks(), self.triangle_count, np.int64), grid=self.grid)
+        return self.whole
+
+    @property
+    def points(self):
+        """The mesh's (n, 3) points (``mesh()``'s), for writers that take the whole arrays."""
+        return self.mesh().points
+
+    @property
+    def triangles(self):
+        """The mesh's (m, 3) triangles (``mesh()``'s)."""
+        return self.mesh().triangles
+
+
+def filled(chunks, count, dtype):
+    """(count, 3) of ``dtype``: the (k, 3) ``chunks`` one after the other."""
+    out = np.empty((count, 3), dtype=dtype)
     done = 0
-    for which in (0, 1):
-        for part in parts:
-            piece, part[which] = part[which], None            # each strip's copy freed as the mesh's fills
-            triangles[done:done + len(piece)] = new_index[piece]
-            done += len(piece)
-    return Mesh(used_points(grid, valid, poles, used), triangles, grid=grid)
-
-
-def strip_triangles(grid, valid, poles, low, high, jump_angle):
-    """[first, second]: the triangles (``cell_triangles``) of the cells between rows low and
-    high of ``grid``, over the grid's flat node indices, the valid nodes of a pole row made
-    its first valid node and the triangles that this collapses to an edge dropped."""
-    cols = grid.shape[1]
-    jumps = jumps_between(grid, low, high, jump_angle)
-    parts = [triangles + low * cols for triangles in cell_triangles(valid[low:high + 1], grid.periodic, jumps)]
-    merged = False
-    for row in low + np.flatnonzero(poles[low:high + 1]):
-        valid_columns = np.flatnonzero(valid[row])
-        if len(valid_columns):
-            parts = [np.where((t >= row * cols) & (t < (row + 1) * cols), row * cols + valid_columns[0], t)
-                     for t in parts]
-            merged = True
-    if merged or cols == 1:   # a periodic grid of one column joins each node to itself
-        parts = [t[(t[:, 0] != t[:, 1]) & (t[:, 1] != t[:, 2]) & (t[:, 0] != t[:, 2])] for t in parts]
-    return parts
-
-
-def used_points(grid, valid, poles, used):
-    """(used nodes, 3): the input-frame points of the ``used`` nodes in node order, the first
-    valid node of a pole row at the mean of the points of that row's valid nodes; computed a
-    strip of rows at a time, coordinate by coordinate (the components of the points a strip
-    chooses are gathered into rows of one array, which the frame's rotation reads as is)."""
-    rows, cols = grid.shape
-    points = np.empty((int(used.sum()), 3))
-    done, step = 0, max(1, STRIP_NODES // cols)
-    for low in range(0, rows, step):
-        strip = slice(low, min(low + step, rows))
-        shape = grid.z[strip].shape
-        coordinates = [np.broadcast_to(c, shape) for c in projections.point_components(
-            grid.projection, grid.radius, grid.xs()[None, :], grid.ys()[strip, None], grid.z[strip])]
-        chosen = used[strip.start * cols:strip.stop * cols].reshape(shape)
-        components = np.empty((3, np.count_nonzero(chosen)))
-        for component, coordinate in zip(components, coordinates):
-            component[:] = coordinate[chosen]
-        for row in np.flatnonzero(poles[strip]):
-            on_row = np.flatnonzero(valid[low + row])
-            if len(on_row) and chosen[row, on_row[0]]:
-                mean = np.stack([coordinate[row, on_row] for coordinate in coordinates], axis=-1).mean(axis=0)
-                components[:, np.count_nonzero(chosen.ravel()[:row * cols + on_row[0]])] = mean
-        points[done:done + components.shape[1]] = grid.to_input_frame(components.T)
-        done += components.shape[1]
-    return points
+    for chunk in chunks:
+        out[done:done + len(chunk)] = chunk
+        done += len(chunk)
+    return out
