@@ -351,38 +351,49 @@ def coupled_pairs(domain, first, n, evens):
     return np.where(even_above, last, after), np.where(even_above, after, last) - evens
 
 
-def solve_plate(band, rhs, start, evens, pairs, weight, rtol=1e-12):
+def solve_plate(band, rhs, start, evens, pairs, weight, rtol=1e-12, max_steps=1000):
     """The solution of A u = b, A = [[E, C], [C^T, O]] with E and O the bands (``_plate``
     storage) of the first ``evens`` unknowns and of the rest, and C ``weight`` at each of
-    ``pairs`` (``coupled_pairs``): until |residual| <= rtol |b|.
+    ``pairs`` (``coupled_pairs``), from ``start``: until |residual| <= rtol |b|. ``band`` is
+    spent (factored in place).
 
     The even gaps are eliminated: conjugate gradients solve the odd ones' Schur complement
-    O - C^T E^-1 C, preconditioned by the exact Cholesky factor of O, then the even ones
-    follow from one solve with E. Alternate gaps never touch, so E and O are bands. The
-    Schur complement's spectrum lies in [1 - rho², 1] when that of A preconditioned by E
-    and O lies within rho of 1: it takes about half the steps (9 for n = 3 on a face) of
-    conjugate gradients on the whole of A so preconditioned, each step costing the same
-    (a solve with E and one with O). The band arithmetic is ``_plate``'s C: LAPACK's band
-    routines through scipy took twice as long, and importing scipy.linalg a third of the
-    command's start-up.
+    S = O - C^T E^-1 C, preconditioned by the exact Cholesky factor of O, then the even ones
+    follow from one solve with E. Alternate gaps never touch, so E and O are bands. S's
+    spectrum, so preconditioned, lies in [1 - rho², 1] when that of A preconditioned by E and
+    O lies within rho of 1: half the steps (9 for n = 3 on a face) of conjugate gradients on
+    the whole of A so preconditioned, at the same cost a step (a solve with E and one with
+    O). O's product is taken once, at the start: the steps keep O p up to date as they go
+    (O p = r + beta O p_before, since O z = r for the preconditioned residual z), so O's band
+    is factored in place. Inner products are plain numpy sums, not BLAS: threaded BLAS on a
+    busy machine costs more in synchronisation than these short vectors take to multiply.
     """
     from mzc.ops import _plate
 
-    width = band.shape[1] - 1
-    odd_band = band[evens:]
-    even_factor, odd_factor = band_factor(band[:evens]), band_factor(odd_band.copy())   # ``band`` is spent
-    to_even = lambda odd: carried(odd, pairs, 1, 0, evens)              # noqa: E731
-    to_odd = lambda even: carried(even, pairs, 0, 1, len(rhs) - evens)  # noqa: E731
-
-    def schur(odd):
-        out = np.empty_like(odd)
-        _plate.product(odd_band, width, odd, out)
-        return out - weight**2 * to_odd(band_solve(even_factor, to_even(odd)))
-
-    right = rhs[evens:] - weight * to_odd(band_solve(even_factor, rhs[:evens].copy()))
-    odd = conjugate_gradients(schur, right, start[evens:], lambda vector: band_solve(odd_factor, vector.copy()),
-                              rtol * np.sqrt(inner(rhs, rhs)))
-    return np.concatenate([band_solve(even_factor, rhs[:evens] - weight * to_even(odd)), odd])
+    even_factor, odd_band = band_factor(band[:evens]), band[evens:]
+    coupled = lambda vector: weight**2 * carried(band_solve(even_factor, carried(vector, pairs, 1, 0, evens)),  # noqa: E731
+                                                 pairs, 0, 1, len(vector))
+    right = rhs[evens:] - weight * carried(band_solve(even_factor, rhs[:evens].copy()), pairs, 0, 1, len(rhs) - evens)
+    odd = start[evens:].copy()
+    image = np.empty_like(odd)
+    _plate.product(odd_band, odd_band.shape[1] - 1, odd, image)
+    odd_factor = band_factor(odd_band)
+    residual = right - (image - coupled(odd))
+    direction = band_solve(odd_factor, residual.copy())
+    product, kept_image = inner(residual, direction), residual.copy()   # r.z, and O p (= r: p = z)
+    goal = rtol**2 * inner(rhs, rhs)
+    for _ in range(max_steps):
+        if inner(residual, residual) <= goal:
+            break
+        image = kept_image - coupled(direction)                        # S p
+        length = product / inner(direction, image)
+        odd += length * direction
+        residual -= length * image
+        smoothed = band_solve(odd_factor, residual.copy())
+        product, previous = inner(residual, smoothed), product
+        direction = smoothed + (product / previous) * direction
+        kept_image = residual + (product / previous) * kept_image
+    return np.concatenate([band_solve(even_factor, rhs[:evens] - weight * carried(odd, pairs, 1, 0, evens)), odd])
 
 
 def carried(vector, pairs, source, target, size):
@@ -411,30 +422,6 @@ def band_solve(factor, vector):
 
     _plate.solve(factor, factor.shape[1] - 1, vector)
     return vector
-
-
-def conjugate_gradients(apply, rhs, start, preconditioner, tolerance, max_steps=1000):
-    """Preconditioned conjugate gradients for an SPD ``apply`` (v -> A v) until |residual| <= ``tolerance``.
-
-    Inner products are plain numpy sums, not BLAS: threaded BLAS on a busy machine
-    costs more in synchronisation than these short vectors take to multiply.
-    """
-    solution = start.copy()
-    residual = rhs - apply(solution)
-    direction = preconditioner(residual)
-    product = inner(residual, direction)
-    goal = tolerance**2
-    for _ in range(max_steps):
-        if inner(residual, residual) <= goal:
-            break
-        image = apply(direction)
-        length = product / inner(direction, image)
-        solution += length * direction
-        residual -= length * image
-        smoothed = preconditioner(residual)
-        product, previous = inner(residual, smoothed), product
-        direction = smoothed + (product / previous) * direction
-    return solution
 
 
 def inner(u, v):
