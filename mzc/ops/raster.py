@@ -88,19 +88,20 @@ def candidate_nodes(col_range, row_range):
     width, height = block_sizes(col_range), block_sizes(row_range)
     counts = width * height
     owner = np.repeat(np.arange(len(counts)), counts)
-    local = np.arange(len(owner)) - np.repeat(np.cumsum(counts) - counts, counts)
-    return owner, row_range[0, owner] + local // width[owner], col_range[0, owner] + local % width[owner]
+    down, across = np.divmod(np.arange(len(owner)) - np.repeat(np.cumsum(counts) - counts, counts), width[owner])
+    return owner, row_range[0, owner] + down, col_range[0, owner] + across
 
 
 def heights_on_triangles(corners, owner, x, y):
     """Barycentric test of points (x, y) against triangle ``owner``, and the height there."""
     a, b, c = corners[:, 0], corners[:, 1], corners[:, 2]
     ab, ac = b - a, c - a
-    inverse_area = 1.0 / cross2(ab[:, :2], ac[:, :2])
-    px, py = x - a[owner, 0], y - a[owner, 1]
-    u = (px * ac[owner, 1] - py * ac[owner, 0]) * inverse_area[owner]
-    v = (py * ab[owner, 0] - px * ab[owner, 1]) * inverse_area[owner]
+    inverse_area = (1.0 / cross2(ab[:, :2], ac[:, :2]))[owner]
+    at = lambda vectors, i: np.ascontiguousarray(vectors[:, i])[owner]  # noqa: E731 - a gather from a contiguous copy
+    px, py = x - at(a, 0), y - at(a, 1)
+    u = (px * at(ac, 1) - py * at(ac, 0)) * inverse_area
+    v = (py * at(ab, 0) - px * at(ab, 1)) * inverse_area
     tolerance = -BARYCENTRIC_TOLERANCE
     hit = (u >= tolerance) & (v >= tolerance) & (1.0 - u - v >= tolerance)
-    z = a[owner, 2] + u * ab[owner, 2] + v * ac[owner, 2]
+    z = at(a, 2) + u * at(ab, 2) + v * at(ac, 2)
     return z, hit
