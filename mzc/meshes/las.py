@@ -64,7 +64,7 @@ def read(data: bytes, source: str) -> Mesh:
 def check_room(header, size, declared, source):
     """Refuse an uncompressed file too short for the points its header declares, before they
     are read (LAZ is checked as it is decoded, a chunk at a time)."""
-    if header.point_format.id >= 64 or header.are_points_compressed:
+    if header.are_points_compressed:
         return
     end = size
     if getattr(header, "start_of_first_evlr", 0) and header.number_of_evlrs:

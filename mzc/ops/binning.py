@@ -26,8 +26,15 @@ middle of its points always is (about 0.2 for nine) and a node beside them, past
 border of the cloud or of a gap, is not (1.7 for points filling half its window): the
 surface is not extended past its border nor across a gap wider than the window.
 
-Accuracy (README, "Point clouds"): against the Delaunay path at the same spacings, on the
-faces' vertices as clouds and on a million-point terrain.
+Accuracy, against the Delaunay path at the same spacings (``benchmarks/clouds.py``): on a
+1,000,000-point terrain with 3 cm of noise, 0.011 m RMS from the true surface where
+Delaunay is 0.022 m (the noise averaged, not passed on), the two 0.018 m RMS apart, in
+1.75 s of CPU against 25.3 s and 460 MB against 1.4 GB. On the 13 faces' vertices as
+clouds, against the mesh cut on the same grid, a node's median error is 0.03-0.04 mm where
+Delaunay's is 0.0005 mm (Delaunay rebuilds the mesh's own triangles where the face is one
+layer; a plane fit over a window smooths), but over all nodes 0.83-1.37 mm RMS against
+Delaunay's 1.6-3.4 mm (where the face overhangs itself, Delaunay joins the layers and
+binning keeps the front one); 3% fewer nodes are valid.
 """
 
 import numpy as np
