@@ -14,6 +14,8 @@ from typing import TYPE_CHECKING, Any
 from mzc.errors import MzcError
 
 if TYPE_CHECKING:
+    from collections.abc import Sequence
+
     import numpy as np
 
     from mzc.grid import ZGrid
@@ -82,13 +84,17 @@ def as_grid(grid: ZGrid | np.ndarray) -> ZGrid:
 def slice(surface: Any, d1: float | None = None, d2: float | None = None, *, rows: int | None = None,
           cols: int | None = None, align: str = "none", projection: str = "auto", view: str = "auto",
           center: tuple[float, float, float] | None = None, axis: tuple[float, float, float] | None = None,
-          units: str | None = None, thesis_grid: bool = False) -> ZGrid:
+          units: str | None = None, thesis_grid: bool = False, classes: Sequence[int] | None = None,
+          cloud: str = "auto") -> ZGrid:
     """Cut a surface into a z-grid (``mzc slice``): spacings d1 (rows) and d2 (columns) default to
-    the data's own, the cutting surfaces (``projection``) to the ones that see it best."""
+    the data's own, the cutting surfaces (``projection``) to the ones that see it best; ``classes``
+    keeps those ASPRS classes of a LAS/LAZ cloud (2: ground), ``cloud`` (auto, bin, delaunay)
+    says how a point cloud becomes a surface."""
     from mzc.ops.slicing import slice_surface
 
     return slice_surface(as_mesh(surface), d1=d1, d2=d2, rows=rows, cols=cols, align=align, units=units,
-                         projection=projection, center=center, axis=axis, view=view, thesis_grid=thesis_grid)
+                         projection=projection, center=center, axis=axis, view=view, thesis_grid=thesis_grid,
+                         classes=None if classes is None else tuple(classes), cloud=cloud)
 
 
 def encode(grid: ZGrid | np.ndarray, codec: str = "dwt2d", **options: Any) -> bytes:
