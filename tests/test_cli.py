@@ -4,6 +4,7 @@ import json
 import os
 import subprocess
 import sys
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -62,7 +63,8 @@ def test_encode_imports_only_what_its_codec_uses(tmp_path):
     assert result.returncode == 0 and not imported & {"constriction", "numba", "pywt", "meshio", "matplotlib"}
 
 
-HEAVY = {"scipy", "constriction", "numba", "llvmlite", "pywt", "meshio", "matplotlib", "distributed", "dask"}
+HEAVY = {"scipy", "constriction", "numba", "llvmlite", "pywt", "meshio", "matplotlib", "distributed", "dask",
+         "rasterio"}
 # what each command may load of HEAVY: scipy only where a sparse solve (or an FFT) runs, numba only to
 # decode dwt2d (its row decoder), constriction only to encode it
 IMPORT_SETS = [
@@ -75,6 +77,10 @@ IMPORT_SETS = [
     (["triangulate", "{grid}", "-o", "{grid}.ply"], set()),                             # our own PLY writer
     (["info", "{coded}"], set()),
     (["diff", "{grid}", "{grid}"], set()),
+    (["slice", "{tif}"], {"rasterio"}),                                                 # GeoTIFF: GDAL
+    (["slice", "{asc}"], set()),                                                        # an ESRI grid: our own
+    (["decode", "{grid}", "--format", "tif"], {"rasterio"}),
+    (["decode", "{grid}", "--format", "asc"], set()),
 ]
 
 
@@ -86,7 +92,9 @@ def sample_files(tmp_path_factory):
     subprocess.run([sys.executable, "-m", "mzc", "sample", "bump", "-o", mesh], check=True)
     subprocess.run([sys.executable, "-m", "mzc", "slice", mesh, "-o", grid], check=True)
     subprocess.run([sys.executable, "-m", "mzc", "encode", "--dwt2d", "--rmse", "0.05", grid, "-o", coded], check=True)
-    return {"mesh": mesh, "grid": grid, "coded": coded}
+    public = Path(__file__).resolve().parent / "data" / "public"
+    return {"mesh": mesh, "grid": grid, "coded": coded, "tif": public / "srtm_blurred_res.tif",
+            "asc": public / "hugo_site.asc"}
 
 
 @pytest.mark.parametrize("arguments, allowed", IMPORT_SETS, ids=lambda v: " ".join(v) if isinstance(v, list) else "")

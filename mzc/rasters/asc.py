@@ -140,7 +140,7 @@ def read_values(body, first_line, rows, cols, source):
     if len(values) != rows * cols:
         cause = "cut short" if len(values) < rows * cols else "more values than the grid has"
         raise MzcError(f"the data holds {len(values)} values, but nrows {rows} x ncols {cols} take {rows * cols} "
-                       f"({cause})", source=source, line=first_line + body.count("\n"), field="nrows")
+                       f"({cause})", source=source, line=first_line + body.rstrip().count("\n"), field="nrows")
     infinite = np.isinf(values)
     if infinite.any():
         index = int(np.flatnonzero(infinite)[0])

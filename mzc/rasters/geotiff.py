@@ -9,6 +9,7 @@ logging (a NullHandler here keeps them off stderr: mzc reports a failure itself,
 """
 
 import logging
+import re
 import warnings
 
 import numpy as np
@@ -19,6 +20,7 @@ from mzc.limits import check_grid_size
 from mzc.rasters import Layout, grid_of, layout_of, no_data_marker, raster_rows, sample_type
 
 EXTRA = "geo"
+MEMORY_NAME = re.compile(r"[\w/.-]*[0-9a-f]{8}(?:-[0-9a-f]{4}){3}-[0-9a-f]{12}[\w.]*:?\s*")   # a MemoryFile's name
 PREDICTORS = {"f": 3, "i": 2, "u": 2}   # floating-point and horizontal differencing: smaller DEFLATE files
 
 
@@ -112,5 +114,8 @@ def write(grid, float32=False):
 
 
 def one_line(error):
-    """GDAL's message as one line."""
-    return " ".join(str(error).split())[:300]
+    """GDAL's own message (the innermost of rasterio's chained errors) as one line, without the
+    name of the in-memory file it was read from."""
+    while error.__cause__ is not None or error.__context__ is not None:
+        error = error.__cause__ or error.__context__
+    return " ".join(MEMORY_NAME.sub("", str(error)).split())[:300]
