@@ -24,7 +24,7 @@ from mzc.georef import crs_kind, metric_frame
 from mzc.grid import Raster, ZGrid
 from mzc.rasters import Layout, asc, grid_of, layout_of, raster_rows, read_raster
 
-from codec_contract import SPEC, spec_examples
+from codec_contract import SPEC, rechecksummed, spec_examples
 
 rasterio = pytest.importorskip("rasterio")
 from rasterio.crs import CRS  # noqa: E402
@@ -479,3 +479,33 @@ def test_a_geographic_grid_is_densified_in_metres_and_keeps_its_degrees():
     metric = mzc.densify(metric_frame(grid), 1)
     assert np.array_equal(dense.z, metric.z, equal_nan=True)
     assert np.isfinite(dense.z[1::2]).sum() > 0.9 * np.isfinite(grid.z).sum()   # rows are inserted
+
+
+# --- the header lines: checked where they are read -----------------------------------------
+
+
+@pytest.mark.parametrize("line, field, words", [
+    ("raster area sideways int16", "raster", "'sideways' is not one of down, up"),
+    ("raster area down", "raster", "expected 3 value(s)"),
+    ("raster area down complex64", "raster", "not one of uint8"),
+])
+def test_a_bad_raster_line_is_refused_naming_its_line(line, field, words):
+    data = f"mzc-zgrid 1.1\nrows 1\ncols 2\nd1 1\nd2 1\n{line}\ndata\n1 2\n".encode()
+    with pytest.raises(MzcError) as error:
+        read_any(data, "hand.zg")
+    assert (error.value.line, error.value.field) == (6, field) and words in error.value.message
+
+
+def test_the_georeferencing_lines_belong_to_planar_grids_and_their_versions():
+    cylinder = ZGrid(np.ones((2, 3)), 1, 1, projection="cylindrical", radius=10)
+    raw = zgrid.write(cylinder, raw="float64").replace(b"mzc-zgrid 3.0\n", b"mzc-zgrid 3.1\n")
+    with pytest.raises(MzcError, match="belong to planar grids") as error:
+        read_any(rechecksummed(raw.replace(b"\nraw ", b"\nraster area down int16\nraw ")), "p.zg")
+    assert error.value.field == "raster" and error.value.line is not None
+    with pytest.raises(MzcError, match="belong to planar grids"):
+        cylinder.with_z(cylinder.z, crs='GEOGCS["x"]')
+    old = read_any(b"mzc-zgrid 1.0\nrows 1\ncols 2\nd1 1\nd2 1\nraster area sideways\ndata\n1 2\n", "old.zg")
+    assert old.raster is None   # a 1.0 reader ignored the line, and so does this one for a 1.0 file
+    grid = ZGrid(np.ones((2, 2)), 1, 1, crs="GEOGCS[\"x\"]", raster=Raster())
+    assert zgrid.write(grid).startswith(b"mzc-zgrid 1.1\n")
+    assert zgrid.write(grid.with_z(grid.z, crs=None, raster=None)).startswith(b"mzc-zgrid 1.0\n")
