@@ -64,7 +64,7 @@ def test_encode_imports_only_what_its_codec_uses(tmp_path):
 
 
 HEAVY = {"scipy", "constriction", "numba", "llvmlite", "pywt", "meshio", "matplotlib", "distributed", "dask",
-         "laspy", "lazrs"}
+         "laspy", "lazrs", "rasterio"}
 # what each command may load of HEAVY: scipy only where a sparse solve (or an FFT) runs, numba only to
 # decode dwt2d (its row decoder), constriction only to encode it, laspy and lazrs only to read a LAS/LAZ
 IMPORT_SETS = [
@@ -79,6 +79,10 @@ IMPORT_SETS = [
     (["triangulate", "{grid}", "-o", "{grid}.ply"], set()),                             # our own PLY writer
     (["info", "{coded}"], set()),
     (["diff", "{grid}", "{grid}"], set()),
+    (["slice", "{tif}"], {"rasterio"}),                                                 # GeoTIFF: GDAL
+    (["slice", "{asc}"], set()),                                                        # an ESRI grid: our own
+    (["decode", "{grid}", "--format", "tif"], {"rasterio"}),
+    (["decode", "{grid}", "--format", "asc"], set()),
 ]
 
 
@@ -90,8 +94,9 @@ def sample_files(tmp_path_factory):
     subprocess.run([sys.executable, "-m", "mzc", "sample", "bump", "-o", mesh], check=True)
     subprocess.run([sys.executable, "-m", "mzc", "slice", mesh, "-o", grid], check=True)
     subprocess.run([sys.executable, "-m", "mzc", "encode", "--dwt2d", "--rmse", "0.05", grid, "-o", coded], check=True)
-    public = Path(__file__).parent / "data" / "public"
-    return {"mesh": mesh, "grid": grid, "coded": coded, "laz": public / "simple.laz", "pcd": public / "milk.pcd"}
+    public = Path(__file__).resolve().parent / "data" / "public"
+    return {"mesh": mesh, "grid": grid, "coded": coded, "laz": public / "simple.laz", "pcd": public / "milk.pcd",
+            "tif": public / "srtm_blurred_res.tif", "asc": public / "hugo_site.asc"}
 
 
 @pytest.mark.parametrize("arguments, allowed", IMPORT_SETS, ids=lambda v: " ".join(v) if isinstance(v, list) else "")

@@ -88,18 +88,24 @@ def command(input, output, d1, d2, rows, cols, thesis_grid, align, projection, v
             classes, cloud, plain, float32, precision):
     """Cut a mesh (OBJ, PLY, VTK, STL, OFF) or point cloud (LAS/LAZ, PCD, x y z text,
     vertex-only PLY) into a z-grid: each node holds the outermost hit of its line with the
-    surface (the front-most height of planar grids, the farthest distance along a central ray)."""
+    surface (the front-most height of planar grids, the farthest distance along a central ray).
+
+    A raster (GeoTIFF, ESRI ASCII grid) is its own z-grid: read node for node with its
+    no-data cells, georeferencing and CRS; the options that would cut it otherwise are
+    refused."""
     from mzc.api import slice as slice_surface
     from mzc.errors import about
-    from mzc.meshes import read_mesh
-    from mzc.streams import check_not_input, display_name
+    from mzc.meshes import mesh_from_bytes
+    from mzc.rasters import read_raster, sniff
+    from mzc.streams import check_not_input, display_name, read_input
 
     check_slice_options(d1, d2, rows, cols)
     body = zgrid_body(plain, float32, precision)
     check_not_input(output, input)
-    mesh = read_mesh(input)
-    with about(display_name(input), "slicing it"):
-        grid = slice_surface(mesh, d1=d1, d2=d2, rows=rows, cols=cols, align=align, units=units,
+    data, source = read_input(input), display_name(input)
+    surface = read_raster(data, source, input) if sniff(data) else mesh_from_bytes(data, source)
+    with about(source, "slicing it"):
+        grid = slice_surface(surface, d1=d1, d2=d2, rows=rows, cols=cols, align=align, units=units,
                              projection=projection, center=center, axis=axis, view=view,
                              thesis_grid=thesis_grid, classes=classes, cloud=cloud)
     write_grid(grid, output, body)

@@ -114,7 +114,11 @@ def grid_triangles(valid, periodic=False, jumps=None):
 def grid_to_mesh(grid: "ZGrid", jump_angle: float | None = None) -> Mesh:
     """The Mesh of a ZGrid (its ``grid`` set to it): valid nodes in the input frame, unused
     nodes dropped, no triangle across a depth jump of ``jump_angle`` degrees (default
-    JUMP_ANGLE; 0 keeps them all)."""
+    JUMP_ANGLE; 0 keeps them all). A geographic grid (longitude and latitude in degrees) is
+    placed in metres about its centre (``mzc.georef.metric_frame``): a mesh is lengths."""
+    from mzc.georef import metric_frame
+
+    grid = metric_frame(grid)
     valid = grid.valid
     nodes = grid.node_points()
     triangles = grid_triangles(valid, grid.periodic, jump_edges(grid, jump_angle, nodes))

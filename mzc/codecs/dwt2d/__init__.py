@@ -1,4 +1,5 @@
-"""The wavelet z-grid codec (``mzc-dwt2d 3.1``; 3.0 and 2.0 are read; extension ``.mzw2``): see spec/dwt2d.md.
+"""The wavelet z-grid codec (``mzc-dwt2d 3.1``, 3.2 with a raster's crs and raster lines; 3.0 and 2.0 are
+read; extension ``.mzw2``): see spec/dwt2d.md.
 
 Text header (grid fields with the projection, wavelet, levels, steps, slope limit,
 correction step), a ``data`` line, then a binary payload: the validity mask as row spans,
@@ -31,6 +32,8 @@ from mzc.limits import MAX_MAGNITUDE
 KIND = "dwt2d"
 VERSION = (3, 1)             # every grid; 3.0 (no crc32 line) and 2.0 (planar, periodised transform) are still read
 PROJECTED_VERSION = (3, 1)
+GEOREFERENCED_VERSION = (3, 2)   # 3.1 with the crs and raster lines of a grid read from a raster
+GEOREF_SINCE = {3: 2}
 OLDEST_MAJOR = 2             # 1.x were drafts
 CHECKSUM_SINCE = {3: 1}      # the crc32 line is required from 3.1 on
 CODER = "rans-signs-2"     # 2.0 names it on a required line; in 3.0 the version implies it
@@ -338,7 +341,7 @@ class Prepared:
     def header_lines(self, step, correction, max_error):
         """The lines of the text header, the magic line to the ``data`` line."""
         # lines at their defaults are left out: a face's file can be 1.5 KB, and they were 50 B of it
-        lines = [magic_line(KIND, file_version(self.grid, VERSION, PROJECTED_VERSION)),
+        lines = [magic_line(KIND, file_version(self.grid, VERSION, PROJECTED_VERSION, GEOREFERENCED_VERSION)),
                  *grid_header_lines(self.grid, write_defaults=False)]
         if self.wavelet != DEFAULT_WAVELET:
             lines.append(f"wavelet {self.wavelet}")
@@ -449,7 +452,13 @@ def check_shared_unit(grid, field):
     gave 306 m. Such grids show heights spanning more than UNIT_RATIO times their width,
     or GEOGRAPHIC_RATIO times on a grid within lon/lat bounds with spacings under
     GEOGRAPHIC_STEP (a DEM's arc-seconds). Central grids are lengths by
-    construction."""
+    construction. A grid with a CRS is judged by its CRS instead: refused when geographic."""
+    if grid.crs is not None:
+        from mzc.georef import check_lengths
+
+        check_lengths(grid, field, "a surface error needs one unit; use --max-error, which bounds the heights "
+                                   "alone, or reproject the raster to a CRS in metres (gdalwarp -t_srs)")
+        return
     z = grid.z[grid.valid]
     if grid.projection != "planar" or z.size < 2:
         return
@@ -493,7 +502,7 @@ def read(data, source="<bytes>"):
     raises MzcError."""
     header, body, _first = read_header(data, source, KIND, VERSION[0], oldest_major=OLDEST_MAJOR,
                                        projected_major=PROJECTED_VERSION[0], checksum_since=CHECKSUM_SINCE,
-                                       binary=True)
+                                       binary=True, georef_since=GEOREF_SINCE)
     fields, rows, cols = read_grid_fields(header)
     transform = w2.TRANSFORMS[header.major]
     wavelet, levels, steps, slope_limit, correction = read_codec_fields(header, (rows, cols), transform)
@@ -519,7 +528,7 @@ def read(data, source="<bytes>"):
 
 
 CODEC = Codec(
-    "dwt2d", encode_grid, read, writer_with_decoded=encode_grid_with_decoded, version=VERSION,
+    "dwt2d", encode_grid, read, writer_with_decoded=encode_grid_with_decoded, version=GEOREFERENCED_VERSION,
     oldest_major=OLDEST_MAJOR, extension=".mzw2", spec="spec/dwt2d.md",
     summary="2D wavelet of the whole grid, entropy coded, error-bounded", check_options=one_target,
     example={"max_error": 0.05}, options=(
