@@ -86,7 +86,7 @@ SCALE_REPEATS_BELOW = 2.0       # sizes under this many M nodes are run 3 times 
 STAGE_TIMEOUT = 600.0           # seconds per scaling stage
 MEMORY_CAP_GB = 12.0            # address-space cap of a scaling stage: fails cleanly instead of swamping the box
 SEED = 15
-PACKAGES = ("numpy", "scipy", "PyWavelets", "constriction", "numba", "DracoPy", "imagecodecs")
+PACKAGES = ("numpy", "scipy", "PyWavelets", "constriction", "DracoPy", "imagecodecs")
 SCALE_STAGES = ("encode", "decode", f"densify -n {SCALE_DENSIFY}", "triangulate")
 MEMORY_STAGES = SCALE_STAGES[:3]   # the memory condition: encode, decode, densify
 

@@ -7,13 +7,14 @@ detail steps scaled up where the surface leans from the node lines, magnitudes a
 each with their own contexts), and an optional correction layer of residuals that makes
 ``max_error`` hold at every valid node of the decoder's own reconstruction. All integers
 are entropy coded by mzc.codecs.dwt2d.entropy (magnitude classes through rANS, one model per context),
-and decoded by the compiled row loop of mzc.codecs.dwt2d.native.
+and decoded by the C row loop of mzc.codecs.dwt2d._rows.
 """
 import functools
 
 import numpy as np
 
 from mzc.codecs.base import Codec, Option
+from mzc.codecs.dwt2d import _rows
 from mzc.codecs.dwt2d import wavelet as w2
 from mzc.errors import MzcError
 from mzc.formats.header import (
@@ -114,8 +115,6 @@ def encode_mask(encoder, valid):
 
 def decode_mask(decoder, rows, cols):
     """The validity mask (rows x cols) from the payload; refuses impossible spans."""
-    from mzc.codecs.dwt2d.native import fill_spans  # here, not at the top: numba loads only to decode
-
     counts = np.cumsum(decoder.read(MASK_COUNT, rows))
     if counts.min() < 0 or counts.max() > (cols + 1) // 2:
         raise decoder.error(f"a mask row has a span count outside 0..{(cols + 1) // 2}")
@@ -124,7 +123,7 @@ def decode_mask(decoder, rows, cols):
     same = decoder.read(MASK_SAME, int(lengths[unchanged].sum()))
     new = decoder.read(MASK_NEW, int(lengths[~unchanged].sum()))
     valid = np.zeros((rows, cols), dtype=bool)
-    bad = fill_spans(lengths, unchanged, same, new, valid)
+    bad = _rows.fill_spans(lengths, unchanged, same, new, rows, cols, valid)
     if bad >= 0:
         raise decoder.error(f"mask row {bad + 1} has spans outside the row or out of order")
     return valid
