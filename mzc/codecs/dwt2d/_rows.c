@@ -229,10 +229,11 @@ static inline double magnitude(int64_t value)   /* |value| as binary64; decoded 
     return (double)(value < 0 ? -value : value);
 }
 
-/* The arrays one pass of a row works in (each `cols` long, `starts` one per context + 2). */
+/* The arrays a row works in (each `cols` long, `starts` one per context + 2): its passes' cells,
+   and |q| of the two rows above as binary64 (zeros above row 0). */
 typedef struct {
     int64_t *cells, *contexts, *ordered, *models, *values, *predicted, *starts;
-    double *near;
+    double *above, *above2;
 } Scratch;
 
 /* Decode the `count` values of one pass (columns `cells`, contexts `contexts`) into row `out`:
@@ -310,25 +311,23 @@ static int rows_loop(Stream *s, Scratch *w, Py_ssize_t rows, Py_ssize_t cols, co
                      int64_t first_model, const int64_t *parent, const int weights[3], int64_t first_sign_model,
                      int64_t sign_contexts, int64_t *out)
 {
+    memset(w->above, 0, (size_t)cols * sizeof(double));
+    memset(w->above2, 0, (size_t)cols * sizeof(double));
     for (Py_ssize_t r = 0; r < rows; r++) {
-        const int64_t *up = r >= 1 ? out + (r - 1) * cols : NULL, *up2 = r >= 2 ? out + (r - 2) * cols : NULL;
         int64_t *row = out + r * cols;
-        for (Py_ssize_t c = 0; c < cols; c++) {   /* active + neighbours(row above, row two above), as numpy adds them */
-            double n = r >= 1 ? magnitude(up[c]) : 0.0;
-            if (c >= 1)
-                n = n + 0.5 * (r >= 1 ? magnitude(up[c - 1]) : 0.0);
-            if (c + 1 < cols)
-                n = n + 0.5 * (r >= 1 ? magnitude(up[c + 1]) : 0.0);
-            n = n + 0.5 * (r >= 2 ? magnitude(up2[c]) : 0.0);
-            w->near[c] = active[r * cols + c] + n;
-        }
         for (int odd = 0; odd < 2; odd++) {
             Py_ssize_t count = 0;
             int64_t top = 0;
             for (Py_ssize_t c = odd; c < cols; c += 2) {
                 if (!where[r * cols + c])
                     continue;
-                double a = w->near[c];
+                double n = w->above[c];   /* neighbours(row above, row two above), as numpy adds them */
+                if (c >= 1)
+                    n = n + 0.5 * w->above[c - 1];
+                if (c + 1 < cols)
+                    n = n + 0.5 * w->above[c + 1];
+                n = n + 0.5 * w->above2[c];
+                double a = active[r * cols + c] + n;
                 if (odd) {   /* beside: the even columns left and right, just decoded */
                     double b = magnitude(row[c - 1]);
                     if (c + 1 < cols)
@@ -353,6 +352,11 @@ static int rows_loop(Stream *s, Scratch *w, Py_ssize_t rows, Py_ssize_t cols, co
             if (code != OK)
                 return code;
         }
+        double *oldest = w->above2;
+        w->above2 = w->above;
+        w->above = oldest;
+        for (Py_ssize_t c = 0; c < cols; c++)
+            w->above[c] = magnitude(row[c]);
     }
     return OK;
 }
@@ -398,13 +402,13 @@ static PyObject *decode_rows(PyObject *self, PyObject *args)
     int code = OK;
     if (cells > 0) {
         /* cols <= the buffers' bytes / 8, so the slots' count cannot overflow */
-        int64_t *slots = PyMem_Malloc(((size_t)cols * 7 + (size_t)thresholds + 2) * sizeof(int64_t));
+        int64_t *slots = PyMem_Malloc(((size_t)cols * 8 + (size_t)thresholds + 2) * sizeof(int64_t));
         if (!slots) {
             release(&v);
             return PyErr_NoMemory();
         }
         Scratch w = {slots, slots + cols, slots + 2 * cols, slots + 3 * cols, slots + 4 * cols, slots + 5 * cols,
-                     slots + 7 * cols, (double *)(slots + 6 * cols)};
+                     slots + 8 * cols, (double *)(slots + 6 * cols), (double *)(slots + 7 * cols)};
         code = rows_loop(&s, &w, rows, cols, v.views[5].buf, v.views[6].buf, v.views[7].buf, thresholds, first_model,
                          v.views[8].buf, weights, first_sign_model, sign_contexts, v.views[9].buf);
         PyMem_Free(slots);
