@@ -89,7 +89,7 @@ SEED = 15
 LAZ_POINTS = 1_000_000          # issue 16: a LAZ cloud of about a million points ...
 QUICK_LAZ_POINTS = 100_000
 LAZ_SECONDS = 10.0              # ... slices in under 10 s (command line, wall)
-PACKAGES = ("numpy", "scipy", "PyWavelets", "constriction", "numba", "DracoPy", "imagecodecs")
+PACKAGES = ("numpy", "scipy", "PyWavelets", "constriction", "DracoPy", "imagecodecs")
 SCALE_STAGES = ("encode", "decode", f"densify -n {SCALE_DENSIFY}", "triangulate")
 MEMORY_STAGES = SCALE_STAGES[:3]   # the issue's memory condition: encode, decode, densify
 
