@@ -12,5 +12,7 @@ def kernel(name):
 
 
 setup(ext_modules=[
+    kernel("mzc.codecs.dwt2d._rows"),
+    kernel("mzc.meshes._lzf"),
     kernel("mzc.ops._plate"),
 ])

@@ -14,6 +14,8 @@ from typing import TYPE_CHECKING, Any
 from mzc.errors import MzcError
 
 if TYPE_CHECKING:
+    from collections.abc import Sequence
+
     import numpy as np
 
     from mzc.grid import ZGrid
@@ -21,6 +23,7 @@ if TYPE_CHECKING:
 
 PathLike = str | os.PathLike
 BYTES_SOURCE = "<bytes>"
+RASTERS = ("tif", "tiff", "asc")   # a ZGrid written to a name with this extension is written as a raster
 
 
 def as_mesh(surface: Any) -> Mesh:
@@ -47,21 +50,36 @@ def as_mesh(surface: Any) -> Mesh:
 
 
 def read_surface(path: PathLike | None) -> Mesh:
-    """A surface to compare: a mesh file, or any mzc file (z-grid or compressed) as the mesh
-    of its grid (``grid`` set). stdin may carry an mzc file only: a mesh on stdin could not
-    be told from a mistake, so meshes are given as file names."""
+    """A surface to compare: a mesh file, or any mzc file or raster as the mesh of its grid
+    (``grid`` set)."""
+    from mzc.grid import ZGrid
+
+    item = read_item(path)
+    if not isinstance(item, ZGrid):
+        return item
+    from mzc.ops.triangulation import grid_to_mesh
+
+    return grid_to_mesh(item)
+
+
+def read_item(path: PathLike | None) -> ZGrid | Mesh:
+    """What a file holds: an mzc file (z-grid or compressed) or a raster (GeoTIFF, ESRI ASCII
+    grid: ``mzc.rasters``) as its ZGrid, a mesh or point cloud as a Mesh. stdin may carry an
+    mzc file or a raster only: a mesh on stdin could not be told from a mistake, so meshes are
+    given as file names."""
     from mzc.formats import is_mzc, read_any
     from mzc.meshes import mesh_from_bytes
+    from mzc.rasters import read_raster, sniff
     from mzc.streams import display_name, is_stdio, read_input
 
     source = display_name(path)
     data = read_input(path)
     if is_mzc(data):
-        from mzc.ops.triangulation import grid_to_mesh
-
-        return grid_to_mesh(read_any(data, source))
+        return read_any(data, source)
+    if sniff(data):
+        return read_raster(data, source, None if is_stdio(path) else path)
     if is_stdio(path):
-        raise MzcError("stdin must carry an mzc file; give meshes as file names", source=source)
+        raise MzcError("stdin must carry an mzc file or a raster; give meshes as file names", source=source)
     return mesh_from_bytes(data, source)
 
 
@@ -82,13 +100,35 @@ def as_grid(grid: ZGrid | np.ndarray) -> ZGrid:
 def slice(surface: Any, d1: float | None = None, d2: float | None = None, *, rows: int | None = None,
           cols: int | None = None, align: str = "none", projection: str = "auto", view: str = "auto",
           center: tuple[float, float, float] | None = None, axis: tuple[float, float, float] | None = None,
-          units: str | None = None, thesis_grid: bool = False) -> ZGrid:
+          units: str | None = None, thesis_grid: bool = False, classes: Sequence[int] | None = None,
+          cloud: str = "auto") -> ZGrid:
     """Cut a surface into a z-grid (``mzc slice``): spacings d1 (rows) and d2 (columns) default to
-    the data's own, the cutting surfaces (``projection``) to the ones that see it best."""
+    the data's own, the cutting surfaces (``projection``) to the ones that see it best; ``classes``
+    keeps those ASPRS classes of a LAS/LAZ cloud (2: ground), ``cloud`` (auto, bin, delaunay)
+    says how a point cloud becomes a surface.
+
+    A raster (a GeoTIFF or ESRI ASCII grid path, or a grid read from one: it has a ``raster``
+    layout) is its own z-grid, node for node: it is returned as it is (with ``units`` when
+    given), and an option that would cut it otherwise is refused (resample the raster first)."""
+    from mzc.grid import ZGrid
+
+    if isinstance(surface, (str, os.PathLike)):
+        surface = read_item(os.fspath(surface))
+    if isinstance(surface, ZGrid) and surface.raster is not None:
+        given = {"d1": d1, "d2": d2, "rows": rows, "cols": cols, "center": center, "axis": axis,
+                 "thesis_grid": thesis_grid or None, "align": None if align == "none" else align,
+                 "projection": None if projection in ("auto", "planar") else projection,
+                 "view": None if view in ("auto", "+z") else view}
+        refused = next((name for name, value in given.items() if value is not None), None)
+        if refused:
+            raise MzcError("a raster is sliced as its own grid, node for node, so this option does not apply: "
+                           "resample the raster first (gdalwarp -tr, -t_srs)", field=refused)
+        return surface if units is None else surface.with_z(surface.z, units=units)
     from mzc.ops.slicing import slice_surface
 
     return slice_surface(as_mesh(surface), d1=d1, d2=d2, rows=rows, cols=cols, align=align, units=units,
-                         projection=projection, center=center, axis=axis, view=view, thesis_grid=thesis_grid)
+                         projection=projection, center=center, axis=axis, view=view, thesis_grid=thesis_grid,
+                         classes=None if classes is None else tuple(classes), cloud=cloud)
 
 
 def encode(grid: ZGrid | np.ndarray, codec: str = "dwt2d", **options: Any) -> bytes:
@@ -146,15 +186,17 @@ def sample(name: str = "bump") -> Mesh:
 
 
 def read(path: PathLike) -> ZGrid | Mesh:
-    """Read a file: an mzc file (z-grid or compressed) as its ZGrid, a mesh or cloud as a Mesh."""
-    mesh = read_surface(os.fspath(path))
-    return mesh.grid if mesh.grid is not None else mesh
+    """Read a file: an mzc file (z-grid or compressed) or a raster (GeoTIFF, ESRI ASCII grid) as
+    its ZGrid, a mesh or cloud as a Mesh."""
+    return read_item(os.fspath(path))
 
 
 def write(path: PathLike, item: ZGrid | Mesh | bytes, file_format: str | None = None,
           precision: int | None = None, *, plain: bool = False, float32: bool = False) -> None:
-    """Write a ZGrid as a z-grid, a Mesh in the format of ``path``'s extension (or ``file_format``),
-    or bytes (a compressed file) as they are; atomically: nothing is left on failure.
+    """Write a ZGrid as a z-grid, or as a raster when ``path`` ends in .tif, .tiff or .asc (or
+    ``file_format`` is tif or asc: mzc.rasters, ``float32`` samples for GeoTIFF), a Mesh in the
+    format of ``path``'s extension (or ``file_format``), or bytes (a compressed file) as they
+    are; atomically: nothing is left on failure.
 
     A z-grid's heights are written raw by default (``mzc-zgrid 3.0``: exact little-endian
     float64, or float32 with ``float32``); ``plain`` writes them as text rows (1.0, 2.0), which
@@ -165,6 +207,10 @@ def write(path: PathLike, item: ZGrid | Mesh | bytes, file_format: str | None = 
     path = os.fspath(path)
     if isinstance(item, (bytes, bytearray)):
         write_output(path, bytes(item))
+    elif isinstance(item, ZGrid) and (file_format or os.path.splitext(path)[1].lower().lstrip(".")) in RASTERS:
+        from mzc.rasters import format_for, write_raster
+
+        write_raster(path, item, format_for(path, file_format), float32=float32)
     elif isinstance(item, ZGrid):
         from mzc.formats import zgrid
 

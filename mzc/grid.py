@@ -20,6 +20,45 @@ from mzc.vectors import rotated
 
 IDENTITY_TRANSFORM = np.hstack([np.eye(3), np.zeros((3, 1))])
 TOKEN = re.compile(r"[^\s\x00-\x1f\x7f]{1,64}")   # one header token: no space, no control character
+MAX_CRS = 16384            # characters of a crs line's WKT (a WKT2 of a projected CRS takes about 2,000)
+CELLS = ("area", "point")  # what a raster's value stands for: its cell, or a sample at its node
+ROW_ORDERS = ("down", "up")   # a raster's first row: the grid's last (north-up images) or its first
+SAMPLES = ("uint8", "int8", "uint16", "int16", "uint32", "int32", "float32", "float64")   # a raster's type
+
+
+@dataclass(frozen=True)
+class Raster:
+    """How a planar grid lies in the raster it was read from (or is written to): ``cells``
+    ``area`` (each node is the centre of a d2 x d1 cell, GeoTIFF's PixelIsArea, ESRI's
+    ``xllcorner``) or ``point`` (a sample at the node: PixelIsPoint, ``xllcenter``); ``rows``
+    ``down`` (the raster's first row is the grid's last: a north-up image) or ``up``; and
+    ``sample``, the raster's value type. The node positions are the grid's own (origin, d1,
+    d2): this only says how to write the same grid back as that raster (spec/zgrid.md)."""
+
+    cells: str = "area"
+    rows: str = "down"
+    sample: str = "float64"
+
+    def __post_init__(self) -> None:
+        for name, choices in (("cells", CELLS), ("rows", ROW_ORDERS), ("sample", SAMPLES)):
+            if getattr(self, name) not in choices:
+                raise MzcError(f"raster {name} {getattr(self, name)!r} is not one of {', '.join(choices)}",
+                               field="raster")
+
+    def words(self) -> str:
+        """The values of the header's ``raster`` line."""
+        return f"{self.cells} {self.rows} {self.sample}"
+
+
+def check_crs(value):
+    """Refuse a ``crs`` that the header cannot hold as its one line of WKT."""
+    if value is None:
+        return
+    if not isinstance(value, str) or not value or len(value) > MAX_CRS or value != " ".join(value.split()):
+        raise MzcError(f"a CRS is one line of WKT of 1 to {MAX_CRS} characters, single spaces between words",
+                       field="crs")
+    if not value.isprintable():
+        raise MzcError("the CRS holds a control character", field="crs")
 
 
 def check_token(value, name):
@@ -47,7 +86,9 @@ class ZGrid:
     centre and R's second column the axis); ``projection`` names the cutting surfaces and
     ``radius`` the reference radius R0 that scales their angles into lengths (None for
     planar grids); ``units`` names the length unit when known; ``nodata`` is the token
-    written for invalid nodes.
+    written for invalid nodes. A planar grid read from a raster (or to be written as one) has
+    ``crs``, the coordinate reference system of the input frame as one line of WKT, and
+    ``raster`` (a Raster): both None otherwise.
     """
 
     z: np.ndarray
@@ -59,6 +100,8 @@ class ZGrid:
     nodata: str = "nan"
     projection: str = "planar"
     radius: float | None = None
+    crs: str | None = None
+    raster: Raster | None = None
 
     def __post_init__(self) -> None:
         self.z = np.asarray(self.z, dtype=float)
@@ -87,6 +130,16 @@ class ZGrid:
                                                  self.origin[1])
             if problem:
                 raise MzcError(f"{problem[0]}: {problem[1]}")
+        check_crs(self.crs)
+        if self.projection != "planar" and self.georeferenced:
+            raise MzcError(f"a {self.projection} grid has no raster or CRS: they belong to planar grids",
+                           field="crs" if self.crs else "raster")
+
+    @property
+    def georeferenced(self) -> bool:
+        """True when the grid carries a CRS or a raster layout (the header lines of spec/zgrid.md's
+        newer minor versions)."""
+        return self.crs is not None or self.raster is not None
 
     @property
     def shape(self) -> tuple[int, int]:

@@ -4,6 +4,7 @@ import json
 import os
 import subprocess
 import sys
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -62,31 +63,41 @@ def test_encode_imports_only_what_its_codec_uses(tmp_path):
     assert result.returncode == 0 and not imported & {"constriction", "numba", "pywt", "meshio", "matplotlib"}
 
 
-HEAVY = {"scipy", "constriction", "numba", "llvmlite", "pywt", "meshio", "matplotlib", "distributed", "dask"}
-# what each command may load of HEAVY: scipy only where a sparse solve (or an FFT) runs, numba only to
-# decode dwt2d (its row decoder), constriction only to encode it
+HEAVY = {"scipy", "constriction", "numba", "llvmlite", "pywt", "meshio", "matplotlib", "distributed", "dask",
+         "laspy", "lazrs", "rasterio"}
+# what each command may load of HEAVY: scipy only where a sparse solve (or an FFT) runs, constriction only
+# to encode dwt2d (its decoder is a small C extension; numba, which it once used, cost 0.8 s of start-up),
+# laspy and lazrs only to read a LAS/LAZ, rasterio only to read or write a GeoTIFF
 IMPORT_SETS = [
     (["slice", "{mesh}"], set()),
+    (["slice", "{laz}"], {"laspy", "lazrs", "scipy"}),   # a cloud: Delaunay (scipy.spatial)
+    (["slice", "{pcd}"], {"scipy"}),
     (["encode", "--dwt2d", "--rmse", "0.05", "{grid}"], {"constriction"}),
     (["encode", "--dct", "-q", "20", "{grid}"], {"scipy"}),                             # scipy.fft
-    (["decode", "{coded}"], {"numba", "llvmlite", "scipy"}),   # numba's first call probes scipy.linalg for a BLAS
+    (["decode", "{coded}"], set()),
     (["densify", "-n", "1", "{grid}"], set()),                                          # the biharmonic solve: C
     (["triangulate", "{grid}"], set()),
     (["triangulate", "{grid}", "-o", "{grid}.ply"], set()),                             # our own PLY writer
     (["info", "{coded}"], set()),
     (["diff", "{grid}", "{grid}"], set()),
+    (["slice", "{tif}"], {"rasterio"}),                                                 # GeoTIFF: GDAL
+    (["slice", "{asc}"], set()),                                                        # an ESRI grid: our own
+    (["decode", "{grid}", "--format", "tif"], {"rasterio"}),
+    (["decode", "{grid}", "--format", "asc"], set()),
 ]
 
 
 @pytest.fixture(scope="module")
 def sample_files(tmp_path_factory):
-    """A sample mesh, its grid and its dwt2d file."""
+    """A sample mesh, its grid and its dwt2d file, and public LAZ and PCD clouds."""
     folder = tmp_path_factory.mktemp("imports")
     mesh, grid, coded = folder / "bump.obj", folder / "bump.zg", folder / "bump.mzw2"
     subprocess.run([sys.executable, "-m", "mzc", "sample", "bump", "-o", mesh], check=True)
     subprocess.run([sys.executable, "-m", "mzc", "slice", mesh, "-o", grid], check=True)
     subprocess.run([sys.executable, "-m", "mzc", "encode", "--dwt2d", "--rmse", "0.05", grid, "-o", coded], check=True)
-    return {"mesh": mesh, "grid": grid, "coded": coded}
+    public = Path(__file__).resolve().parent / "data" / "public"
+    return {"mesh": mesh, "grid": grid, "coded": coded, "laz": public / "simple.laz", "pcd": public / "milk.pcd",
+            "tif": public / "srtm_blurred_res.tif", "asc": public / "hugo_site.asc"}
 
 
 @pytest.mark.parametrize("arguments, allowed", IMPORT_SETS, ids=lambda v: " ".join(v) if isinstance(v, list) else "")

@@ -9,14 +9,17 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from mzc.codecs import dwt2d
+from mzc.codecs.dwt2d import _rows
 from mzc.codecs.dwt2d import wavelet as w2
-from mzc.codecs.dwt2d.entropy import TABLE_BITS, Decoder, Encoder
+from mzc.codecs.dwt2d.entropy import MAX_CLASSES, TABLE_BITS, Decoder, Encoder
 from mzc.errors import MzcError
 from mzc.formats import read_any
+from mzc.formats.header import with_checksum
 from mzc.grid import ZGrid
 from mzc.measure.metrics import surface_distance
 from mzc.ops.triangulation import grid_to_mesh, jump_edges
 
+from codec_contract import CHECKSUM_LINE
 from codec_contract import spec_examples as contract_examples
 from conftest import FACE_NAMES, face_path
 
@@ -316,6 +319,94 @@ def test_corrupt_or_truncated_payloads_raise_only_mzc_errors(version, data):
     except MzcError:
         return
     assert np.isfinite(decoded.z[decoded.valid]).all()
+
+
+integers = st.one_of(st.integers(-3, 3), st.integers(-(2 ** (MAX_CLASSES - 1) - 1), 2 ** (MAX_CLASSES - 1) - 1))
+
+
+@settings(max_examples=200, deadline=None)
+@given(st.lists(st.tuples(st.integers(0, 40), st.lists(integers, min_size=1, max_size=30)), min_size=1, max_size=12))
+def test_random_integers_of_many_models_decode_exactly(runs):
+    """Runs of integers of every class (up to the largest, 47 bits) with any model ids come back from
+    the C decoder's rANS and raw bits exactly, with nothing left over."""
+    encoder = Encoder()
+    for model, values in runs:
+        encoder.add(model, values)
+    decoder = Decoder(encoder.finish(), "t")
+    assert [decoder.read(model, len(values)).tolist() for model, values in runs] == [values for _, values in runs]
+    decoder.check_end()
+
+
+@settings(max_examples=300, deadline=None, derandomize=True, suppress_health_check=[HealthCheck.too_slow])
+@given(small_grids(), st.data())
+def test_damaged_payloads_with_a_matching_checksum_decode_or_raise_mzc_errors(grid, data):
+    """Random grids' payloads with bytes changed, cut off or added, and the crc32 recomputed so that
+    the damage reaches the C decoder: a grid of the declared shape or an MzcError, never a crash."""
+    original = CHECKSUM_LINE.sub(b"", dwt2d.write(grid, max_error=0.05), count=1)
+    body = original.index(b"\ndata\n") + 6
+    payload = bytearray(original[body:])
+    if data.draw(st.booleans()):
+        payload = payload[: data.draw(st.integers(0, len(payload)))]
+    for _ in range(data.draw(st.integers(1, 4)) if payload else 0):
+        payload[data.draw(st.integers(0, len(payload) - 1))] = data.draw(st.integers(0, 255))
+    payload += data.draw(st.binary(max_size=8))
+    try:
+        decoded = dwt2d.read(with_checksum(original[:body] + bytes(payload)))
+    except MzcError:
+        return
+    assert decoded.shape == grid.shape and np.isfinite(decoded.z[decoded.valid]).all()
+
+
+def c_decoder_calls():
+    """Valid calls of the C decoder's three functions on a one-coefficient payload, by name, as lists of arguments."""
+    stream = list(Decoder(one_coefficient_payload(1, 1), "t").stream)
+    one = [np.ones(1, dtype=bool), np.zeros(1), np.array(dwt2d.THRESHOLDS)]
+    return {
+        "read_values": stream + [4, 1, np.zeros(1, dtype=np.int64)],
+        "decode_rows": stream + [1, 1, *one, 4, np.zeros(1, dtype=np.int64), (-1, 0, 0), 5, 4, np.zeros(1, np.int64)],
+        "fill_spans": [np.array([2]), np.array([False]), np.zeros(0, np.int64), np.array([0, 0]), 1, 1,
+                       np.zeros(1, dtype=bool)],
+    }
+
+
+@pytest.mark.parametrize("function, index, value", [
+    ("read_values", 8, np.zeros(2, dtype=np.int64)),        # out longer than count
+    ("read_values", 8, np.zeros(1, dtype=np.int32)),        # out of 4-byte items
+    ("read_values", 4, np.zeros((2, MAX_CLASSES + 1), dtype=np.int64)),   # cumulative rows not ending at 2**24
+    ("read_values", 2, np.zeros(3, dtype=np.uint8)),        # words not of 4-byte items
+    ("decode_rows", 7, 2),                                  # 2 columns, but buffers of 1 cell
+    ("decode_rows", 8, np.ones(2, dtype=bool)),             # where of 2 cells
+    ("decode_rows", 10, np.ones(2, dtype=bool)),            # thresholds of 1-byte items
+    ("decode_rows", 12, np.zeros(0, dtype=np.int64)),       # no parent map although signs are decoded
+    ("decode_rows", 13, (-1, 0)),                           # two sign weights
+    ("fill_spans", 6, np.zeros(2, dtype=bool)),             # valid of 2 cells
+    ("fill_spans", 0, np.array([2, 2])),                    # two rows of lengths for one row
+])
+def test_the_c_decoder_refuses_buffers_that_do_not_fit_the_shapes_passed(function, index, value):
+    arguments = c_decoder_calls()[function]
+    assert isinstance(getattr(_rows, function)(*arguments), int)   # the valid call runs (to a result code)
+    arguments[index] = value
+    with pytest.raises((ValueError, TypeError)):
+        getattr(_rows, function)(*arguments)
+
+
+@settings(max_examples=300, deadline=None)
+@given(st.integers(0, 6), st.integers(0, 6), st.data())
+def test_the_mask_spans_of_any_flips_stay_inside_the_grid(rows, cols, data):
+    """fill_spans on arbitrary flip counts and moves (negative, odd, too many, huge): the first bad row
+    or -1, and then every row's spans are those its flips give."""
+    numbers = st.integers(-2 ** 63, 2 ** 63 - 1) | st.integers(-3, 8)
+    lengths = np.array(data.draw(st.lists(numbers, min_size=rows, max_size=rows)), dtype=np.int64)
+    unchanged = np.array(data.draw(st.lists(st.booleans(), min_size=rows, max_size=rows)), dtype=bool)
+    same, gaps = (np.array(data.draw(st.lists(numbers, max_size=12)), dtype=np.int64) for _ in range(2))
+    valid = np.zeros((rows, cols), dtype=bool)
+    bad = _rows.fill_spans(lengths, unchanged, same, gaps, rows, cols, valid)
+    assert -1 <= bad < rows and not valid[bad:].any() if bad >= 0 else True
+    flips = np.zeros(0, dtype=np.int64)
+    for r in range(rows if bad < 0 else bad):   # the good rows, decoded as spec/dwt2d.md says
+        moves, same, gaps = (same, same[lengths[r]:], gaps) if unchanged[r] else (gaps, same, gaps[lengths[r]:])
+        flips = flips + moves[:lengths[r]] if unchanged[r] and r else np.cumsum(moves[:lengths[r]] + 1) - 1
+        assert np.array_equal(np.flatnonzero(np.diff(valid[r], prepend=False, append=False)), flips)
 
 
 def spec_examples():

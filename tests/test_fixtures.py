@@ -53,9 +53,11 @@ def test_fixture_name_states_its_magic_line_and_extension(name):
 
 
 def written_versions(module):
-    """The versions a format's writer writes: planar and projected grids, and the z-grid's raw
-    body (RAW_VERSION), a third version above both."""
-    return {module.VERSION, module.PROJECTED_VERSION, getattr(module, "RAW_VERSION", module.VERSION)}
+    """The versions a format's writer writes: planar and projected grids, the z-grid's raw
+    body (RAW_VERSION), a third version above both, and the georeferenced planar grids of
+    rasters (GEOREF_SINCE: a minor version of a major)."""
+    return {module.VERSION, module.PROJECTED_VERSION, getattr(module, "RAW_VERSION", module.VERSION),
+            *module.GEOREF_SINCE.items()}
 
 
 def newest_major(kind):
@@ -132,9 +134,11 @@ def grids():
 
 def test_fixtures_span_planar_spherical_cylindrical_full_turn_holes_and_transforms():
     for name, grid in grids().items():
-        kind, major, _minor = split_magic(fixture_bytes(name), name)
+        kind, major, minor = split_magic(fixture_bytes(name), name)
+        georeferenced = minor >= module_for(kind).GEOREF_SINCE.get(major, minor + 1)
         newest = major == module_for(kind).PROJECTED_VERSION[0]   # holds a projected grid, the older ones planar
-        assert (grid.projection != "planar") == newest, name
+        assert (grid.projection != "planar") == (newest and not georeferenced), name
+        assert grid.georeferenced == georeferenced, name   # a raster's planar grid, with its CRS and layout
         assert 0 < np.isnan(grid.z).sum() < grid.z.size, name
     projections = {(split_magic(fixture_bytes(n), n)[0], g.projection, g.periodic) for n, g in grids().items()}
     for kind in REGISTRY:

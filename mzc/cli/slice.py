@@ -17,6 +17,16 @@ def one_word(value):
     return value
 
 
+def class_codes(value):
+    """``--classes`` as a tuple of ASPRS class codes (0..255), or a usage error."""
+    if value is None:
+        return None
+    words = [word.strip() for word in value.split(",")]
+    if not all(word.isascii() and word.isdigit() and int(word) <= 255 for word in words):
+        raise click.BadParameter(f"{value!r} is not a comma-separated list of class codes 0..255 (e.g. 2 or 2,9)")
+    return tuple(sorted({int(word) for word in words}))
+
+
 SLICE_OPTIONS = [   # the grid's options, shared with 'mzc batch encode'
     click.option("--d1", type=float, metavar="F",
                  help="Row spacing: distance between horizontal planes [default: from the data]."),
@@ -43,6 +53,13 @@ SLICE_OPTIONS = [   # the grid's options, shared with 'mzc batch encode'
                  help="Axis direction of a central projection [default: chosen]."),
     click.option("--units", metavar="TEXT", callback=lambda ctx, param, value: one_word(value),
                  help="Length unit to record, e.g. mm (one word)."),
+    click.option("--classes", metavar="LIST", callback=lambda ctx, param, value: class_codes(value),
+                 help="Keep only the points of these classes of a LAS/LAZ cloud: ASPRS codes, comma-separated "
+                      "(2: ground; 2,9: ground and water)."),
+    click.option("--cloud", type=click.Choice(["auto", "bin", "delaunay"]), default="auto", show_default=True,
+                 help="How a point cloud becomes a surface: bin (a local plane fit at each node, for dense clouds) "
+                      "or delaunay (triangles between its points); auto bins clouds of over 100,000 points that "
+                      "are dense at the grid's spacing."),
 ]
 
 
@@ -68,21 +85,27 @@ def check_slice_options(d1, d2, rows, cols):
 @slice_options
 @zgrid_output_options
 def command(input, output, d1, d2, rows, cols, thesis_grid, align, projection, view, center, axis, units,
-            plain, float32, precision):
-    """Cut a mesh (OBJ, PLY, VTK, STL, OFF) or point cloud (x y z text, vertex-only PLY)
-    into a z-grid: each node holds the outermost hit of its line with the surface (the
-    front-most height of planar grids, the farthest distance along a central ray)."""
+            classes, cloud, plain, float32, precision):
+    """Cut a mesh (OBJ, PLY, VTK, STL, OFF) or point cloud (LAS/LAZ, PCD, x y z text,
+    vertex-only PLY) into a z-grid: each node holds the outermost hit of its line with the
+    surface (the front-most height of planar grids, the farthest distance along a central ray).
+
+    A raster (GeoTIFF, ESRI ASCII grid) is its own z-grid: read node for node with its
+    no-data cells, georeferencing and CRS; the options that would cut it otherwise are
+    refused."""
     from mzc.api import slice as slice_surface
     from mzc.errors import about
-    from mzc.meshes import read_mesh
-    from mzc.streams import check_not_input, display_name
+    from mzc.meshes import mesh_from_bytes
+    from mzc.rasters import read_raster, sniff
+    from mzc.streams import check_not_input, display_name, read_input
 
     check_slice_options(d1, d2, rows, cols)
     body = zgrid_body(plain, float32, precision)
     check_not_input(output, input)
-    mesh = read_mesh(input)
-    with about(display_name(input), "slicing it"):
-        grid = slice_surface(mesh, d1=d1, d2=d2, rows=rows, cols=cols, align=align, units=units,
+    data, source = read_input(input), display_name(input)
+    surface = read_raster(data, source, input) if sniff(data) else mesh_from_bytes(data, source)
+    with about(source, "slicing it"):
+        grid = slice_surface(surface, d1=d1, d2=d2, rows=rows, cols=cols, align=align, units=units,
                              projection=projection, center=center, axis=axis, view=view,
-                             thesis_grid=thesis_grid)
+                             thesis_grid=thesis_grid, classes=classes, cloud=cloud)
     write_grid(grid, output, body)

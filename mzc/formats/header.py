@@ -15,6 +15,11 @@ the version its writer gives planar grids (``VERSION``: the older one where the 
 not change, so older readers keep reading them), the one it gives projected grids
 (``PROJECTED_VERSION``) and the oldest major it reads (``OLDEST_MAJOR``).
 
+The georeferencing lines (``crs``, ``raster``) of a planar grid read from a raster describe
+the same nodes, so they came in a minor version of each format (``GEOREF_SINCE``: major ->
+first minor that reads them; older readers ignore them and decode the same surface); a grid
+without them keeps its format's older version, byte for byte.
+
 The integrity rule: a compressed format's file carries a ``crc32`` header line, the CRC-32
 of every byte of the file but that line (``with_checksum``); ``read_header`` checks it
 before anything reads the body, whatever the version, and refuses a file of a version that
@@ -31,7 +36,7 @@ import numpy as np
 
 from mzc import projections
 from mzc.errors import MzcError
-from mzc.grid import IDENTITY_TRANSFORM, check_token
+from mzc.grid import IDENTITY_TRANSFORM, Raster, check_crs, check_token
 from mzc.limits import MAX_DIMENSION, check_grid_size, length_problem
 from mzc.numbers import parse_int
 
@@ -53,9 +58,12 @@ def split_magic(data, source):
     return kind, int(version[1]), int(version[2])
 
 
-def file_version(grid, planar, projected):
-    """The version a format writes ``grid`` with: its ``planar`` one or its ``projected`` one."""
-    return tuple(planar) if grid.projection == "planar" else tuple(projected)
+def file_version(grid, planar, projected, georeferenced=None):
+    """The version a format writes ``grid`` with: its ``planar`` one, its ``projected`` one, or
+    its ``georeferenced`` one for a planar grid with a CRS or raster layout."""
+    if grid.projection != "planar":
+        return tuple(projected)
+    return tuple(georeferenced) if grid.georeferenced else tuple(planar)
 
 
 def magic_line(kind, version):
@@ -67,14 +75,15 @@ class Header:
     """The keyword lines of a header, with the line number of each for error messages.
 
     ``major`` is the file's major version; ``projected`` is True when it may hold a central
-    projection.
+    projection, ``georeferenced`` when its version reads the ``crs`` and ``raster`` lines.
     """
 
-    def __init__(self, source, major=1, projected=False):
+    def __init__(self, source, major=1, projected=False, georeferenced=False):
         self.source = source
         self.fields = {}
         self.major = major
         self.projected = projected
+        self.georeferenced = georeferenced
 
     def add(self, keyword, values, line):
         if keyword in self.fields:
@@ -153,7 +162,7 @@ class Header:
 
 
 def read_header(data, source, kind, supported_major, oldest_major=1, projected_major=None, checksum_since=None,
-                binary=False):
+                binary=False, georef_since=None):
     """Parse magic and header lines of ``data``; return (Header, body bytes, first body line number).
 
     Majors above ``supported_major`` are refused (upgrade mzc), and so are majors below
@@ -161,7 +170,8 @@ def read_header(data, source, kind, supported_major, oldest_major=1, projected_m
     ``projected_major`` on, the grid header may hold a central projection. A ``crc32`` line
     is checked against the whole file; from ``checksum_since[major]`` (a minor version) on
     it is required. A ``binary`` body (dwt2d's payload) refuses CRLF line ends: a text-mode copy
-    changed its bytes.
+    changed its bytes. From ``georef_since[major]`` on, the ``crs`` and ``raster`` lines are read
+    (an older version's reader ignored them).
     """
     found, major, minor = split_magic(data, source)
     if found != kind:
@@ -172,7 +182,9 @@ def read_header(data, source, kind, supported_major, oldest_major=1, projected_m
     if major < oldest_major:
         raise MzcError(f"mzc-{kind} {major}.x was a draft of this format and is not read; encode the grid again",
                        source=source, line=1)
-    header = Header(source, major, projected=projected_major is not None and major >= projected_major)
+    since = (georef_since or {}).get(major)
+    header = Header(source, major, projected=projected_major is not None and major >= projected_major,
+                    georeferenced=since is not None and minor >= since)
     position = data.index(b"\n") + 1 if b"\n" in data else len(data)
     line_number = 1
     checksum_line = None
@@ -263,6 +275,7 @@ def read_grid_fields(header):
         units=header.word("units", required=False),
         nodata=header.word("nodata", required=False, default="nan"),
         **read_projection(header, rows, cols),
+        **read_georeference(header),
     )
     for name in ("units", "nodata"):
         try:
@@ -295,6 +308,30 @@ def read_projection(header, rows, cols):
     return {"projection": projection, "radius": radius}
 
 
+def read_georeference(header):
+    """``crs`` (one line of WKT) and ``raster`` (cells, row order, sample type) of a version that
+    reads them; they belong to planar grids."""
+    if not header.georeferenced:
+        return {}
+    fields = {}
+    if header.has("crs"):
+        fields["crs"] = " ".join(header.tokens("crs"))
+        try:
+            check_crs(fields["crs"])
+        except MzcError as error:
+            raise header.error("crs", error.message) from None
+    if header.has("raster"):
+        try:
+            fields["raster"] = Raster(*header.tokens("raster", 3))
+        except MzcError as error:
+            raise header.error("raster", error.message) from None
+    projection = header.word("projection", required=False, default="planar")
+    if fields and projection != "planar":
+        keyword = next(iter(fields))
+        raise header.error(keyword, f"a {projection} grid has no raster or CRS: they belong to planar grids")
+    return fields
+
+
 def format_number(value):
     """The shortest text that reads back as ``value`` (``3`` rather than ``3.0``)."""
     text = repr(float(value))
@@ -320,5 +357,9 @@ def grid_header_lines(grid, write_defaults=True):
         lines.append(f"units {grid.units}")
     if write_defaults or grid.nodata != "nan":
         lines.append(f"nodata {grid.nodata}")
+    if grid.crs is not None:
+        lines.append(f"crs {grid.crs}")
+    if grid.raster is not None:
+        lines.append(f"raster {grid.raster.words()}")
     return lines
 

@@ -8,6 +8,9 @@ line, then the heights, in one of two bodies (as netpbm's plain and raw variants
 - raw (``mzc-zgrid 3.0``, any projection): a ``raw float64`` (or ``float32``) header line and
   the file's ``crc32`` line, then rows x cols little-endian IEEE 754 values, row by row, NaN
   for invalid nodes. A new major version, so readers that only know text bodies refuse it.
+
+A planar grid read from a raster adds the ``crs`` and ``raster`` lines, a minor version of
+each body (1.1, 3.1); other grids keep 1.0, 2.0 and 3.0 byte for byte.
 """
 
 import numpy as np
@@ -31,6 +34,9 @@ VERSION = (1, 0)             # planar grids, byte for byte as before projections
 PROJECTED_VERSION = (2, 0)   # 1.0 with the projection lines (mzc.formats.header)
 OLDEST_MAJOR = 1
 RAW_VERSION = (3, 0)         # 2.0's header with a raw binary body, planar or projected
+GEOREFERENCED_VERSION = (1, 1)       # 1.0 with the crs and raster lines of a grid read from a raster
+RAW_GEOREFERENCED_VERSION = (3, 1)   # 3.0 with them
+GEOREF_SINCE = {1: 1, 3: 1}          # major -> the minor from which the crs and raster lines are read
 CHECKSUM_SINCE = {RAW_VERSION[0]: 0}   # a raw body is never read without its crc32 line
 SAMPLES = {"float64": "<f8", "float32": "<f4"}   # the raw line's value -> numpy dtype of the body
 
@@ -63,7 +69,7 @@ def read(data, source="<bytes>"):
     and field on bad input."""
     raw = split_magic(data, source)[1] >= RAW_VERSION[0]
     header, body, first_line = read_header(data, source, KIND, RAW_VERSION[0], projected_major=PROJECTED_VERSION[0],
-                                           checksum_since=CHECKSUM_SINCE, binary=raw)
+                                           checksum_since=CHECKSUM_SINCE, binary=raw, georef_since=GEOREF_SINCE)
     fields, rows, cols = read_grid_fields(header)
     z = read_raw(body, header, rows, cols) if raw else read_plain(body, first_line, fields["nodata"], rows, cols,
                                                                   source)
@@ -130,13 +136,15 @@ def write(grid, precision=None, raw=None):
     """Serialise a ZGrid to z-grid bytes: plain text (``raw`` None; ``precision`` decimals round
     the heights), or a raw body of ``raw`` samples, "float64" (exact) or "float32"."""
     if raw is None:
-        lines = [magic_line(KIND, file_version(grid, VERSION, PROJECTED_VERSION)), *grid_header_lines(grid), "data",
+        lines = [magic_line(KIND, file_version(grid, VERSION, PROJECTED_VERSION, GEOREFERENCED_VERSION)),
+                 *grid_header_lines(grid), "data",
                  *format_rows(grid.z, grid.nodata, precision)]
         return file_bytes(lines, checksum=False)
     if precision is not None:
         raise MzcError("precision rounds the text of a plain body; a raw body holds the values exactly",
                        field="precision")
-    lines = [magic_line(KIND, RAW_VERSION), *grid_header_lines(grid), f"raw {raw}", "data"]
+    version = file_version(grid, RAW_VERSION, RAW_VERSION, RAW_GEOREFERENCED_VERSION)
+    lines = [magic_line(KIND, version), *grid_header_lines(grid), f"raw {raw}", "data"]
     return file_bytes(lines, raw_body(grid.z, raw))
 
 

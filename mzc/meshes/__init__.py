@@ -2,8 +2,8 @@
 and writing mesh files.
 
 ``read_mesh`` accepts OBJ, PLY (ascii and binary), VTK, STL and OFF, and point clouds (a
-PLY with vertices only, or ``x y z`` text). Real files come in many dialects, so OBJ,
-PLY and STL are read by mzc's own vectorised readers (meshio misreads negative OBJ
+PLY with vertices only, ``x y z`` text, PCD, and LAS/LAZ through the ``las`` extra). Real
+files come in many dialects, so OBJ, PLY and STL are read by mzc's own vectorised readers (meshio misreads negative OBJ
 indices, refuses valid PLY files: vertex-only, ``vertex_index``, extra properties, and
 reads truncated PLY and STL files as if complete); meshio reads VTK and OFF. Polygons are
 fan-triangulated; other cell types are ignored. Every problem becomes an MzcError naming
@@ -34,19 +34,40 @@ if TYPE_CHECKING:
 class Mesh:
     """Vertices ``points`` (n, 3) and ``triangles`` (m, 3) indexing them; (0, 3) for a point
     cloud, whose file may give ``normals`` (n, 3) (they tell a slice which side it was seen
-    from). ``grid`` is the z-grid the mesh was derived from, when it was (``grid_to_mesh``):
-    ``mzc diff`` compares a grid at its own nodes and in its own frame."""
+    from) and ``classification`` (n,), the ASPRS class of each point of a LAS/LAZ cloud
+    (``with_classes``). ``crs`` is the coordinate reference system the file names (a WKT
+    string, or ``EPSG:code``), None when it names none. ``grid`` is the z-grid the mesh was
+    derived from, when it was (``grid_to_mesh``): ``mzc diff`` compares a grid at its own
+    nodes and in its own frame."""
 
     points: np.ndarray
     triangles: np.ndarray = field(default_factory=lambda: np.empty((0, 3), dtype=np.int64))
     normals: np.ndarray | None = None
     grid: ZGrid | None = None
+    classification: np.ndarray | None = None
+    crs: str | None = None
 
     def __post_init__(self):
         self.points = np.asarray(self.points, dtype=np.float64).reshape(-1, 3)
         self.triangles = np.asarray(self.triangles, dtype=np.int64).reshape(-1, 3)
         if self.normals is not None:
             self.normals = np.asarray(self.normals, dtype=np.float64).reshape(self.points.shape)
+        if self.classification is not None:
+            self.classification = np.asarray(self.classification).reshape(len(self.points))
+
+    def with_classes(self, classes) -> Mesh:
+        """The cloud of the points whose ``classification`` is one of ``classes`` (ASPRS codes:
+        2 = ground), as PDAL's filters.range on Classification keeps them; an MzcError when
+        the points have no classes or none has one of those."""
+        if self.classification is None or len(self.triangles):
+            raise MzcError("the input has no point classes (a LAS/LAZ cloud has them)", field="classes")
+        keep = np.isin(self.classification, np.asarray(list(classes)))
+        if not keep.any():
+            present = ", ".join(str(code) for code in np.unique(self.classification)[:20])
+            raise MzcError(f"no point has class {', '.join(str(code) for code in classes)} "
+                           f"(the cloud's classes: {present})", field="classes")
+        normals = None if self.normals is None else self.normals[keep]
+        return Mesh(self.points[keep], normals=normals, classification=self.classification[keep], crs=self.crs)
 
     @property
     def is_point_cloud(self) -> bool:
@@ -76,7 +97,7 @@ def mesh_from_bytes(data: bytes, source: str = "<bytes>", file_format: str | Non
                        source=source)
     name = file_format or registry.by_extension(source) or registry.by_content(data)
     if name is None:
-        raise MzcError("unrecognised mesh format (expected OBJ, PLY, VTK, STL, OFF or x y z text)",
+        raise MzcError("unrecognised mesh format (expected OBJ, PLY, VTK, STL, OFF, LAS/LAZ, PCD or x y z text)",
                        source=source)
     return checked(registry.format_named(name).read(data, source), source)
 

@@ -2,8 +2,13 @@
 loop per vertex or face.
 
 mzc reads OBJ itself rather than through meshio, which misreads negative indices. Lines
-end with ``\n``, ``\r\n`` or a lone ``\r`` (old Mac files); a positive face index may
-name a vertex defined further down, a negative one counts back from the vertices so far.
+end with ``\n``, ``\r\n`` or a lone ``\r`` (old Mac files), and a backslash at the end of
+a line continues the statement on the next; a positive face index may name a vertex
+defined further down, a negative one counts back from the vertices so far. Polygons
+(quads, n-gons) are split into a fan of triangles about their first corner: exact for
+the convex polygons scanners and exporters write (a concave one would need ear
+clipping). Exporters' other statements (``mtllib``, ``usemtl``, ``g``, ``o``, ``s``,
+``vn``, ``vt``, ``l``) and comments holding any bytes are read past.
 """
 
 import re
@@ -29,12 +34,12 @@ def sniff(data: bytes) -> bool:
 
 def read(data: bytes, source: str) -> Mesh:
     """Read Wavefront OBJ: ``v`` and ``f`` lines in any dialect (v/vt/vn, negative indices,
-    polygons, CRLF or CR line ends, trailing comments); every other statement (vt, vn, o, g, s, usemtl,
-    l, ...) is ignored. Works on whole byte arrays: no Python loop per vertex or face."""
+    polygons, CRLF or CR line ends, continued lines, trailing comments); every other statement (vt, vn, o, g, s,
+    usemtl, l, ...) is ignored. Works on whole byte arrays: no Python loop per vertex or face."""
     tokens = ObjTokens(data)
     binary = tokens.first_nul_line()
     if binary is not None:
-        raise MzcError("binary data (a NUL byte) where OBJ text was expected", source=source, line=binary + 1)
+        raise MzcError("binary data (a NUL byte) where OBJ text was expected", source=source, line=binary)
     vertex_lines, face_lines = tokens.lines_of("v"), tokens.lines_of("f")
     if len(vertex_lines) == 0:
         raise MzcError("no 'v' lines: the OBJ file has no vertices", source=source)
@@ -47,12 +52,16 @@ class ObjTokens:
     """The whitespace-separated tokens of OBJ bytes: where each starts and ends, and its line.
 
     Comments (``#`` to the end of the line, whatever bytes they hold) are blanked first. A line ends at ``\n``, or at
-    ``\r`` not followed by ``\n``.
+    ``\r`` not followed by ``\n``, unless a backslash comes just before: that line goes on on the next. ``line``
+    numbers the joined lines from 0; ``number`` gives the file's line number where one of them starts.
     """
 
     def __init__(self, data):
         text = np.frombuffer(data, dtype=np.uint8)
         line_end = (text == ord("\n")) | ((text == ord("\r")) & (np.r_[text[1:], 0] != ord("\n")))
+        self.physical = np.flatnonzero(line_end)
+        if b"\\\n" in data or b"\\\r" in data:
+            line_end, text = joined_lines(text, line_end)
         self.newlines = newlines = np.flatnonzero(line_end)
         if b"#" in data:
             after_hash = last_index(text == ord("#")) > last_index(line_end)
@@ -67,11 +76,16 @@ class ObjTokens:
         self.line = np.searchsorted(newlines, self.starts)
         self.first_on_line = np.r_[True, self.line[1:] != self.line[:-1]]
 
+    def number(self, line):
+        """The file's line number (from 1) where joined line ``line`` (0-based) starts."""
+        start = self.newlines[line - 1] + 1 if line > 0 else 0
+        return int(np.searchsorted(self.physical, start)) + 1
+
     def first_nul_line(self):
-        """The index (0-based) of the first line holding a NUL byte outside a comment, or None:
+        """The line number of the first line holding a NUL byte outside a comment, or None:
         exporters put any bytes in comments (ZBrush a NUL), but a NUL elsewhere means binary data."""
         nul = np.flatnonzero(self.text == 0)
-        return int(np.searchsorted(self.newlines, nul[0])) if len(nul) else None
+        return int(np.searchsorted(self.physical, nul[0])) + 1 if len(nul) else None
 
     def lines_of(self, keyword):
         """Sorted line indices (0-based) whose first token is the one-letter ``keyword``."""
@@ -108,6 +122,20 @@ class ObjTokens:
         return self.text[self.starts[index]:self.ends[index]].tobytes().decode("utf-8", "replace")
 
 
+def joined_lines(text, line_end):
+    """(line ends, text) with each line end that follows a backslash taken away, the backslash
+    and a ``\r`` before the ``\n`` made spaces: the statement goes on on the next line."""
+    before = np.r_[0, text[:-1]]
+    crlf = (text == ord("\n")) & (before == ord("\r"))
+    backslash_before = np.where(crlf, np.r_[0, 0, text[:-2]], before) == ord("\\")
+    joined = line_end & backslash_before
+    blank = np.zeros(len(text), dtype=bool)
+    positions = np.flatnonzero(joined)
+    blank[positions - 1 - crlf[positions]] = True      # the backslash
+    blank[positions[crlf[positions]] - 1] = True         # the \r of \r\n
+    return line_end & ~joined, np.where(blank, ord(" "), text).astype(np.uint8)
+
+
 def last_index(mask):
     """For every position, the index of the latest True at or before it (-1 when none)."""
     return np.maximum.accumulate(np.where(mask, np.arange(len(mask), dtype=np.int32), np.int32(-1)))
@@ -121,7 +149,7 @@ def obj_vertices(tokens, vertex_lines, source):
     counts = np.bincount(np.searchsorted(vertex_lines, line), minlength=len(vertex_lines))
     if (counts < 3).any():
         raise MzcError("a vertex needs x y z", source=source,
-                       line=int(vertex_lines[np.argmax(counts < 3)]) + 1)
+                       line=tokens.number(int(vertex_lines[np.argmax(counts < 3)])))
     xyz = arguments[position <= 3]
     values = tokens.numbers(xyz, np.float64)
     if values is None:
@@ -138,7 +166,7 @@ def obj_triangles(tokens, face_lines, vertex_lines, source):
     counts = np.bincount(np.searchsorted(face_lines, corner_line), minlength=len(face_lines))
     if (counts < 3).any():
         raise MzcError("a face needs at least 3 vertices", source=source,
-                       line=int(face_lines[np.argmax(counts < 3)]) + 1)
+                       line=tokens.number(int(face_lines[np.argmax(counts < 3)])))
     flat = tokens.numbers(corners, np.int64, cut_at_slash=True)
     if flat is None:
         raise first_bad_token(tokens, corners, is_index, "bad vertex index", source)
@@ -148,7 +176,7 @@ def obj_triangles(tokens, face_lines, vertex_lines, source):
     invalid = (flat < 0) | (flat >= len(vertex_lines))
     if invalid.any():
         raise MzcError(f"face refers to a vertex that does not exist (there are {len(vertex_lines)})",
-                       source=source, line=int(corner_line[np.argmax(invalid)]) + 1)
+                       source=source, line=tokens.number(int(corner_line[np.argmax(invalid)])))
     return fan_triangulate_ragged(flat, counts)
 
 
@@ -162,7 +190,7 @@ def first_bad_token(tokens, indices, accept, message, source):
     for index in indices:
         text = tokens.token_text(index)
         if not accept(text):
-            return MzcError(f"{message}: {text[:40]!r}", source=source, line=int(tokens.line[index]) + 1)
+            return MzcError(f"{message}: {text[:40]!r}", source=source, line=tokens.number(int(tokens.line[index])))
     return MzcError(message, source=source)
 
 

@@ -302,7 +302,8 @@ def ply_mesh(elements, tables, source):
     Other elements (``edge``, ``material``, ...) are skipped beside faces or strips; without
     them such an element holding records is refused by name: read as a bare cloud, a file
     whose surface lives in an element mzc does not know would be re-triangulated into noise.
-    A cloud keeps the normals its vertices carry (nx, ny, nz)."""
+    A cloud (no faces, or ``element face 0``) keeps the normals its vertices carry (nx, ny,
+    nz); colours and other vertex properties are read past."""
     unknown = [element for element in elements if element.name not in PLY_ELEMENTS and element.count]
     has_surface = any(element.name in ("face", "tristrips") and element.count for element in elements)
     if unknown and not has_surface:
@@ -315,7 +316,7 @@ def ply_mesh(elements, tables, source):
     faces, strips = index_lists(tables, "face", source), index_lists(tables, "tristrips", source)
     triangles = ([ply_face_triangles(faces, source)] if faces is not None else []) + \
         ([strip_triangles(strips, source)] if strips is not None else [])
-    if triangles:
+    if sum(len(part) for part in triangles):   # an ``element face 0`` leaves a cloud
         return Mesh(points, np.concatenate(triangles))
     normals = None
     if all(isinstance(vertex.get(axis), np.ndarray) for axis in ("nx", "ny", "nz")):

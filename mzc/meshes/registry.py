@@ -17,10 +17,12 @@ FORMATS = {
     "stl": "mzc.meshes.stl",
     "off": "mzc.meshes.meshio_fallback:OFF",
     "xyz": "mzc.meshes.xyz",
+    "pcd": "mzc.meshes.pcd",
+    "las": "mzc.meshes.las",
 }
 # The order sniffing tries them: magic words first, then OBJ's loose ``v`` lines (a binary
 # PLY body may hold one), and x y z text last (almost any text starts with a number).
-SNIFF_ORDER = ("ply", "vtk", "off", "stl", "obj", "xyz")
+SNIFF_ORDER = ("ply", "las", "pcd", "vtk", "off", "stl", "obj", "xyz")
 
 
 def format_named(name: str):

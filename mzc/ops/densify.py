@@ -69,14 +69,18 @@ def densify_grid(grid, n, method=DEFAULT_METHOD, iterations=DEFAULT_ITERATIONS, 
     No row is inserted across a depth jump of ``jump_angle`` degrees (default the
     triangulation's JUMP_ANGLE; 0 ignores jumps), and no row is smoothed across one (module
     docstring). A periodic grid (a full turn) is densified with its columns wrapped round.
-    ``strip``: as ``densify``'s; the jumps are found strip by strip too.
+    ``strip``: as ``densify``'s; the jumps are found strip by strip too. A geographic grid is
+    solved with its steps and jumps in metres (``mzc.georef.metric_frame``) and keeps its degrees.
     """
+    from mzc.georef import metric_frame
+
+    original, grid = grid, metric_frame(grid)
     cols = grid.shape[1]
     pad = wrap_width(grid, method, iterations, tol) if grid.periodic else 0
     z = np.pad(grid.z, ((0, 0), (pad, pad)), mode="wrap") if pad else grid.z
     breaks = lambda low, high: strip_jumps(grid, low, high, jump_angle, pad)  # noqa: E731
     dense = densify(z, n, grid.d1, grid.d2, method=method, iterations=iterations, tol=tol, breaks=breaks, strip=strip)
-    return grid.with_z(dense[:, pad:pad + cols], d1=grid.d1 / (n + 1))
+    return original.with_z(dense[:, pad:pad + cols], d1=original.d1 / (n + 1))
 
 
 def strip_jumps(grid, low, high, jump_angle, pad):

@@ -23,7 +23,10 @@ DATA_SPACING_FRACTION = 0.5   # default spacing: half the median edge of the sur
 MIN_NODES_ACROSS = 200        # and at least 200 nodes along the longest side
 SNAP_TOLERANCE = 1e-3       # a spacing this close (relative) to a lattice's own step snaps to it
 LATTICE_TOLERANCE = 1e-6    # coordinates this close (in steps) to a multiple of the step lie on a lattice
+LATTICE_FILL = 0.1          # and the points fill at least this share of its nodes (not a LAS cloud's 0.01 quanta)
 LONG_EDGE_FACTOR = 5.0
+BIN_POINTS = 100_000        # clouds of more points are binned (mzc.ops.binning) when dense at the grid's spacing
+CLOUD_METHODS = ("auto", "bin", "delaunay")
 
 
 # --------------------------------------------------------------------------- alignment
@@ -91,7 +94,8 @@ def triangulate_point_cloud(points_xy, long_edge_factor=LONG_EDGE_FACTOR):
 
 
 def slice_surface(mesh, d1=None, d2=None, rows=None, cols=None, align="none", units=None,
-                  projection="auto", center=None, axis=None, view="auto", thesis_grid=False):
+                  projection="auto", center=None, axis=None, view="auto", thesis_grid=False, classes=None,
+                  cloud="auto"):
     """Cut ``mesh`` (a Mesh; no triangles = point cloud) into a ZGrid.
 
     ``projection`` names the cutting surfaces (``mzc.projections``); ``auto`` picks the
@@ -101,17 +105,21 @@ def slice_surface(mesh, d1=None, d2=None, rows=None, cols=None, align="none", un
     node (0, 0) at its low corner, a full turn of a surface that goes all the way round.
     Spacings come from ``d1``/``d2`` or from counts ``rows`` (across v) and ``cols``
     (across u), else from the data (``spacings``); ``thesis_grid``: 72 rows, as the
-    thesis's ~70 planes, and d2 = d1/10. Warns (MzcWarning) when the grid's lines meet less
-    than SEEN_WARNING of the area well.
+    thesis's ~70 planes, and d2 = d1/10. ``classes`` (ASPRS codes) keeps only the points of
+    those classes of a LAS/LAZ cloud (``Mesh.with_classes``); ``cloud`` says how a cloud
+    becomes a surface (``slice_in_frame``). Warns (MzcWarning) when the grid's lines meet
+    less than SEEN_WARNING of the area well.
     """
     from mzc.limits import check_magnitude
     from mzc.ops.views import SEEN_WARNING, choose_view
 
+    if classes is not None:
+        mesh = mesh.with_classes(classes)
     check_magnitude(mesh.points, "coordinates")
     chosen = choose_view(mesh, frame_for(mesh, align), projection, center, axis, view)
     grid = slice_in_frame(mesh, chosen.rotation, chosen.shift, d1=d1, d2=d2, rows=rows, cols=cols, units=units,
                           projection=chosen.projection, radius=chosen.radius, full_turn=chosen.full_turn,
-                          thesis_grid=thesis_grid)
+                          thesis_grid=thesis_grid, cloud=cloud)
     if np.isnan(grid.z).all():
         raise MzcError("no grid node meets the surface (seen edge-on? try --view or --align pca)")
     if chosen.seen is not None and chosen.seen < SEEN_WARNING:
@@ -127,21 +135,29 @@ def slice_surface(mesh, d1=None, d2=None, rows=None, cols=None, align="none", un
 
 
 def slice_in_frame(mesh, rotation, shift, d1=None, d2=None, rows=None, cols=None, units=None,
-                   projection="planar", radius=None, full_turn=False, thesis_grid=False):
+                   projection="planar", radius=None, full_turn=False, thesis_grid=False, cloud="auto"):
     """The z-grid of ``mesh`` in the frame where input = rotation @ p + shift, over its (u, v) extent.
 
     Shared by ``slice_surface`` and ``mzc diff``, which samples surfaces in a given frame.
     A planar grid of points that lie on a lattice, at the lattice's own spacings, holds
-    exactly their values, node for node (a DEM as x y z text).
+    exactly their values, node for node (a DEM as x y z text). Any other cloud is
+    triangulated in (u, v) (Delaunay) or binned (``mzc.ops.binning``), as ``cloud`` says:
+    ``auto`` bins a cloud of more than BIN_POINTS points that is dense at the grid's spacing
+    (``binning.window_radius``), whose default spacing is then its own median point spacing
+    (a node per point, where Delaunay's grid takes half of it).
     """
     from mzc.projections import to_nodes
 
+    if cloud not in CLOUD_METHODS:
+        raise MzcError(f"unknown cloud method {cloud!r} (choose {', '.join(CLOUD_METHODS)})", field="cloud")
     local = rotated(mesh.points - shift, rotation.T)
     nodes = to_nodes(projection, radius, local)
     low, high = nodes[:, :2].min(axis=0), nodes[:, :2].max(axis=0)
     lattice = lattice_steps(nodes[:, :2]) if projection == "planar" else None
+    binned = mesh.is_point_cloud and lattice is None and \
+        (cloud == "bin" or (cloud == "auto" and len(mesh.points) > BIN_POINTS))
     triangles = mesh.triangles
-    if mesh.is_point_cloud and lattice is None:   # a lattice cloud at its own steps needs none
+    if mesh.is_point_cloud and lattice is None and not binned:   # a lattice cloud at its own steps needs none
         triangles = triangulate_point_cloud(nodes[:, :2])
     if projection != "planar":   # central grids start on a round (u, v): shorter headers, the same cover
         from mzc.ops.views import rounded
@@ -155,11 +171,16 @@ def slice_in_frame(mesh, rotation, shift, d1=None, d2=None, rows=None, cols=None
     if pole_to_pole:
         low[1], high[1] = -np.pi / 2 * radius, np.pi / 2 * radius
     if rows is None and cols is None:
-        d1, d2 = spacings(d1, d2, lattice, local, triangles, thesis_grid)
+        d1, d2 = spacings(d1, d2, lattice, local, triangles, thesis_grid, nodes[:, :2] if binned else None)
     d1, d2, n_rows, n_cols = grid_size(high - low, d1, d2, rows, cols, full_turn, pole_to_pole, thesis_grid)
     xs, ys = low[0] + d2 * np.arange(n_cols), low[1] + d1 * np.arange(n_rows)
+    window = cloud_window(nodes, low, d1, d2, (n_rows, n_cols), cloud) if mesh.is_point_cloud else None
     if mesh.is_point_cloud and lattice == (d2, d1):
         z = lattice_values(nodes, low, d1, d2, (n_rows, n_cols))
+    elif window is not None:
+        from mzc.ops.binning import binned_values
+
+        z = binned_values(nodes, low, d1, d2, (n_rows, n_cols), window)
     else:
         if not len(triangles):
             triangles = triangulate_point_cloud(nodes[:, :2])
@@ -168,18 +189,32 @@ def slice_in_frame(mesh, rotation, shift, d1=None, d2=None, rows=None, cols=None
                  projection=projection, radius=radius)
 
 
-def spacings(d1, d2, lattice, local, triangles, thesis_grid):
+def cloud_window(nodes, low, d1, d2, shape, cloud):
+    """The binning window's radius for a cloud's grid-frame ``nodes`` on this grid, or None for
+    Delaunay: ``bin`` always bins, ``delaunay`` never; ``auto`` bins more than BIN_POINTS points
+    when they are dense enough at these spacings (``mzc.ops.binning.window_radius``)."""
+    if cloud == "delaunay" or (cloud == "auto" and len(nodes) <= BIN_POINTS):
+        return None
+    from mzc.ops.binning import MAX_RADIUS, density, node_bins, window_radius
+
+    row, col, *_ = node_bins(nodes, low, d1, d2, shape)
+    radius = window_radius(density(row, col, shape))
+    return radius or (MAX_RADIUS if cloud == "bin" else None)
+
+
+def spacings(d1, d2, lattice, local, triangles, thesis_grid, binned_uv=None):
     """(d1, d2) from the data where not given: on a lattice (``lattice_steps``) its own steps,
     else ``data_spacing`` (half the median edge length of the ``triangles``, a cloud's
-    Delaunay ones), for both; one spacing given, the other equals it. A given spacing
-    within SNAP_TOLERANCE of the lattice's own step is that step. ``thesis_grid`` leaves
-    them to ``grid_size`` (72 rows, d2 = d1/10)."""
+    Delaunay ones; for a cloud to bin, given as ``binned_uv``, its median point spacing,
+    ``binning.cloud_spacing``), for both; one spacing given, the other equals it. A given
+    spacing within SNAP_TOLERANCE of the lattice's own step is that step. ``thesis_grid``
+    leaves them to ``grid_size`` (72 rows, d2 = d1/10)."""
     if lattice is not None:
         d2, d1 = (snapped(given, step, thesis_grid) for given, step in ((d2, lattice[0]), (d1, lattice[1])))
     if thesis_grid or (d1 is not None and d2 is not None):
         return d1, d2
     if d1 is None and d2 is None:
-        d1 = d2 = data_spacing(local, triangles)
+        d1 = d2 = data_spacing(local, triangles) if binned_uv is None else cloud_data_spacing(local, binned_uv)
     return (d1, d1) if d2 is None else (d2, d2)
 
 
@@ -199,14 +234,31 @@ def data_spacing(points, triangles):
     if not len(corners):
         raise MzcError("the surface has no triangles to measure its sampling: give --d1 and --d2")
     edges = lengths((corners - np.roll(corners, 1, axis=1)).reshape(-1, corners.shape[-1]))
-    longest = float(np.ptp(points, axis=0).max())
-    return float(min(DATA_SPACING_FRACTION * np.median(edges), longest / MIN_NODES_ACROSS))
+    return within_longest_side(DATA_SPACING_FRACTION * float(np.median(edges)), points)
+
+
+def cloud_data_spacing(points, uv):
+    """The default spacing of a cloud to bin: its median point spacing in (u, v) (a node per
+    point; ``binning.cloud_spacing``), at most 1/MIN_NODES_ACROSS of its longest side."""
+    from mzc.ops.binning import cloud_spacing
+
+    step = cloud_spacing(uv)
+    if step is None:
+        raise MzcError("the point cloud is degenerate in the grid's plane (all points on a line?)")
+    return within_longest_side(step, points)
+
+
+def within_longest_side(spacing, points):
+    """``spacing``, at most 1/MIN_NODES_ACROSS of the longest side of ``points``' box."""
+    return float(min(spacing, float(np.ptp(points, axis=0).max()) / MIN_NODES_ACROSS))
 
 
 def lattice_steps(uv):
     """(step in u, step in v) when every point's u and v lie on a regular lattice (within
-    LATTICE_TOLERANCE of a step; whole lines may be missing), else None."""
-    steps = []
+    LATTICE_TOLERANCE of a step; whole lines may be missing) whose nodes the points fill to
+    at least LATTICE_FILL (a DEM with its holes; not a LiDAR cloud, whose coordinates are
+    all multiples of its file's 0.01 m quantum), else None."""
+    steps, nodes = [], 1.0
     for values in (uv[:, 0], uv[:, 1]):
         distinct = np.unique(values)
         extent = distinct[-1] - distinct[0]
@@ -215,7 +267,8 @@ def lattice_steps(uv):
         if len(gaps) < 2:
             return None
         count = np.round(extent / gaps.min())
-        if count > MAX_DIMENSION:
+        nodes *= count + 1
+        if count > MAX_DIMENSION or len(uv) < LATTICE_FILL * nodes:
             return None
         step = extent / count
         position = (distinct - distinct[0]) / step

@@ -139,6 +139,22 @@ def is_jump(start, end, chord, cosine2):
     return (delta * total) ** 2 > cosine2 * (delta * delta + product + rise) * (total * total - product)
 
 
+def sight_jumps(points, angle=JUMP_ANGLE):
+    """The Jumps of the edges between the (rows, cols, 3) ``points`` of an organised cloud,
+    whose node lines are the lines of sight from the origin (a spherical grid's rays, but not
+    on a regular grid of angles): the spec's test on the points themselves, with ``is_jump``'s
+    algebra (2 e . m = |end|^2 - |start|^2, 2m = start + end)."""
+    cosine2 = np.cos(np.radians(angle)) ** 2
+
+    def jump(start, end):
+        squared = lambda vectors: np.sum(vectors * vectors, axis=-1)  # noqa: E731
+        return (squared(end) - squared(start)) ** 2 > cosine2 * squared(end - start) * squared(end + start)
+
+    with np.errstate(invalid="ignore"):
+        return Jumps(across=jump(points[:-1], points[1:]), along=jump(points[:, :-1], points[:, 1:]),
+                     diagonal=jump(points[:-1, 1:], points[1:, :-1]))
+
+
 def grid_triangles(valid, periodic=False, jumps=None):
     """Triangles (m, 3) over the flat node indices of a (rows, cols) validity mask: those of
     ``cell_triangles``, 1-2-3 first."""
@@ -186,7 +202,8 @@ class GridMesh:
     triangles 1-2-3 of every cell first, row by row, then the triangles 2-4-3; none across a
     depth jump of ``jump_angle`` degrees (default JUMP_ANGLE; 0 keeps them all); the valid
     nodes of a pole row one vertex (the first, at their mean point) and the triangles this
-    collapses to an edge dropped.
+    collapses to an edge dropped. A geographic grid (longitude and latitude in degrees) is
+    placed in metres about its centre (``mzc.georef.metric_frame``): a mesh is lengths.
 
     Made when it is read: each strip's jumps (from the values) and kept cells first, the
     nodes their triangles use and the counts; then, a strip at a time, the points and the
@@ -195,7 +212,9 @@ class GridMesh:
     or of the attributes are its arrays, made on first use)."""
 
     def __init__(self, grid, jump_angle=None):
-        self.grid = grid
+        from mzc.georef import metric_frame
+
+        self.grid = grid = metric_frame(grid)
         self.valid, self.poles = grid.valid, grid.pole_rows()
         self.strips = row_strips(grid.shape)
         self.kept = [kept_cells(self.valid[low:high + 1], grid.periodic, jumps_between(grid, low, high, jump_angle))

@@ -8,12 +8,13 @@ weight per class; raw bits go to a separate bit buffer. The classes are coded wi
 rANS coder of ``constriction`` (AnsCoder: 32-bit words, 64-bit state, 24-bit
 probabilities), vectorised per run of symbols whose tables have one class count.
 spec/dwt2d.md gives the exact arithmetic, and the decoder does it itself: its integers are
-decoded by the compiled loops of mzc.codecs.dwt2d.native (a row's contexts depend on the
-row decoded just before). So a decode does not load constriction, nor an encode numba.
+decoded by the C loops of mzc.codecs.dwt2d._rows (a row's contexts depend on the row decoded
+just before). So a decode does not load constriction.
 """
 
 import numpy as np
 
+from mzc.codecs.dwt2d import _rows
 from mzc.errors import MzcError
 
 TABLE_BITS = 14
@@ -220,14 +221,12 @@ def ans_encode(tables, models, cls):
 class Decoder:
     """Reads a payload written by Encoder.finish; every failure is an MzcError.
 
-    Python parses the tables; the integers are decoded by mzc.codecs.dwt2d.native, whose
-    kernels update the rANS state x (``state``, uint64) and the ``cursor`` (words left,
-    next raw bit, an error detail) in place.
+    Python parses the tables; the integers are decoded by the C loops of mzc.codecs.dwt2d._rows,
+    which read the words and raw bits where they lie in the payload and update the rANS state x
+    (``state``, uint64) and the ``cursor`` (words left, next raw bit, an error detail) in place.
     """
 
     def __init__(self, payload, source, same_size=()):
-        from mzc.codecs.dwt2d import native  # here, not at the top: the encoder needs no numba
-
         self.source = source
         self.data = memoryview(payload)
         self.position = 0
@@ -236,22 +235,23 @@ class Decoder:
         end = self.position + 4 * word_count
         if end > len(self.data):
             raise self.error("payload ends inside the rANS words")
-        self.words = np.frombuffer(self.data[self.position:end], dtype="<u4").astype(np.uint32)
+        self.words = np.frombuffer(self.data[self.position:end], dtype="<u4")
         if word_count and self.words[-1] == 0:
             raise self.error("the last rANS word is zero")
-        self.bits = np.unpackbits(np.frombuffer(self.data[end:], dtype=np.uint8))
+        self.bits = self.data[end:]   # the raw bits, 8 a byte
         sizes = np.array([len(t) for t in self.tables], dtype=np.int64)
         for group in same_size:
             present = sizes[[m for m in group if m < len(sizes)]]
             if (present != present[:1]).any():
                 raise self.error("tables mixed in one row have different class counts")
-        # one row per table: the cumulative frequencies, 2**TABLE_BITS from its last class on
-        self.cumulative = np.full((len(self.tables), MAX_CLASSES + 1), 1 << TABLE_BITS, dtype=np.int64)
+        # one row per table: the cumulative probabilities B(s) in ANS_PRECISION bits, 2**ANS_PRECISION
+        # from its last class on
+        cumulative = np.full((len(self.tables), MAX_CLASSES + 1), 1 << ANS_PRECISION, dtype=np.int64)
         for index, table in enumerate(self.tables):
-            self.cumulative[index, 1:len(table) + 1] = np.cumsum(table)
-            self.cumulative[index, 0] = 0
-        self.native = native
+            cumulative[index, 1:len(table) + 1] = np.cumsum(table) << (ANS_PRECISION - TABLE_BITS)
+            cumulative[index, 0] = 0
         self.state, self.cursor = np.zeros(1, dtype=np.uint64), np.zeros(3, dtype=np.int64)
+        self.stream = (self.state, self.cursor, self.words, self.bits, cumulative, MAX_CLASSES + 1)
         self.start()
 
     def start(self):
@@ -263,25 +263,24 @@ class Decoder:
             if x < 1 << 32 and left:
                 left -= 1
                 x = (x << 32) | int(self.words[left])
-        self.state[0], self.cursor[self.native.WORDS_LEFT] = x, left
+        self.state[0], self.cursor[_rows.WORDS_LEFT] = x, left
 
     def error(self, message):
         return MzcError(message, source=self.source, field="data")
 
     def check(self, code):
         """Raise the MzcError that a kernel's error code stands for."""
-        native = self.native
-        if code == native.NO_TABLE:
-            raise self.error(f"the payload has no model table {int(self.cursor[native.DETAIL])}")
-        if code == native.RAW_BITS_END:
+        if code == _rows.NO_TABLE:
+            raise self.error(f"the payload has no model table {int(self.cursor[_rows.DETAIL])}")
+        if code == _rows.RAW_BITS_END:
             raise self.error("payload ends inside the raw bits")
-        if code == native.NOT_A_SIGN:
+        if code == _rows.NOT_A_SIGN:
             raise self.error("a sign symbol is not 0 or 1")
 
     def check_end(self):
         """Refuse a payload with data left once everything it declares is decoded: rANS words
         not consumed (x is 0 exactly when they are), or a byte or more of raw bits past the last one read."""
-        extra = (len(self.bits) - int(self.cursor[self.native.BIT_POSITION])) // 8
+        extra = (8 * len(self.bits) - int(self.cursor[_rows.BIT_POSITION])) // 8
         if extra or self.state[0] != 0:
             raise self.error(f"{extra} byte(s) after the end of the payload" if extra
                              else "rANS words left over after the last symbol")
@@ -327,25 +326,20 @@ class Decoder:
     def read(self, model, count):
         """``count`` (signed) values coded with context ``model``."""
         out = np.zeros(count, dtype=np.int64)
-        if count:
-            if model >= len(self.tables):
-                raise self.error(f"the payload has no model table {model}")
-            self.check(self.native.read_values(self.state, self.cursor, self.words, self.bits, self.cumulative,
-                                               model, count, 1, out))
+        self.check(_rows.read_values(*self.stream, model, count, out))
         return out
 
     def read_rows(self, where, active, thresholds, first_model, signs=None):
         """A grid of integers coded row by row, each row in two passes by context (its even
-        columns, then its odd ones; see native.decode_rows), 0 outside ``where``. ``active``
+        columns, then its odd ones; see decode_rows in _rows.c), 0 outside ``where``. ``active``
         is each cell's activity from outside its band, ``first_model`` the model of context 0.
         With ``signs`` = (parent map, the three sign weights, model of sign context 0, sign
         contexts per column parity), as for detail bands, each pass's values are magnitudes
         followed by the signs of the nonzero ones; without, each value carries its sign in the raw bits."""
         out = np.zeros(where.shape, dtype=np.int64)
-        parent, weights, first_sign_model, sign_contexts = signs or (np.zeros((1, 1), np.int64), (0, 0, 0), -1, 1)
-        self.check(self.native.decode_rows(
-            self.state, self.cursor, self.words, self.bits, self.cumulative, np.ascontiguousarray(where, dtype=bool),
+        parent, weights, first_sign_model, sign_contexts = signs or (np.zeros(0, np.int64), (0, 0, 0), -1, 1)
+        self.check(_rows.decode_rows(
+            *self.stream, *where.shape, np.ascontiguousarray(where, dtype=bool),
             np.ascontiguousarray(active, dtype=np.float64), np.asarray(thresholds, dtype=np.float64), first_model,
-            np.ascontiguousarray(parent, dtype=np.int64), np.asarray(weights, dtype=np.int64), first_sign_model,
-            sign_contexts, out))
+            np.ascontiguousarray(parent, dtype=np.int64), tuple(weights), first_sign_model, sign_contexts, out))
         return out

@@ -148,6 +148,7 @@ def split_relevance(mask, wavelet, periodic=False):
     n = len(mask)
     if n == 1:
         return mask.copy(), mask[:0]
+    mask = np.ascontiguousarray(mask)   # not a transposed or strided view: numpy's ORs of those ran 5x slower
     cyclic = wraps(periodic, n)
     low_reach, high_reach = REACH[wavelet]
     return reach_mask(mask, low_reach, cyclic)[0::2], reach_mask(mask, high_reach, cyclic)[1::2]

@@ -39,6 +39,8 @@ DEFAULT_PRECISION = 4
 MAX_PRECISION = 17
 VERSION = (1, 1)             # every row codec: planar grids (1.0 without the crc32 line)
 PROJECTED_VERSION = (2, 1)   # 1.1 with the projection lines (mzc.formats.header)
+GEOREFERENCED_VERSION = (1, 2)   # 1.1 with the crs and raster lines of a grid read from a raster
+GEOREF_SINCE = {1: 2}
 OLDEST_MAJOR = 1
 CHECKSUM_SINCE = {1: 1, 2: 1}   # 1.0 and 2.0 files have no crc32 line; from 1.1 and 2.1 on it is required
 QUALITY = Option("quality", int, 100, 1, 100, metavar="Q",
@@ -142,7 +144,8 @@ def write_options(codec, grid, **options):
 def write_grid(grid, codec, options):
     """Encode ``grid`` into the bytes of a ``codec`` file."""
     rows, holes = encode_rows(grid, codec, options)
-    lines = [magic_line(codec.kind, file_version(grid, VERSION, PROJECTED_VERSION)), *codec.header_lines(options),
+    version = file_version(grid, VERSION, PROJECTED_VERSION, GEOREFERENCED_VERSION)
+    lines = [magic_line(codec.kind, version), *codec.header_lines(options),
              *grid_header_lines(grid), "data", *rows, *holes]
     return file_bytes(lines)
 
@@ -260,7 +263,8 @@ def _apply_hole_line(z, tokens, source, line):
 def read_grid(data, source, codec):
     """Decode the bytes of a ``codec`` file into a ZGrid."""
     header, body, first_line = read_header(data, source, codec.kind, PROJECTED_VERSION[0],
-                                           projected_major=PROJECTED_VERSION[0], checksum_since=CHECKSUM_SINCE)
+                                           projected_major=PROJECTED_VERSION[0], checksum_since=CHECKSUM_SINCE,
+                                           georef_since=GEOREF_SINCE)
     fields, rows, cols = read_grid_fields(header)
     options = codec.read_options(header)
     lines = body_lines(body, first_line, source)

@@ -10,6 +10,7 @@ from mzc.codecs.rows.transforms import dct_forward, dct_inverse, kept
 KIND = "dct"
 VERSION, PROJECTED_VERSION, OLDEST_MAJOR, CHECKSUM_SINCE = (rows.VERSION, rows.PROJECTED_VERSION, rows.OLDEST_MAJOR,
                                                        rows.CHECKSUM_SINCE)
+GEOREFERENCED_VERSION, GEOREF_SINCE = rows.GEOREFERENCED_VERSION, rows.GEOREF_SINCE
 
 
 def encode(spans, firsts, d2, options):

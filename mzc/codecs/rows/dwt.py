@@ -16,6 +16,7 @@ from mzc.errors import MzcError
 KIND = "dwt"
 VERSION, PROJECTED_VERSION, OLDEST_MAJOR, CHECKSUM_SINCE = (rows.VERSION, rows.PROJECTED_VERSION, rows.OLDEST_MAJOR,
                                                        rows.CHECKSUM_SINCE)
+GEOREFERENCED_VERSION, GEOREF_SINCE = rows.GEOREFERENCED_VERSION, rows.GEOREF_SINCE
 MAX_LEVEL = 32
 
 

@@ -14,6 +14,7 @@ from mzc.errors import MzcError
 KIND = "poly"
 VERSION, PROJECTED_VERSION, OLDEST_MAJOR, CHECKSUM_SINCE = (rows.VERSION, rows.PROJECTED_VERSION, rows.OLDEST_MAJOR,
                                                        rows.CHECKSUM_SINCE)
+GEOREFERENCED_VERSION, GEOREF_SINCE = rows.GEOREFERENCED_VERSION, rows.GEOREF_SINCE
 MAX_DEGREE = 10_000
 
 

@@ -1,0 +1,123 @@
+"""What a grid's coordinate reference system says about its lengths, read from its WKT alone.
+
+A grid read from a raster keeps the raster's CRS as one line of WKT (spec/zgrid.md, ``crs``).
+Most of mzc needs one thing from it: whether x and y are lengths in the unit of the heights
+(a projected CRS: metres east and north) or angles (a geographic CRS: longitude and latitude
+in degrees, the heights in metres). That is read from the WKT's own keywords, so no CRS
+library is loaded to encode, densify or triangulate a grid.
+
+A geographic grid is never measured as if degrees were metres. The operations that need
+lengths either refuse it (``check_lengths``: the rate control of ``--rmse`` and ``--size``,
+whose decoder would have to agree on any metric) or measure it in metres through a local
+projection (``metric_frame``): an equirectangular projection about the grid's centre on the
+CRS's ellipsoid, x = (lon - lon0) N cos(lat0), y = (lat - lat0) M, with M and N the
+ellipsoid's meridional and prime-vertical radii of curvature at lat0. It keeps the grid a
+regular grid (each axis scales by one factor), so densify and triangulate run on the same
+nodes; its scale along x is off by cos(lat)/cos(lat0) - 1 away from the centre row (0.9% at
+0.5 degrees of latitude from it at 45 degrees north), and along y by the change of M (under
+0.02% over a degree).
+"""
+
+import math
+import re
+
+from mzc.errors import MzcError
+
+QUOTED = re.compile(r'"(?:[^"]|"")*"')
+# The keywords that open a CRS in WKT 1 (OGC 01-009) and WKT 2 (ISO 19162), by what x and y are.
+KINDS = {
+    "geographic": ("GEOGCS", "GEOGCRS", "GEOGRAPHICCRS"),
+    "projected": ("PROJCS", "PROJCRS", "PROJECTEDCRS"),
+    "geodetic": ("GEODCRS", "GEODETICCRS", "GEOCCS"),   # WKT 2 geographic or geocentric: see crs_kind
+    "engineering": ("LOCAL_CS", "ENGCRS", "ENGINEERINGCRS"),
+}
+FIRST_CRS = re.compile(r"\b(" + "|".join(k for kinds in KINDS.values() for k in kinds) + r")\s*\[", re.IGNORECASE)
+ELLIPSOID = re.compile(r"\b(?:SPHEROID|ELLIPSOID)\s*\[\s*\"[^\"]*\"\s*,\s*([-+0-9.eE]+)\s*,\s*([-+0-9.eE]+)",
+                       re.IGNORECASE)
+ANGLE_UNIT = re.compile(r"\bANGLEUNIT\s*\[\s*\"[^\"]*\"\s*,\s*([-+0-9.eE]+)", re.IGNORECASE)
+WKT1_UNIT = re.compile(r"\bUNIT\s*\[\s*\"[^\"]*\"\s*,\s*([-+0-9.eE]+)", re.IGNORECASE)
+WGS84 = (6378137.0, 298.257223563)   # when the WKT names no ellipsoid
+
+
+def crs_kind(wkt):
+    """``geographic``, ``projected``, ``geocentric``, ``engineering`` or ``unknown``: the kind of
+    the horizontal CRS of ``wkt`` (the first CRS it opens, so a compound CRS's horizontal part
+    and a bound CRS's source). Quoted names are skipped, so a name cannot fool it."""
+    found = FIRST_CRS.search(QUOTED.sub('""', wkt))
+    if not found:
+        return "unknown"
+    keyword = found[1].upper()
+    kind = next(name for name, keywords in KINDS.items() if keyword in keywords)
+    if kind == "geodetic":   # WKT 2 names a geographic CRS GEODCRS too: its coordinate system says which
+        rest = wkt[found.end():]
+        return "geographic" if keyword != "GEOCCS" and re.search(r"\bCS\s*\[\s*ellipsoidal", rest, re.I) \
+            else "geocentric"
+    return kind
+
+
+def is_geographic(grid):
+    """True when ``grid``'s x and y are longitude and latitude (its CRS is geographic)."""
+    return grid.crs is not None and crs_kind(grid.crs) == "geographic"
+
+
+def check_lengths(grid, field, advice):
+    """Refuse an operation that measures ``grid`` in one unit across x, y and z when its x and y
+    are degrees; ``advice`` says what to do instead."""
+    if is_geographic(grid):
+        raise MzcError(f"the grid's x and y are longitude and latitude in degrees (its CRS is geographic) and "
+                       f"its heights are lengths: {advice}", field=field)
+
+
+def ellipsoid(wkt):
+    """(semi-major axis, inverse flattening) of the WKT's ellipsoid, WGS 84's when it names none."""
+    found = ELLIPSOID.search(wkt)
+    if not found:
+        return WGS84
+    try:
+        return float(found[1]), float(found[2])
+    except ValueError:
+        return WGS84
+
+
+def radians_per_unit(wkt):
+    """The angular unit of a geographic CRS's coordinates, in radians (a degree when the WKT
+    names none)."""
+    found = ANGLE_UNIT.search(wkt) or WKT1_UNIT.search(wkt)
+    try:
+        factor = float(found[1]) if found else math.pi / 180
+    except ValueError:
+        factor = math.pi / 180
+    return factor if 0 < factor < 10 else math.pi / 180
+
+
+def metres_per_unit(wkt, latitude):
+    """(metres per unit of longitude, per unit of latitude) at ``latitude`` (in the CRS's unit),
+    on the CRS's ellipsoid."""
+    axis, inverse_flattening = ellipsoid(wkt)
+    flattening = 1 / inverse_flattening if inverse_flattening > 0 else 0.0
+    squared = flattening * (2 - flattening)
+    unit = radians_per_unit(wkt)
+    phi = latitude * unit
+    sine = math.sin(phi)
+    meridional = axis * (1 - squared) / (1 - squared * sine * sine) ** 1.5
+    prime_vertical = axis / math.sqrt(1 - squared * sine * sine)
+    return prime_vertical * math.cos(phi) * unit, meridional * unit
+
+
+def metric_frame(grid):
+    """``grid`` itself, or for a geographic grid the same nodes and values in metres of the local
+    equirectangular projection about its centre (module docstring), without its CRS, so that
+    lengths mean one thing across x, y and z."""
+    if not is_geographic(grid):
+        return grid
+    import numpy as np
+
+    from mzc.grid import IDENTITY_TRANSFORM
+
+    if not np.array_equal(grid.transform, IDENTITY_TRANSFORM):
+        raise MzcError("a geographic grid turned by a transform cannot be measured in metres", field="transform")
+    rows, cols = grid.shape
+    centre = (grid.origin[0] + grid.d2 * (cols - 1) / 2, grid.origin[1] + grid.d1 * (rows - 1) / 2)
+    east, north = metres_per_unit(grid.crs, centre[1])
+    origin = ((grid.origin[0] - centre[0]) * east, (grid.origin[1] - centre[1]) * north)
+    return grid.with_z(grid.z, d1=grid.d1 * north, d2=grid.d2 * east, origin=origin, crs=None, raster=None)

@@ -1,0 +1,120 @@
+"""LAS and LAZ, the ASPRS formats of airborne and terrestrial LiDAR, read through laspy
+(and lazrs for LAZ), the optional extra ``las`` (``pip install 'mzc[las]'``).
+
+x, y and z are the stored integers with the header's scale and offset applied. Each
+point's ASPRS classification (2 = ground, 6 = building, 9 = water, ...) goes with the
+cloud, so ``mzc slice --classes 2`` keeps the ground alone (as PDAL's filters.range on
+Classification does); the coordinate reference system the header names, if any, is kept
+as ``Mesh.crs`` (a WKT string, or ``EPSG:code`` from GeoTIFF keys). Points are read in
+chunks, so memory grows with the points the file really holds, whatever its header
+declares: a file with fewer points than it declares is refused as truncated.
+"""
+
+import io
+
+import numpy as np
+
+from mzc.errors import MzcError
+from mzc.meshes import Mesh
+
+NAME = "las"
+EXTENSIONS = (".las", ".laz")
+write = None   # mzc reads LiDAR clouds; what it writes are meshes
+CHUNK_POINTS = 1_000_000
+GEO_KEYS_CRS = (3072, 2048)   # ProjectedCSTypeGeoKey, then GeographicTypeGeoKey
+MISSING_EXTRA = "reading LAS/LAZ needs laspy and lazrs: pip install 'mzc[las]'"
+
+
+def sniff(data: bytes) -> bool:
+    """True when ``data`` starts with the LAS signature ``LASF``."""
+    return data.startswith(b"LASF")
+
+
+def read(data: bytes, source: str) -> Mesh:
+    """The point cloud of LAS or LAZ ``data``, with its classes and CRS."""
+    try:
+        import laspy
+    except ImportError:
+        raise MzcError(MISSING_EXTRA, source=source) from None
+    chunks: list = []
+    declared = None
+    try:
+        with laspy.open(io.BytesIO(data)) as reader:
+            declared = int(reader.header.point_count)
+            check_room(reader.header, len(data), declared, source)
+            for chunk in reader.chunk_iterator(min(CHUNK_POINTS, max(declared, 1))):
+                if not len(chunk):
+                    break
+                chunks.append((np.column_stack([np.asarray(chunk.x), np.asarray(chunk.y), np.asarray(chunk.z)]),
+                               np.asarray(chunk.classification, dtype=np.uint8)))
+            crs = header_crs(reader.header)
+    except MzcError:
+        raise
+    except reading_errors() as error:
+        held = sum(len(chunk[0]) for chunk in chunks)
+        raise MzcError(las_problem(error, held, declared), source=source) from None
+    held = sum(len(chunk[0]) for chunk in chunks)
+    if held < declared:
+        raise MzcError(f"truncated: the header declares {declared} points, the file holds {held}", source=source)
+    points = np.concatenate([chunk[0] for chunk in chunks] or [np.empty((0, 3))])
+    classes = np.concatenate([chunk[1] for chunk in chunks] or [np.empty(0, dtype=np.uint8)])
+    return Mesh(points, classification=classes, crs=crs)
+
+
+def check_room(header, size, declared, source):
+    """Refuse an uncompressed file too short for the points its header declares, before they
+    are read (LAZ is checked as it is decoded, a chunk at a time)."""
+    if header.are_points_compressed:
+        return
+    end = size
+    if getattr(header, "start_of_first_evlr", 0) and header.number_of_evlrs:
+        end = min(end, int(header.start_of_first_evlr))
+    held = max(end - int(header.offset_to_point_data), 0) // header.point_format.size
+    if held < declared:
+        raise MzcError(f"truncated: the header declares {declared} points of {header.point_format.size} bytes, "
+                       f"the file holds {held}", source=source)
+
+
+def reading_errors():
+    """The exceptions laspy and lazrs raise on a damaged file."""
+    import struct
+
+    import laspy
+
+    errors = [laspy.errors.LaspyException, ValueError, EOFError, struct.error]
+    try:
+        import lazrs
+
+        errors.append(lazrs.LazrsError)
+    except ImportError:
+        pass
+    return tuple(errors)
+
+
+def las_problem(error, held, declared):
+    """One line for a laspy or lazrs error: a missing LAZ backend names the extra that brings
+    it; a failure after some points (``held`` of ``declared``) is damaged or truncated data."""
+    text = str(error).strip().splitlines()[0] if str(error).strip() else type(error).__name__
+    if "LazBackend" in text:
+        return MISSING_EXTRA
+    if declared is not None:
+        return f"truncated or damaged point data after {held} of the {declared} points the header declares ({text})"
+    return f"not a readable LAS/LAZ file: {text}"
+
+
+def header_crs(header):
+    """The CRS a LAS header names: its WKT VLR, else the EPSG code of its GeoTIFF keys, else None
+    (also for a user-defined CRS, code 32767, which has no code to give)."""
+    from laspy.vlrs.known import GeoKeyDirectoryVlr, WktCoordinateSystemVlr
+
+    records = list(header.vlrs) + list(getattr(header, "evlrs", None) or [])
+    for record in records:
+        if isinstance(record, WktCoordinateSystemVlr) and record.string.strip("\0 \n"):
+            return record.string.strip("\0 \n")
+    for record in records:
+        if isinstance(record, GeoKeyDirectoryVlr):
+            codes = {key.id: key.value_offset for key in record.geo_keys if key.tiff_tag_location == 0}
+            code = next((codes[key] for key in GEO_KEYS_CRS if 0 < codes.get(key, 0) < 32767), None)
+            if code is not None:
+                return f"EPSG:{code}"
+    return None

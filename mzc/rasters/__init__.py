@@ -1,0 +1,229 @@
+"""Rasters are grids: GeoTIFF and ESRI ASCII grids read as the z-grid they are, and written back.
+
+A DEM raster already is a regular grid of heights, so it is read node for node, never
+re-triangulated: its cells become nodes (at their centres, or at their points for a
+pixel-is-point raster), its no-data cells invalid nodes, its rows in the z-grid's order
+(v up: a north-up raster's last row is the grid's first), and the grid keeps the raster's
+CRS and layout (``ZGrid.crs``, ``ZGrid.raster``; spec/zgrid.md), so that writing it back
+gives the same raster: the same cells, georeferencing, no-data value and sample type.
+
+GeoTIFF is read and written by rasterio (GDAL: every compression, tiling, BigTIFF and CRS
+encoding GIS tools write), in the optional extra ``geo``; ESRI ASCII grids by mzc's own
+vectorised reader and writer (``asc``). Each is recognised by its bytes, not its name (an
+``.asc`` file may also be an ``x y z`` point cloud).
+
+Georeferencing is exact both ways: a node's coordinate is the raster's reference (a cell
+corner, or a centre) plus an offset of half a cell or whole rows, computed one way
+(``node_coordinate``); writing recovers the shortest reference that gives the same
+coordinate back (``raster_reference``), which is the raster's own for any reference written
+in up to 15 significant digits.
+"""
+
+import os
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from mzc.errors import MzcError
+from mzc.grid import IDENTITY_TRANSFORM, SAMPLES, Raster, ZGrid
+from mzc.limits import check_magnitude
+
+FORMATS = ("tif", "asc")
+EXTENSIONS = {".tif": "tif", ".tiff": "tif", ".asc": "asc"}
+TIFF_MAGIC = (b"II*\0", b"MM\0*", b"II+\0", b"MM\0+")   # classic and BigTIFF, either byte order
+ULPS = 4   # how far from the plain inverse raster_reference looks for the shortest reference
+
+
+def sniff(data):
+    """``tif`` or ``asc`` when ``data`` is a raster of that format, else None."""
+    if data[:4] in TIFF_MAGIC:
+        return "tif"
+    from mzc.rasters import asc
+
+    return "asc" if asc.sniff(data) else None
+
+
+def format_for(path, file_format=None):
+    """The raster format named by ``file_format`` or by ``path``'s extension, or None."""
+    if file_format is not None:
+        return file_format if file_format in FORMATS else None
+    return EXTENSIONS.get(os.path.splitext(str(path or ""))[1].lower())
+
+
+def read_raster(data, source, path=None):
+    """The ZGrid of raster bytes ``data`` (sniff says which format); an ESRI grid read from a
+    file ``path`` takes its CRS from the ``.prj`` beside it, as GIS tools do."""
+    if sniff(data) == "tif":
+        from mzc.rasters import geotiff
+
+        return geotiff.read(data, source)
+    from mzc.rasters import asc
+
+    return asc.read(data, source, sidecar_crs(path))
+
+
+def sidecar_crs(path):
+    """The one-line WKT of the ``.prj`` file beside ``path``, or None."""
+    if path is None or path == "-":
+        return None
+    prj = os.path.splitext(os.fspath(path))[0] + ".prj"
+    try:
+        with open(prj, "rb") as file:
+            text = file.read(1 << 20).decode("utf-8", "replace")
+    except OSError:
+        return None
+    return " ".join(text.split()) or None
+
+
+@dataclass(frozen=True)
+class Layout:
+    """Where a raster's cells lie: ``x`` and ``y``, its reference (the outer corner of its west
+    column and of its south or, with ``top``, north row; with ``centred``, the centre of that
+    corner's cell), the steps ``d2`` along x and ``d1`` along y (both > 0), and its ``cells``
+    and ``rows`` (``down`` for a north-up raster) as in ``mzc.grid.Raster``."""
+
+    x: float
+    y: float
+    d2: float
+    d1: float
+    cells: str
+    rows: str
+    top: bool
+    centred: bool = False
+
+    def offsets(self, rows):
+        """(x, y) from the reference to the grid's node (0, 0), the centre of its south-west cell."""
+        half = 0.0 if self.centred else 0.5
+        return half * self.d2, (-(rows - 1 + half) if self.top else half) * self.d1
+
+
+def grid_of(values, invalid, layout, sample, nodata=None, crs=None):
+    """A ZGrid from a raster's ``values`` (its rows in file order), ``invalid`` mask, Layout and
+    ``sample`` type, its no-data value ``nodata`` (None when it has none) and ``crs`` (WKT)."""
+    for name in ("d2", "d1"):
+        if not getattr(layout, name) > 0:
+            raise MzcError(f"its cells are {getattr(layout, name):g} wide along {'x' if name == 'd2' else 'y'}",
+                           field="transform")
+    rows = values.shape[0]
+    z = np.where(invalid, np.nan, values.astype(np.float64))
+    check_magnitude(z, "heights", field="data")
+    dx, dy = layout.offsets(rows)
+    origin = (node_coordinate(layout.x, dx), node_coordinate(layout.y, dy))
+    raster = Raster(layout.cells, layout.rows, sample)
+    return ZGrid(z[::-1] if layout.rows == "down" else z, d1=layout.d1, d2=layout.d2, origin=origin,
+                 nodata=nodata_token(nodata), crs=crs, raster=raster)
+
+
+def node_coordinate(reference, offset):
+    """A node's coordinate from its raster reference (corner or centre) and offset: the one
+    rounding both ways of mzc's georeferencing go through."""
+    return reference + offset
+
+
+def raster_reference(coordinate, offset):
+    """The raster reference r with node_coordinate(r, offset) == coordinate: of those within
+    ULPS units in the last place of the plain inverse, the shortest in decimal (then the
+    nearest), so a reference a raster read as a short decimal comes back as that decimal."""
+    guess = coordinate - offset
+    candidates = [guess]
+    for direction in (np.inf, -np.inf):
+        value = guess
+        for _ in range(ULPS):
+            value = float(np.nextafter(value, direction))
+            candidates.append(value)
+    exact = [c for c in candidates if node_coordinate(c, offset) == coordinate] or [guess]
+    return min(exact, key=lambda c: (len(repr(c)), abs(c - guess)))
+
+
+def layout_of(grid, top, centred):
+    """The Layout of the raster that holds ``grid`` (its reference on the north row with ``top``,
+    a cell's centre with ``centred``): the inverse of grid_of's, with the grid's raster layout
+    (a north-up raster of area cells for a grid that has none)."""
+    raster = grid.raster or Raster()
+    layout = Layout(0.0, 0.0, grid.d2, grid.d1, raster.cells, raster.rows, top, centred)
+    dx, dy = layout.offsets(grid.shape[0])
+    return replace(layout, x=raster_reference(grid.origin[0], dx), y=raster_reference(grid.origin[1], dy))
+
+
+def raster_rows(grid):
+    """The grid's values in the raster's row order (its first row first)."""
+    return grid.z if grid.raster is not None and grid.raster.rows == "up" else grid.z[::-1]
+
+
+def nodata_token(value):
+    """The z-grid's ``nodata`` token of a raster's no-data value (None: ``nan``)."""
+    if value is None or np.isnan(value):
+        return "nan"
+    from mzc.formats.header import format_number
+
+    if np.isinf(value):
+        raise MzcError("the no-data value is infinite: mzc keeps a finite one or NaN", field="nodata")
+    return format_number(value)
+
+
+def check_writable(grid):
+    """Refuse a grid that no raster holds: a raster is a planar grid in its CRS's own frame."""
+    if grid.projection != "planar":
+        raise MzcError(f"a raster holds planar grids; this one is {grid.projection}: triangulate it instead",
+                       field="projection")
+    if not np.array_equal(grid.transform, IDENTITY_TRANSFORM):
+        raise MzcError("the grid's frame is turned or shifted from its input's (a transform): a raster holds "
+                       "grids in the input's own frame (slice the surface with --align none)", field="transform")
+
+
+def no_data_marker(grid):
+    """The value a raster writes for the grid's invalid nodes: its numeric ``nodata`` token, NaN for
+    ``nan`` when it has invalid nodes, or None (no no-data value) when it has none."""
+    try:
+        marker = float(grid.nodata)
+    except ValueError:
+        marker = np.nan
+    if np.isnan(marker):
+        return np.nan if not grid.valid.all() else None
+    return marker
+
+
+def sample_type(grid, marker, float32=False):
+    """The sample type to write ``grid`` in: ``float32`` when asked; else the raster's own when it
+    holds every valid value and the no-data ``marker`` exactly (an int16 DEM decoded losslessly
+    stays int16); else float64, which holds every value mzc computes."""
+    if float32:
+        return "float32"
+    own = grid.raster.sample if grid.raster is not None else "float64"
+    values = grid.z[grid.valid]
+    if marker is not None:
+        values = np.append(values, marker)
+    return own if holds(own, values) else "float64"
+
+
+def holds(sample, values):
+    """True when every one of ``values`` (float64) is a ``sample`` value exactly."""
+    if sample not in SAMPLES:
+        return False
+    dtype = np.dtype(sample)
+    if dtype.kind == "f":
+        with np.errstate(over="ignore"):
+            return bool(np.array_equal(values.astype(dtype).astype(np.float64), values, equal_nan=True))
+    info = np.iinfo(dtype)
+    return bool(np.all((values == np.round(values)) & (values >= info.min) & (values <= info.max)))
+
+
+def write_raster(path, grid, file_format, float32=False):
+    """Write ``grid`` as a ``tif`` or ``asc`` raster to ``path`` (or stdout), atomically; an ESRI
+    grid with a CRS gets its ``.prj`` beside it (not on stdout)."""
+    from mzc.streams import is_stdio, write_outputs
+
+    check_writable(grid)
+    if file_format == "tif":
+        from mzc.rasters import geotiff
+
+        write_outputs((path, geotiff.write(grid, float32)))
+        return
+    from mzc.rasters import asc
+
+    if float32:
+        raise MzcError("an ESRI ASCII grid is text: float32 is for GeoTIFF samples", field="float32")
+    outputs = [(path, asc.write(grid))]
+    if grid.crs is not None and not is_stdio(path):
+        outputs.append((os.path.splitext(os.fspath(path))[0] + ".prj", (grid.crs + "\n").encode("utf-8")))
+    write_outputs(*outputs)

@@ -1,0 +1,121 @@
+"""GeoTIFF through rasterio (GDAL), the optional extra ``geo``.
+
+GDAL reads every GeoTIFF a GIS user has (strips or tiles, every compression, BigTIFF, a CRS
+given by EPSG code or in full, GDAL's no-data tag and masks) and writes GeoTIFFs every GIS
+tool opens. Its geotransform is always a corner's: for a pixel-is-point raster it has already
+moved the tie point half a cell, and moves it back when writing one (``AREA_OR_POINT``), so
+both kinds of cell reach mzc.rasters as a corner and a cell kind. Its messages go to Python's
+logging (a NullHandler here keeps them off stderr: mzc reports a failure itself, in one line).
+"""
+
+import logging
+import re
+import warnings
+
+import numpy as np
+
+from mzc.errors import MzcError
+from mzc.grid import SAMPLES
+from mzc.limits import check_grid_size
+from mzc.rasters import Layout, grid_of, layout_of, no_data_marker, raster_rows, sample_type
+
+EXTRA = "geo"
+MEMORY_NAME = re.compile(r"[\w/.-]*[0-9a-f]{8}(?:-[0-9a-f]{4}){3}-[0-9a-f]{12}[\w.]*:?\s*")   # a MemoryFile's name
+PREDICTORS = {"f": 3, "i": 2, "u": 2}   # floating-point and horizontal differencing: smaller DEFLATE files
+
+
+def rasterio():
+    """The rasterio module, or a one-line error naming the extra that installs it."""
+    try:
+        import rasterio as module
+    except ImportError:
+        raise MzcError(f"GeoTIFF needs rasterio: pip install 'mzc[{EXTRA}]'") from None
+    logging.getLogger("rasterio").addHandler(logging.NullHandler())
+    return module
+
+
+def read(data, source):
+    """The ZGrid of GeoTIFF bytes: band 1, its cells, no-data and mask, geotransform and CRS."""
+    module = rasterio()
+    from rasterio.errors import RasterioError
+
+    try:
+        with warnings.catch_warnings(), module.MemoryFile(data) as memory, memory.open() as dataset:
+            warnings.simplefilter("ignore")   # NotGeoreferencedWarning: a plain TIFF is a grid of unit cells
+            check_readable(dataset, source)
+            values = dataset.read(1)
+            invalid = dataset.read_masks(1) == 0
+            layout = layout_from(dataset, source)
+            nodata, crs = dataset.nodata, dataset.crs.to_wkt() if dataset.crs else None
+    except RasterioError as error:
+        raise MzcError(f"not a readable GeoTIFF: {one_line(error)}", source=source) from None
+    if values.dtype.kind == "f":
+        invalid |= np.isnan(values)
+    try:
+        return grid_of(values, invalid, layout, str(values.dtype), nodata=nodata, crs=crs)
+    except MzcError as error:
+        raise error.located(source=source) from None
+
+
+def check_readable(dataset, source):
+    """Refuse what is not one grid of heights, before its values are read."""
+    check_grid_size(dataset.height, dataset.width, source=source, field="size")
+    if dataset.count != 1:
+        raise MzcError(f"it has {dataset.count} bands: mzc reads a raster of one band of heights (a DEM); "
+                       "take the band you mean first (gdal_translate -b N)", source=source, field="bands")
+    if dataset.dtypes[0] not in SAMPLES:
+        raise MzcError(f"its samples are {dataset.dtypes[0]}: mzc reads {', '.join(SAMPLES)}", source=source,
+                       field="sample")
+
+
+def layout_from(dataset, source):
+    """The Layout of a dataset's geotransform (GDAL's: the outer corner of its first row and column)."""
+    step_x, skew_x, x, skew_y, step_y, y = tuple(dataset.transform)[:6]
+    if skew_x or skew_y:
+        raise MzcError("its geotransform is rotated or sheared: mzc reads rasters whose rows run east-west "
+                       "(gdalwarp it to a north-up grid first)", source=source, field="transform")
+    if step_x < 0:
+        raise MzcError(f"its columns run west (x step {step_x:g}): flip it first (gdalwarp)", source=source,
+                       field="transform")
+    cells = "point" if dataset.tags().get("AREA_OR_POINT", "Area").lower() == "point" else "area"
+    return Layout(x, y, step_x, abs(step_y), cells, "down" if step_y < 0 else "up", top=step_y < 0)
+
+
+def write(grid, float32=False):
+    """The bytes of ``grid`` as a GeoTIFF (DEFLATE with a predictor): its raster's cells, row
+    order, sample type (float64 when that type cannot hold its values: sample_type) and
+    no-data value, its CRS."""
+    module = rasterio()
+    from affine import Affine
+
+    marker = no_data_marker(grid)
+    sample = sample_type(grid, marker, float32)
+    place = layout_of(grid, top=grid.raster is None or grid.raster.rows == "down", centred=False)
+    step_y = -grid.d1 if place.rows == "down" else grid.d1
+    values = raster_rows(grid)
+    if marker is not None:
+        values = np.where(np.isnan(values), marker, values)
+    with np.errstate(over="ignore", invalid="ignore"):
+        samples = values.astype(sample)
+    if np.dtype(sample).kind == "f" and np.isinf(samples[~np.isinf(values)]).any():
+        raise MzcError(f"a value does not fit {sample}", field="float32" if float32 else "sample")
+    profile = {"driver": "GTiff", "width": grid.shape[1], "height": grid.shape[0], "count": 1, "dtype": sample,
+               "transform": Affine(grid.d2, 0.0, place.x, 0.0, step_y, place.y), "nodata": marker,
+               "compress": "deflate", "predictor": PREDICTORS[np.dtype(sample).kind]}
+    if grid.crs is not None:
+        profile["crs"] = module.crs.CRS.from_wkt(grid.crs)
+    with warnings.catch_warnings(), module.MemoryFile() as memory:
+        warnings.simplefilter("ignore")
+        with memory.open(**profile) as dataset:
+            if place.cells == "point":
+                dataset.update_tags(AREA_OR_POINT="Point")
+            dataset.write(samples, 1)
+        return memory.read()
+
+
+def one_line(error):
+    """GDAL's own message (the innermost of rasterio's chained errors) as one line, without the
+    name of the in-memory file it was read from."""
+    while error.__cause__ is not None or error.__context__ is not None:
+        error = error.__cause__ or error.__context__
+    return " ".join(MEMORY_NAME.sub("", str(error)).split())[:300]
