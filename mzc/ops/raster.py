@@ -13,7 +13,7 @@ import numpy as np
 from mzc.vectors import of_each_row
 
 BARYCENTRIC_TOLERANCE = 1e-9  # nodes on shared edges belong to both triangles
-CANDIDATES_PER_CHUNK = 2_000_000
+CANDIDATES_PER_CHUNK = 1 << 15   # (triangle, node) pairs tested at a time: a few MB of temporaries
 
 
 def rasterize(points, triangles, xs, ys):
