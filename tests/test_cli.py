@@ -63,7 +63,7 @@ def test_encode_imports_only_what_its_codec_uses(tmp_path):
 
 
 HEAVY = {"scipy", "constriction", "numba", "llvmlite", "pywt", "meshio", "matplotlib", "distributed", "dask"}
-# what each command may load of HEAVY: scipy only where a sparse solve (or an FFT) runs, numba only to
+# what each command may load of HEAVY: scipy only where a sparse solve, an FFT or a KD-tree runs, numba only to
 # decode dwt2d (its row decoder), constriction only to encode it
 IMPORT_SETS = [
     (["slice", "{mesh}"], set()),
@@ -75,6 +75,8 @@ IMPORT_SETS = [
     (["triangulate", "{grid}", "-o", "{grid}.ply"], set()),                             # our own PLY writer
     (["info", "{coded}"], set()),
     (["diff", "{grid}", "{grid}"], set()),
+    (["diff", "{mesh}", "{grid}", "--surface"], set()),                                 # the C distance search
+    (["diff", "{mesh}", "{grid}", "--heightfield"], {"scipy"}),                         # KD-trees (front_most)
 ]
 
 
