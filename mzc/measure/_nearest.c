@@ -29,9 +29,9 @@
  * nearest to the sample before. A search keeps the best squared distance so far, visits
  * the nearer child first and skips a node whose box is farther than that best (raised by a
  * billionth, the slack for the rounding of the box distance). Each triangle is measured by
- * the point-triangle formula (triangle_distance2) of metrics.py's numpy _point_triangle_distance:
- * the same operations in the same order, -ffp-contract=off keeping them unfused, give the
- * same bits. The GIL is released while it runs, on one thread.
+ * the point-triangle formula (triangle_distance2) whose numpy form tests/test_mesh_distance.py
+ * keeps as its reference: the same operations in the same order, -ffp-contract=off keeping
+ * them unfused, give the same bits. The GIL is released while it runs, on one thread.
  */
 #define PY_SSIZE_T_CLEAN
 #include <Python.h>

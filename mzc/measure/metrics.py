@@ -49,49 +49,6 @@ def sample_surface(points, triangles, count, rng):
     return a + u[:, None] * (b - a) + v[:, None] * (c - a), chosen
 
 
-def point_triangle_distance(p, a, b, c):
-    """Exact distance from points p to triangles (a, b, c), all (n, 3)."""
-    return _point_triangle_distance(*(np.asarray(x, dtype=float).T for x in (p, a, b, c)))
-
-
-def _point_triangle_distance(p, a, b, c):
-    """``point_triangle_distance`` on component arrays (3, n): a few passes of plain arithmetic.
-
-    When p projects into the triangle (on the inner side of its three edges) the distance
-    is to its plane, else to the nearest of its three edges; a zero-area triangle is only
-    its edges (a segment, or a point).
-    """
-    ab, bc, ca = b - a, c - b, a - c
-    ap, bp, cp = p - a, p - b, p - c
-    normal = _cross(ab, -ca)
-    norm2 = _dot(normal, normal)
-    inside = norm2 > 0
-    for edge, start in ((ab, ap), (bc, bp), (ca, cp)):
-        inside &= _dot(_cross(edge, start), normal) >= 0
-    squared = np.minimum.reduce([_segment_distance2(ap, ab), _segment_distance2(bp, bc), _segment_distance2(cp, ca)])
-    with np.errstate(divide="ignore", invalid="ignore"):
-        plane = _dot(ap, normal) ** 2 / norm2
-    return np.sqrt(np.where(inside, plane, squared))
-
-
-def _segment_distance2(start, edge):
-    """Squared distance from points to segments a + t edge (t in [0, 1]), given start = p - a;
-    components (3, n). A zero-length segment is its point."""
-    length2 = _dot(edge, edge)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        t = np.where(length2 > 0, np.clip(_dot(start, edge) / length2, 0, 1), 0.0)
-    offset = start - t * edge
-    return _dot(offset, offset)
-
-
-def _dot(u, v):
-    return u[0] * v[0] + u[1] * v[1] + u[2] * v[2]
-
-
-def _cross(u, v):
-    return np.stack([u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]])
-
-
 def distance_to_mesh(samples, points, triangles):
     """Exact distance from each sample to the mesh: the minimum over all its triangles."""
     return nearest_triangles(samples, points, triangles)[0]
@@ -136,21 +93,6 @@ def radius_groups(radius):
     return [np.flatnonzero(level == value) for value in np.unique(level)]
 
 
-def corner_rows(points, triangles):
-    """The corners of every triangle as an array (3 corners, 3 coordinates, triangles), the
-    layout that ``distances_to`` gathers fastest, made one coordinate row at a time."""
-    coordinates = np.asarray(points, dtype=float).T
-    triangles = np.asarray(triangles)
-    return np.stack([coordinates[:, triangles[:, corner]] for corner in range(3)])
-
-
-def distances_to(samples, sample_index, triangle_index, rows):
-    """Distances from samples[sample_index] to the triangles triangle_index, whose corners are
-    ``rows`` (3 corners, 3 coordinates, triangles), the layout that gathers fastest."""
-    chosen = rows[:, :, triangle_index]
-    return _point_triangle_distance(samples[sample_index].T, chosen[0], chosen[1], chosen[2])
-
-
 def surface_distance(mesh_a, mesh_b, samples=100_000, seed=0, keep_a=None, keep_b=None):
     """Symmetric point-to-surface distance between two (points, triangles) meshes.
 
@@ -171,7 +113,6 @@ def surface_distance(mesh_a, mesh_b, samples=100_000, seed=0, keep_a=None, keep_
 
 
 HEIGHTFIELD_NORMAL_Z = 0.5
-HEIGHTFIELD_CANDIDATES = 8
 
 
 def heightfield_filters(points_a, triangles_a, min_normal_z=HEIGHTFIELD_NORMAL_Z):
@@ -182,30 +123,20 @@ def heightfield_filters(points_a, triangles_a, min_normal_z=HEIGHTFIELD_NORMAL_Z
     part of A is its triangles whose unit normal has z above ``min_normal_z`` (0.5: within
     60 degrees of +z) and that are seen from +z: no other triangle of A lies above their
     centroid (``front_most``). keep_a keeps A-samples on those triangles. keep_b keeps
-    B-samples whose nearest A-triangle is one of them, the nearest being the closest (exact
-    point-triangle distance) among the HEIGHTFIELD_CANDIDATES triangles with the nearest
-    centroids; that differs from the true nearest only for samples about equally far from
-    two triangles, i.e. on the border between the parts, where either answer is right.
+    B-samples whose nearest A-triangle (``nearest_triangles``) is one of them; a sample
+    about equally far from two triangles lies on the border between the parts, where
+    either answer is right.
     """
-    from scipy.spatial import cKDTree
-
     points_a = np.asarray(points_a, dtype=float)
     corners = points_a[np.asarray(triangles_a)]
     normals = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
     part = (normals[:, 2] > min_normal_z * np.linalg.norm(normals, axis=1)) & front_most(corners)
-    tree = cKDTree(corners.mean(axis=1))
-    rows = corner_rows(points_a, triangles_a)
-    k = min(HEIGHTFIELD_CANDIDATES, len(corners))
 
     def keep_a(samples, triangle_index):
         return part[triangle_index]
 
     def keep_b(samples, triangle_index):
-        _, candidates = tree.query(samples, k=k)
-        candidates = candidates.reshape(len(samples), k)
-        sample_index = np.repeat(np.arange(len(samples)), k)
-        distance = distances_to(samples, sample_index, candidates.ravel(), rows).reshape(-1, k)
-        return part[candidates[np.arange(len(samples)), distance.argmin(axis=1)]]
+        return part[nearest_triangles(samples, points_a, triangles_a)[1]]
 
     return keep_a, keep_b
 
