@@ -13,4 +13,5 @@ def kernel(name):
 
 setup(ext_modules=[
     kernel("mzc.measure._nearest"),
+    kernel("mzc.ops._raster"),
 ])

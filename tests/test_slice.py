@@ -130,16 +130,27 @@ def test_edge_on_triangles_are_skipped_and_misses_are_nan():
     assert np.isnan(z).all()
 
 
-def test_many_candidates_are_processed_in_chunks(monkeypatch):
-    import mzc.ops.raster
+def test_the_rasterizer_refuses_ranges_owners_and_buffers_that_do_not_fit():
+    """The C kernel checks every buffer's size, node range and owner before it reads or
+    writes: a bad one is refused and nothing is written."""
+    from mzc.ops import _raster
+    from mzc.ops.raster import BARYCENTRIC_TOLERANCE, heights_on_triangles
+    from mzc.vectors import corner_rows
 
-    lattice = np.linspace(0, 1, 6)
-    mesh = grid_mesh(lattice, lattice, lambda x, y: 2 * x - y)
-    nodes = np.linspace(0, 1, 101)
-    whole = rasterize(mesh.points, mesh.triangles, nodes, nodes)
-    monkeypatch.setattr(mzc.ops.raster, "CANDIDATES_PER_CHUNK", 500)
-    np.testing.assert_array_equal(rasterize(mesh.points, mesh.triangles, nodes, nodes), whole)
-    assert not np.isnan(whole).any()
+    rows = corner_rows(np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0.0]]), [[0, 1, 2]])
+    nodes = np.arange(3.0)
+    for cols in ([[0], [3]], [[-1], [1]], [[0], [1], [2]]):
+        best = np.full(9, -np.inf)
+        status = _raster.front_most(rows, np.array(cols), np.array([[0], [2]]), nodes, nodes, BARYCENTRIC_TOLERANCE,
+                                    best)
+        assert status == (1 if len(cols) == 3 else 2) and (best == -np.inf).all()
+    best = np.full(9, -np.inf)
+    assert _raster.front_most(rows, np.array([[2], [0]]), np.array([[0], [2]]), nodes, nodes, 0.0, best) == 0
+    assert (best == -np.inf).all()   # an empty range
+    assert _raster.front_most(rows, np.array([[0], [2]]), np.array([[0], [2]]), nodes, nodes, 0.0, best[:8]) == 1
+    for owner in (1, -1):
+        with pytest.raises(MzcError, match="out of range"):
+            heights_on_triangles(rows.transpose(2, 1, 0), np.array([0, owner]), np.zeros(2), np.zeros(2))
 
 
 # --------------------------------------------------------------------------- point clouds
