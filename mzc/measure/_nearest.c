@@ -11,7 +11,7 @@
  * The buffers are C-contiguous (the y* and w* formats) and their sizes are checked against
  * each other before anything is read. Returns 0, or NEAREST_BAD_SIZE (sizes that do not
  * fit), NEAREST_BAD_INDEX (a corner index out of range), NEAREST_NO_MEMORY or
- * NEAREST_TOO_MANY (more than MAX_TRIANGLES), which metrics.py turns into errors. An empty
+ * NEAREST_TOO_MANY (more than MAX_TRIANGLES or MAX_POINTS), which metrics.py turns into errors. An empty
  * mesh is infinitely far from every sample.
  *
  * The tree: the triangles sorted by the Morton code of their box centres (63 bits, 21 per
@@ -22,9 +22,10 @@
  * most log2(MAX_TRIANGLES) = 30 halvings: the depth stays under 95, which bounds the
  * search's stack (MAX_DEPTH). Nodes are stored depth first, a node's left child right after
  * it; a node's box is the union of its children's, a leaf's that of its corners, in float
- * rounded outwards. A leaf holds a range of the sorted order, which names its triangles:
- * the tree takes about 40 bytes a triangle, the search 32 a sample (copying the corners
- * into leaf order was no faster and took 72 bytes a triangle more).
+ * rounded outwards. A leaf holds a range of the leaf order, in which the triangles' vertex
+ * indices are copied (int32): the tree takes about 50 bytes a triangle, the search 32 a
+ * sample (copying the corners themselves was no faster and took 60 bytes a triangle more;
+ * reaching the vertices through the sorted order's triangle indices was 15% slower).
  *
  * The search: the samples in the Morton order of their own codes, so that consecutive
  * searches walk the same part of the tree, each starting from the bound of the triangle
@@ -50,6 +51,7 @@
 
 #define LEAF_SIZE 4
 #define MAX_TRIANGLES (INT32_MAX / 2) /* so that the 2m - 1 nodes are counted in int32 */
+#define MAX_POINTS INT32_MAX           /* vertex indices in int32 */
 #define MAX_DEPTH 128 /* above the depth of any tree, under 95 */
 /* (1 + 1e-9)^2: a box within a billionth of the best distance is still searched */
 #define WIDEN2 (1.0 + 2e-9 + 1e-18)
@@ -67,8 +69,7 @@ typedef struct {
 
 typedef struct {
     const double *points;
-    const int64_t *triangles;
-    const Key *order; /* the triangles in Morton order: the leaves' order */
+    const int32_t *vertices; /* the vertex indices of each triangle, 3 a triangle, in leaf order */
     Node *nodes;
     int64_t used;     /* nodes, while they are being made */
 } Tree;
@@ -151,8 +152,9 @@ static float outwards(double x, int down) {
 
 /* The 9 coordinates of the triangle at ``place`` in leaf order. */
 static void corners_of(const Tree *tree, int64_t place, double corners[9]) {
-    const int64_t *triangle = tree->triangles + 3 * tree->order[place].index;
-    for (int corner = 0; corner < 3; corner++) memcpy(corners + 3 * corner, tree->points + 3 * triangle[corner], 24);
+    const int32_t *vertex = tree->vertices + 3 * place;
+    for (int corner = 0; corner < 3; corner++)
+        memcpy(corners + 3 * corner, tree->points + 3 * (int64_t)vertex[corner], 3 * sizeof(double));
 }
 
 /* A leaf of order[lo..hi): the box of their corners. */
@@ -192,14 +194,14 @@ static int64_t split(const Key *keys, int64_t lo, int64_t hi) {
 }
 
 /* Build the subtree of order[lo..hi) at the next free node; returns its index. */
-static int64_t build_node(Tree *tree, int64_t lo, int64_t hi) {
+static int64_t build_node(Tree *tree, const Key *order, int64_t lo, int64_t hi) {
     int64_t index = tree->used++;
     if (hi - lo <= LEAF_SIZE) {
         make_leaf(tree, &tree->nodes[index], lo, hi);
         return index;
     }
-    int64_t mid = split(tree->order, lo, hi);
-    int64_t left = build_node(tree, lo, mid), right = build_node(tree, mid, hi);
+    int64_t mid = split(order, lo, hi);
+    int64_t left = build_node(tree, order, lo, mid), right = build_node(tree, order, mid, hi);
     Node *node = &tree->nodes[index], *a = &tree->nodes[left], *b = &tree->nodes[right];
     for (int i = 0; i < 3; i++) {
         node->lo[i] = a->lo[i] < b->lo[i] ? a->lo[i] : b->lo[i];
@@ -319,8 +321,9 @@ static int measure(const double *points, int64_t n, const int64_t *triangles, in
     }
     Key *order = malloc((size_t)m * sizeof(Key)), *queue = malloc((size_t)(k ? k : 1) * sizeof(Key));
     Node *nodes = malloc((size_t)(2 * m) * sizeof(Node)); /* a binary tree of at most m leaves */
+    int32_t *vertices = malloc((size_t)m * 3 * sizeof(int32_t));
     int status = NEAREST_NO_MEMORY;
-    if (!order || !queue || !nodes) goto done;
+    if (!order || !queue || !nodes || !vertices) goto done;
     double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
     for (int64_t v = 0; v < n; v++)
         for (int i = 0; i < 3; i++) {
@@ -345,8 +348,11 @@ static int measure(const double *points, int64_t n, const int64_t *triangles, in
         queue[s].index = s;
     }
     if (sort_keys(order, m) || sort_keys(queue, k)) goto done;
-    Tree tree = {points, triangles, order, nodes, 0};
-    build_node(&tree, 0, m);
+    for (int64_t t = 0; t < m; t++)
+        for (int corner = 0; corner < 3; corner++)
+            vertices[3 * t + corner] = (int32_t)triangles[3 * order[t].index + corner];
+    Tree tree = {points, vertices, nodes, 0};
+    build_node(&tree, order, 0, m);
     int64_t which = 0;
     for (int64_t s = 0; s < k; s++) {
         int64_t sample = queue[s].index;
@@ -358,6 +364,7 @@ done:
     free(order);
     free(queue);
     free(nodes);
+    free(vertices);
     return status;
 }
 
@@ -368,7 +375,7 @@ static PyObject *nearest(PyObject *self, PyObject *args) {
     const Py_ssize_t row = 3 * (Py_ssize_t)sizeof(double); /* int64 rows are as long */
     Py_ssize_t n = points.len / row, m = triangles.len / row, k = samples.len / row;
     int status = NEAREST_BAD_SIZE;
-    if (m > MAX_TRIANGLES) status = NEAREST_TOO_MANY;
+    if (m > MAX_TRIANGLES || n > MAX_POINTS) status = NEAREST_TOO_MANY;
     else if (points.len % row == 0 && triangles.len % row == 0 && samples.len % row == 0 &&
              distances.len == k * (Py_ssize_t)sizeof(double) && found.len == k * (Py_ssize_t)sizeof(int64_t)) {
         Py_BEGIN_ALLOW_THREADS
@@ -390,8 +397,8 @@ static PyMethodDef methods[] = {
     {NULL, NULL, 0, NULL},
 };
 
-static struct PyModuleDef module = {
-    PyModuleDef_HEAD_INIT, "_nearest", "The exact distance from points to a triangle mesh (a bounding volume hierarchy).",
-    -1, methods, NULL, NULL, NULL, NULL};
+static struct PyModuleDef module = {PyModuleDef_HEAD_INIT, "_nearest",
+                                    "The exact distance from points to a triangle mesh (a bounding volume hierarchy).",
+                                    -1, methods, NULL, NULL, NULL, NULL};
 
 PyMODINIT_FUNC PyInit__nearest(void) { return PyModule_Create(&module); }

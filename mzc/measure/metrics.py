@@ -61,7 +61,8 @@ def distance_to_mesh(samples, points, triangles):
 
 NEAREST_ERRORS = {1: "the points, triangles and samples given to the distance search do not fit together",
                   2: "a triangle refers to a vertex that does not exist",
-                  4: "the mesh has more triangles than the distance search takes (2^30 - 1)"}
+                  4: "the mesh has more triangles or vertices than the distance search takes (2^30 - 1 triangles, "
+                     "2^31 - 1 vertices)"}
 
 
 def nearest_triangles(samples, points, triangles):
@@ -75,7 +76,7 @@ def nearest_triangles(samples, points, triangles):
     triangle that could be nearer is measured exactly, with the point-triangle formula
     (the plane within the three edges, else the nearest edge; a zero-area triangle is its
     edges), so the distance is exact to round-off whatever the mesh. It runs on one thread,
-    without the GIL; its memory, about 40 bytes a triangle and 32 a sample, is freed when it returns.
+    without the GIL; its memory, about 50 bytes a triangle and 32 a sample, is freed when it returns.
     """
     from mzc.measure import _nearest
 
