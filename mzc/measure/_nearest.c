@@ -67,6 +67,9 @@ typedef struct {
     int64_t index; /* of the triangle or sample */
 } Key;
 
+/* the triangles' sort runs through the room of the 2m nodes (C99's static assertion) */
+typedef char nodes_hold_the_keys[2 * sizeof(Node) >= sizeof(Key) ? 1 : -1];
+
 typedef struct {
     const double *points;
     const int32_t *vertices; /* the vertex indices of each triangle, 3 a triangle, in leaf order */
@@ -276,16 +279,11 @@ static uint64_t morton(const double p[3], const double lo[3], const double hi[3]
     return code;
 }
 
-/* Sort keys by code, equal codes in their order (a radix sort, a byte at a time); returns
- * NEAREST_NO_MEMORY if its buffer cannot be had. */
-static int sort_keys(Key *keys, int64_t count) {
-    Key *buffer = malloc((size_t)(count ? count : 1) * sizeof(Key)), *from = keys, *to = buffer;
-    if (!buffer) return NEAREST_NO_MEMORY;
-    int64_t (*histogram)[256] = calloc(8, sizeof *histogram);
-    if (!histogram) {
-        free(buffer);
-        return NEAREST_NO_MEMORY;
-    }
+/* Sort keys by code, equal codes in their order: a radix sort, a byte at a time, through
+ * ``scratch``, room for as many keys. */
+static void sort_keys(Key *keys, int64_t count, Key *scratch) {
+    int64_t histogram[8][256] = {{0}};
+    Key *from = keys, *to = scratch;
     for (int64_t k = 0; k < count; k++)
         for (int byte = 0; byte < 8; byte++) histogram[byte][(keys[k].code >> (8 * byte)) & 255]++;
     for (int byte = 0; byte < 8; byte++) {
@@ -302,9 +300,6 @@ static int sort_keys(Key *keys, int64_t count) {
         to = swap;
     }
     if (from != keys) memcpy(keys, from, (size_t)count * sizeof(Key));
-    free(histogram);
-    free(buffer);
-    return 0;
 }
 
 /* The whole job on checked sizes: build, search every sample, free. */
@@ -319,7 +314,8 @@ static int measure(const double *points, int64_t n, const int64_t *triangles, in
         }
         return 0;
     }
-    Key *order = malloc((size_t)m * sizeof(Key)), *queue = malloc((size_t)(k ? k : 1) * sizeof(Key));
+    /* the samples' keys, then as many for their sort; the nodes' room serves the triangles' sort */
+    Key *order = malloc((size_t)m * sizeof(Key)), *queue = malloc((size_t)(k ? 2 * k : 1) * sizeof(Key));
     Node *nodes = malloc((size_t)(2 * m) * sizeof(Node)); /* a binary tree of at most m leaves */
     int32_t *vertices = malloc((size_t)m * 3 * sizeof(int32_t));
     int status = NEAREST_NO_MEMORY;
@@ -347,7 +343,8 @@ static int measure(const double *points, int64_t n, const int64_t *triangles, in
         queue[s].code = morton(samples + 3 * s, lo, hi);
         queue[s].index = s;
     }
-    if (sort_keys(order, m) || sort_keys(queue, k)) goto done;
+    sort_keys(order, m, (Key *)nodes); /* 2m nodes of 32 bytes hold m keys of 16 */
+    sort_keys(queue, k, queue + k);
     for (int64_t t = 0; t < m; t++)
         for (int corner = 0; corner < 3; corner++)
             vertices[3 * t + corner] = (int32_t)triangles[3 * order[t].index + corner];
