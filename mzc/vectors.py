@@ -30,15 +30,3 @@ def rotated(points, matrix):
     """``points @ matrix.T`` for (..., 3) ``points`` and a 3x3 ``matrix``: each point mapped by it."""
     return np.stack([dotted(points, row) for row in np.asarray(matrix, dtype=np.float64)], axis=-1)
 
-
-def corner_rows(points, triangles):
-    """The corners of (m, 3) ``triangles`` of (n, 3) ``points`` as one (3 coordinates, 3 corners, m)
-    array, gathered a coordinate row at a time (numpy's fastest gather: 1.44 M triangles in
-    0.03 s against 0.07 for points[triangles])."""
-    coordinates = np.ascontiguousarray(np.asarray(points, dtype=np.float64).T)
-    corners = np.ascontiguousarray(np.asarray(triangles, dtype=np.int64).reshape(-1, 3).T)
-    rows = np.empty((3, 3, corners.shape[1]))
-    for i, row in enumerate(coordinates):
-        for j, corner in enumerate(corners):
-            rows[i, j] = row[corner]
-    return rows

@@ -9,7 +9,6 @@ of Metro: area-weighted random samples on each surface, exact distance to the ot
 import numpy as np
 
 from mzc.errors import MzcError
-from mzc.vectors import corner_rows
 
 
 def grid_error_stats(reference, other):
@@ -34,11 +33,12 @@ def distance_stats(distances):
 
 
 def triangle_areas(points, triangles):
-    """Area of every triangle: half the length of the cross product of two edges, on corner rows
-    (1.44 M triangles in 0.065 s instead of 0.11) in the operations of np.cross and
-    np.linalg.norm, so the same bits."""
-    rows = corner_rows(points, triangles)
-    u, v = rows[:, 1] - rows[:, 0], rows[:, 2] - rows[:, 0]
+    """Area of every triangle: half the length of the cross product of two edges, computed a
+    coordinate row at a time (gathers of rows are numpy's fastest: 1.44 M triangles in 0.065 s
+    instead of 0.11) with the operations of np.cross and np.linalg.norm, so the same bits."""
+    coordinates = np.ascontiguousarray(np.asarray(points, dtype=np.float64).T)
+    a, b, c = np.ascontiguousarray(np.asarray(triangles, dtype=np.int64).reshape(-1, 3).T)
+    u, v = [row[b] - row[a] for row in coordinates], [row[c] - row[a] for row in coordinates]
     x, y, z = u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]
     return 0.5 * np.sqrt(x * x + y * y + z * z)
 

@@ -4,14 +4,13 @@ Node (r, c) of a planar grid stands for the vertical line where a "horizontal" p
 (constant y, one grid row) meets a "vertical" plane (constant x, one column); its height
 is the exact front-most intersection of that line with the surface, not the nearest
 vertex the thesis takes, so a piecewise-linear surface is reproduced exactly at the
-nodes. The arithmetic is a small C kernel (``_raster.c``); the blocks of candidate nodes
-per triangle, in chunks of bounded size, serve the rays of central grids (``mzc.ops.rays``).
+nodes. It is a small C kernel (``_raster.c``); its node ranges, and the blocks of candidate
+nodes per triangle in chunks of bounded size, serve the rays of central grids (``mzc.ops.rays``).
 """
 
 import numpy as np
 
 from mzc.errors import MzcError
-from mzc.vectors import corner_rows, of_each_row
 
 BARYCENTRIC_TOLERANCE = 1e-9  # nodes on shared edges belong to both triangles
 CANDIDATES_PER_CHUNK = 2_000_000
@@ -29,12 +28,10 @@ def rasterize(points, triangles, xs, ys):
     from mzc.ops import _raster
 
     xs, ys = np.ascontiguousarray(xs, dtype=np.float64), np.ascontiguousarray(ys, dtype=np.float64)
-    rows = corner_rows(points, triangles)
     best = np.full(len(ys) * len(xs), -np.inf)
-    if rows.shape[2]:
-        col_range = index_range(rows[0].T, xs)
-        row_range = index_range(rows[1].T, ys)
-        checked(_raster.front_most(rows, col_range, row_range, xs, ys, BARYCENTRIC_TOLERANCE, best))
+    checked(_raster.front_most(np.ascontiguousarray(points, dtype=np.float64).reshape(-1, 3),
+                               np.ascontiguousarray(triangles, dtype=np.int64).reshape(-1, 3), xs, ys,
+                               BARYCENTRIC_TOLERANCE, best))
     best[best == -np.inf] = np.nan
     return best.reshape(len(ys), len(xs))
 
@@ -45,12 +42,15 @@ def cross2(u, v):
 
 
 def index_range(coordinate, nodes):
-    """(2, m) first and last node index inside each triangle's [min, max] of ``coordinate``."""
-    step = nodes[1] - nodes[0] if len(nodes) > 1 else 1.0
-    slack = 1e-7  # in node steps: a node exactly on the box edge is always a candidate
-    low = np.ceil((of_each_row(np.min, coordinate) - nodes[0]) / step - slack)
-    high = np.floor((of_each_row(np.max, coordinate) - nodes[0]) / step + slack)
-    return np.stack([np.clip(low, 0, len(nodes)), np.clip(high, -1, len(nodes) - 1)]).astype(np.int64)
+    """(2, m) first and last node index inside each row's [min, max] of ``coordinate`` (m, k):
+    the node ranges of the planar rasterizer (``_raster.c``), with the slack that keeps a
+    node exactly on the box's edge a candidate; none (last < first) for a NaN."""
+    from mzc.ops import _raster
+
+    values = np.ascontiguousarray(coordinate, dtype=np.float64)
+    out = np.empty((2, len(values)), dtype=np.int64)
+    checked(_raster.ranges(values, values.shape[1], np.ascontiguousarray(nodes, dtype=np.float64), out))
+    return out
 
 
 def candidate_chunks(col_range, row_range):
@@ -85,10 +85,9 @@ def heights_on_triangles(corners, owner, x, y):
     from mzc.ops import _raster
 
     z, hit = np.empty(len(owner)), np.empty(len(owner), dtype=bool)
-    rows = np.ascontiguousarray(np.asarray(corners, dtype=np.float64).transpose(2, 1, 0))
-    checked(_raster.heights(rows, np.ascontiguousarray(owner, dtype=np.int64),
-                            np.ascontiguousarray(x, dtype=np.float64), np.ascontiguousarray(y, dtype=np.float64),
-                            BARYCENTRIC_TOLERANCE, z, hit))
+    checked(_raster.heights(np.ascontiguousarray(corners, dtype=np.float64),
+                            np.ascontiguousarray(owner, dtype=np.int64), np.ascontiguousarray(x, dtype=np.float64),
+                            np.ascontiguousarray(y, dtype=np.float64), BARYCENTRIC_TOLERANCE, z, hit))
     return z, hit
 
 
