@@ -98,11 +98,12 @@ static int raster(const double *points, Py_ssize_t n, const int64_t *triangles, 
         double c[9];
         for (int corner = 0; corner < 3; corner++)
             memcpy(c + 3 * corner, points + 3 * triangles[3 * t + corner], 3 * sizeof(double));
-        Plane plane = plane_of(c);
-        if (!has_area(&plane)) continue;
         int64_t col, col_last, row, row_last;
         node_range(fmin(fmin(c[0], c[3]), c[6]), fmax(fmax(c[0], c[3]), c[6]), xs, nx, &col, &col_last);
         node_range(fmin(fmin(c[1], c[4]), c[7]), fmax(fmax(c[1], c[4]), c[7]), ys, ny, &row, &row_last);
+        if (col > col_last || row > row_last) continue; /* no candidate node (most triangles of a fine mesh) */
+        Plane plane = plane_of(c);
+        if (!has_area(&plane)) continue;
         for (int64_t r = row; r <= row_last; r++)
             for (int64_t k = col; k <= col_last; k++) {
                 double z;
