@@ -11,8 +11,8 @@
  * The buffers are C-contiguous (the y* and w* formats) and their sizes are checked against
  * each other before anything is read. Returns 0, or NEAREST_BAD_SIZE (sizes that do not
  * fit), NEAREST_BAD_INDEX (a corner index out of range), NEAREST_NO_MEMORY or
- * NEAREST_TOO_MANY (more than MAX_TRIANGLES or MAX_POINTS), which metrics.py turns into errors. An empty
- * mesh is infinitely far from every sample.
+ * NEAREST_TOO_MANY (more than MAX_TRIANGLES or MAX_POINTS), which metrics.py turns into
+ * errors. An empty mesh is infinitely far from every sample.
  *
  * The tree: the triangles sorted by the Morton code of their box centres (63 bits, 21 per
  * axis, over the box of the points; a radix sort), then split top-down where the codes of a
@@ -74,7 +74,7 @@ typedef struct {
     const double *points;
     const int32_t *vertices; /* the vertex indices of each triangle, 3 a triangle, in leaf order */
     Node *nodes;
-    int64_t used;     /* nodes, while they are being made */
+    int64_t used; /* nodes, while they are being made */
 } Tree;
 
 static double dot(const double u[3], const double v[3]) { return u[0] * v[0] + u[1] * v[1] + u[2] * v[2]; }
@@ -181,12 +181,18 @@ static void make_leaf(const Tree *tree, Node *node, int64_t lo, int64_t hi) {
     node->count = (int32_t)(hi - lo);
 }
 
+/* The highest set bit of x. */
+static uint64_t highest_bit(uint64_t x) {
+    for (int shift = 1; shift < 64; shift <<= 1) x |= x >> shift;
+    return x ^ (x >> 1);
+}
+
 /* Where to split keys[lo..hi) (Morton order, at least two keys): at the first key with the
  * highest bit in which the codes differ, else (all equal) in the middle. */
 static int64_t split(const Key *keys, int64_t lo, int64_t hi) {
     uint64_t differ = keys[lo].code ^ keys[hi - 1].code;
     if (!differ) return lo + (hi - lo) / 2;
-    uint64_t bit = (uint64_t)1 << (63 - __builtin_clzll(differ));
+    uint64_t bit = highest_bit(differ);
     int64_t lacks = lo, has = hi - 1; /* the codes share the bits above ``bit``, so they are sorted by it */
     while (has - lacks > 1) {
         int64_t mid = lacks + (has - lacks) / 2;
