@@ -29,3 +29,4 @@ def dotted(vectors, direction):
 def rotated(points, matrix):
     """``points @ matrix.T`` for (..., 3) ``points`` and a 3x3 ``matrix``: each point mapped by it."""
     return np.stack([dotted(points, row) for row in np.asarray(matrix, dtype=np.float64)], axis=-1)
+
