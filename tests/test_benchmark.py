@@ -60,9 +60,12 @@ def test_the_heightfield_part_leaves_out_steep_and_hidden_triangles():
     assert not keep_wall(None, np.arange(2)).any()
     lower, upper = flat_mesh(), flat_mesh(5.0)
     stacked = (np.vstack([lower[0], upper[0]]), np.vstack([lower[1], upper[1] + len(lower[0])]))
-    keep, _ = heightfield_filters(*stacked)
+    keep, keep_b = heightfield_filters(*stacked)
     hidden = keep(None, np.arange(len(stacked[1])))
     assert not hidden[:len(lower[1])].any() and hidden[len(lower[1]):].all()
+    # B's samples count where their nearest triangle of A does: above the upper patch, not under the lower
+    assert keep_b(np.array([[20, 15, 6.0], [20, 15, 2.4], [20, 15, 2.6], [20, 15, -1.0]]), None).tolist() == \
+        [True, False, True, False]
 
 
 def test_parts_equal_separate_surface_distance_calls():

@@ -65,7 +65,7 @@ def test_encode_imports_only_what_its_codec_uses(tmp_path):
 
 HEAVY = {"scipy", "constriction", "numba", "llvmlite", "pywt", "meshio", "matplotlib", "distributed", "dask",
          "laspy", "lazrs", "rasterio"}
-# what each command may load of HEAVY: scipy only where a sparse solve (or an FFT) runs, constriction only
+# what each command may load of HEAVY: scipy only where a sparse solve, an FFT or a KD-tree runs, constriction only
 # to encode dwt2d (its decoder is a small C extension; numba, which it once used, cost 0.8 s of start-up),
 # laspy and lazrs only to read a LAS/LAZ, rasterio only to read or write a GeoTIFF
 IMPORT_SETS = [
@@ -84,6 +84,8 @@ IMPORT_SETS = [
     (["slice", "{asc}"], set()),                                                        # an ESRI grid: our own
     (["decode", "{grid}", "--format", "tif"], {"rasterio"}),
     (["decode", "{grid}", "--format", "asc"], set()),
+    (["diff", "{mesh}", "{grid}", "--surface"], set()),                                 # the C distance search
+    (["diff", "{mesh}", "{grid}", "--heightfield"], {"scipy"}),                         # KD-trees (front_most)
 ]
 
 

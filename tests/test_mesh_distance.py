@@ -54,6 +54,44 @@ def reference_distance(samples, points, triangles):
     return np.array([min(np.linalg.norm(p - closest_on_triangle(p, *points[t])) for t in triangles) for p in samples])
 
 
+def point_triangle_distance(p, a, b, c):
+    """Exact distance from points p to triangles (a, b, c), all (n, 3), vectorised over the
+    pairs: the formula that the C search evaluates one pair at a time, in numpy. When p
+    projects into the triangle (on the inner side of its three edges) the distance is to
+    its plane, else to the nearest of its three edges; a zero-area triangle is only its
+    edges (a segment, or a point)."""
+    p, a, b, c = (np.asarray(x, dtype=float).T for x in (p, a, b, c))
+    ab, bc, ca = b - a, c - b, a - c
+    ap, bp, cp = p - a, p - b, p - c
+    normal = cross(ab, -ca)
+    norm2 = dot(normal, normal)
+    inside = norm2 > 0
+    for edge, start in ((ab, ap), (bc, bp), (ca, cp)):
+        inside &= dot(cross(edge, start), normal) >= 0
+    squared = np.minimum.reduce([segment_distance2(ap, ab), segment_distance2(bp, bc), segment_distance2(cp, ca)])
+    with np.errstate(divide="ignore", invalid="ignore"):
+        plane = dot(ap, normal) ** 2 / norm2
+    return np.sqrt(np.where(inside, plane, squared))
+
+
+def segment_distance2(start, edge):
+    """Squared distance from points to segments a + t edge (t in [0, 1]), given start = p - a;
+    components (3, n). A zero-length segment is its point."""
+    length2 = dot(edge, edge)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        t = np.where(length2 > 0, np.clip(dot(start, edge) / length2, 0, 1), 0.0)
+    offset = start - t * edge
+    return dot(offset, offset)
+
+
+def dot(u, v):
+    return u[0] * v[0] + u[1] * v[1] + u[2] * v[2]
+
+
+def cross(u, v):
+    return np.stack([u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]])
+
+
 coordinate = st.integers(-4, 4).map(float)
 corner = st.tuples(coordinate, coordinate, coordinate)
 
@@ -128,22 +166,27 @@ def test_distance_to_mesh_with_very_different_triangle_sizes_equals_the_referenc
                                reference_distance(samples, points, triangles), rtol=1e-9, atol=1e-9)
 
 
-def test_batches_of_a_few_pairs_give_the_same_distances():
-    """``pairs`` only bounds the memory: batches of 7 sample-triangle pairs give the same answer."""
+def test_the_distances_do_not_depend_on_which_samples_come_along():
+    """The samples are searched in Morton order, each from the previous one's nearest
+    triangle: any subset, in any order, gets the same distances and nearest triangles."""
     from mzc.grid import ZGrid
+    from mzc.measure.metrics import nearest_triangles
     from mzc.ops.triangulation import grid_to_mesh
 
     y, x = np.mgrid[0:20, 0:20].astype(float)
     mesh = grid_to_mesh(ZGrid(np.sin(x / 3) * np.cos(y / 4) * 2, 0.5, 0.5))
     rng = np.random.default_rng(8)
     samples = rng.uniform(mesh.points.min(axis=0) - 2, mesh.points.max(axis=0) + 2, (300, 3))
-    np.testing.assert_array_equal(distance_to_mesh(samples, mesh.points, mesh.triangles, pairs=7),
-                                  distance_to_mesh(samples, mesh.points, mesh.triangles))
+    distances, nearest = nearest_triangles(samples, mesh.points, mesh.triangles)
+    some = rng.permutation(300)[:77]
+    np.testing.assert_array_equal(distance_to_mesh(samples[some], mesh.points, mesh.triangles), distances[some])
+    corners = mesh.points[mesh.triangles[nearest]]
+    np.testing.assert_array_equal(point_triangle_distance(samples, *corners.transpose(1, 0, 2)), distances)
 
 
 def test_distance_from_a_face_to_another_equals_every_triangle_looked_at():
     """Samples of f18 against the 59,697 triangles of m18, each measured against all of them."""
-    from mzc.measure.metrics import point_triangle_distance, sample_surface
+    from mzc.measure.metrics import sample_surface
     from mzc.meshes import read_mesh
 
     a, b = read_mesh(face_path("f18.ply")), read_mesh(face_path("m18.ply"))
@@ -170,3 +213,30 @@ def test_the_figures_of_two_faces_are_those_of_the_method_before_the_kd_tree_rew
     assert figures.keys() == expected.keys()
     for key, value in expected.items():
         assert figures[key] == pytest.approx(value, rel=1e-9), key
+
+
+def test_the_search_refuses_indices_and_buffers_that_do_not_fit():
+    """The C search checks every corner index and every buffer's size before it reads or
+    writes: a bad one is refused and nothing is written."""
+    from mzc.errors import MzcError
+    from mzc.measure import _nearest
+
+    points, samples = np.eye(3), np.ones((2, 3))
+    for corner in (3, -1):
+        with pytest.raises(MzcError, match="refers to a vertex that does not exist"):
+            distance_to_mesh(samples, points, [[0, 1, 2], [0, corner, 1]])
+    triangle = np.array([[0, 1, 2]])
+    for arguments in [(points.ravel()[:7], triangle, samples), (points, triangle.ravel()[:2], samples),
+                      (points, triangle, samples.ravel()[:5])]:
+        distances, nearest = np.full(2, 7.0), np.full(2, 7)
+        assert _nearest.nearest(*arguments, distances, nearest) == 1
+        assert (distances == 7).all() and (nearest == 7).all()
+    for distances, nearest in [(np.empty(3), np.empty(2, dtype=np.int64)), (np.empty(2), np.empty(1, dtype=np.int64))]:
+        assert _nearest.nearest(points, triangle, samples, distances, nearest) == 1
+
+
+def test_an_empty_mesh_is_infinitely_far():
+    from mzc.measure.metrics import nearest_triangles
+
+    distances, nearest = nearest_triangles(np.ones((2, 3)), np.eye(3), np.empty((0, 3), dtype=np.int64))
+    assert np.isinf(distances).all() and (nearest == -1).all()

@@ -96,6 +96,21 @@ def test_cast_matches_brute_force_on_random_triangles(seed, projection):
     np.testing.assert_allclose(got, expected, rtol=1e-9, equal_nan=True)
 
 
+def test_many_candidates_are_cast_in_chunks(monkeypatch):
+    """Central grids test their candidate nodes in chunks of bounded size: small chunks give the
+    same values."""
+    import mzc.ops.raster
+
+    rng = np.random.default_rng(11)
+    points = (rng.normal(size=(30, 1, 3)) * [40, 25, 40] + rng.normal(size=(30, 3, 3)) * 12).reshape(-1, 3)
+    triangles, radius = np.arange(90).reshape(30, 3), 40.0
+    xs, ys = -np.pi * radius + 2 * np.pi * radius / 48 * np.arange(48), np.linspace(-60, 60, 25)
+    whole = cast(points, triangles, "cylindrical", radius, xs, ys)
+    monkeypatch.setattr(mzc.ops.raster, "CANDIDATES_PER_CHUNK", 50)
+    np.testing.assert_array_equal(cast(points, triangles, "cylindrical", radius, xs, ys), whole)
+    assert np.isfinite(whole).sum() > 100
+
+
 def test_a_triangle_around_the_pole_covers_the_pole_row_and_the_rows_below_it():
     radius = 10.0
     points = np.array([[-5.0, 20, -3], [5.0, 20, -3], [0.0, 20, 6]])

@@ -130,16 +130,26 @@ def test_edge_on_triangles_are_skipped_and_misses_are_nan():
     assert np.isnan(z).all()
 
 
-def test_many_candidates_are_processed_in_chunks(monkeypatch):
-    import mzc.ops.raster
+def test_the_rasterizer_refuses_indices_and_buffers_that_do_not_fit():
+    """The C kernel checks every buffer's size, corner index and owner before it reads or
+    writes: a bad one is refused and nothing is written."""
+    from mzc.ops import _raster
+    from mzc.ops.raster import heights_on_triangles
 
-    lattice = np.linspace(0, 1, 6)
-    mesh = grid_mesh(lattice, lattice, lambda x, y: 2 * x - y)
-    nodes = np.linspace(0, 1, 101)
-    whole = rasterize(mesh.points, mesh.triangles, nodes, nodes)
-    monkeypatch.setattr(mzc.ops.raster, "CANDIDATES_PER_CHUNK", 500)
-    np.testing.assert_array_equal(rasterize(mesh.points, mesh.triangles, nodes, nodes), whole)
-    assert not np.isnan(whole).any()
+    points, triangle, nodes = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0.0]]), np.array([[0, 1, 2]]), np.arange(3.0)
+    for corner in (3, -1):
+        with pytest.raises(MzcError, match="out of range"):
+            rasterize(points, [[0, 1, 2], [0, corner, 1]], nodes, nodes)
+    for arguments in [(points.ravel()[:7], triangle, nodes, nodes), (points, triangle.ravel()[:2], nodes, nodes)]:
+        best = np.full(9, -np.inf)
+        assert _raster.front_most(*arguments, 0.0, best) == 1 and (best == -np.inf).all()
+    assert _raster.front_most(points, triangle, nodes, nodes, 0.0, np.full(8, -np.inf)) == 1
+    for owner in (1, -1):
+        with pytest.raises(MzcError, match="out of range"):
+            heights_on_triangles(points[triangle], np.array([0, owner]), np.zeros(2), np.zeros(2))
+    out = np.full((2, 2), 7)
+    assert _raster.ranges(np.zeros(5), 2, nodes, out) == 1 and _raster.ranges(np.zeros(4), 0, nodes, out) == 1
+    assert (out == 7).all()
 
 
 # --------------------------------------------------------------------------- point clouds

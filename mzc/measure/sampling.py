@@ -19,6 +19,7 @@ def common_grid(a, d1=None, d2=None):
     from mzc.meshes import Mesh
     from mzc.ops.slicing import slice_in_frame
     from mzc.projections import to_nodes
+    from mzc.vectors import rotated
 
     if a.grid is not None and d1 is None and d2 is None:
         return a.grid
@@ -26,7 +27,7 @@ def common_grid(a, d1=None, d2=None):
     transform = grid.transform if grid is not None else IDENTITY_TRANSFORM
     rotation, shift = transform[:, :3], transform[:, 3]
     projection, radius = (grid.projection, grid.radius) if grid is not None else ("planar", None)
-    extent = np.ptp(to_nodes(projection, radius, (a.points - shift) @ rotation), axis=0)[:2]
+    extent = np.ptp(to_nodes(projection, radius, rotated(a.points - shift, rotation.T)), axis=0)[:2]
     d1 = d1 or d2 or extent.max() / DEFAULT_DIVISIONS
     return slice_in_frame(Mesh(a.points, a.triangles), rotation, shift, d1=d1, d2=d2 or d1,
                           units=grid.units if grid is not None else None, projection=projection, radius=radius,

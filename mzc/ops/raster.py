@@ -4,13 +4,13 @@ Node (r, c) of a planar grid stands for the vertical line where a "horizontal" p
 (constant y, one grid row) meets a "vertical" plane (constant x, one column); its height
 is the exact front-most intersection of that line with the surface, not the nearest
 vertex the thesis takes, so a piecewise-linear surface is reproduced exactly at the
-nodes. The blocks of candidate nodes per triangle, in chunks of bounded size, serve the
-rays of central grids too (``mzc.ops.rays``).
+nodes. It is a small C kernel (``_raster.c``); its node ranges, and the blocks of candidate
+nodes per triangle in chunks of bounded size, serve the rays of central grids (``mzc.ops.rays``).
 """
 
 import numpy as np
 
-from mzc.vectors import of_each_row
+from mzc.errors import MzcError
 
 BARYCENTRIC_TOLERANCE = 1e-9  # nodes on shared edges belong to both triangles
 CANDIDATES_PER_CHUNK = 1 << 15   # (triangle, node) pairs tested at a time: a few MB of temporaries
@@ -21,28 +21,19 @@ def rasterize(points, triangles, xs, ys):
 
     ``xs`` and ``ys`` are uniform, increasing node coordinates. Each triangle's xy bounding
     box maps to a block of candidate nodes in O(1); every candidate gets an inclusive
-    barycentric test and the plane's height, and the largest height per node wins. Nodes
-    that no triangle covers are NaN. Triangles with no xy area (seen edge-on) are skipped.
+    barycentric test and the plane's height, and the largest height per node wins (in C,
+    node by node: no candidate lists). Nodes that no triangle covers are NaN. Triangles with
+    no xy area (seen edge-on) are skipped.
     """
-    points = np.asarray(points, dtype=np.float64)
-    xs, ys = np.asarray(xs, dtype=np.float64), np.asarray(ys, dtype=np.float64)
-    corners = points[non_degenerate(points, np.asarray(triangles, dtype=np.int64))]
+    from mzc.ops import _raster
+
+    xs, ys = np.ascontiguousarray(xs, dtype=np.float64), np.ascontiguousarray(ys, dtype=np.float64)
     best = np.full(len(ys) * len(xs), -np.inf)
-    if len(corners):
-        col_range = index_range(corners[:, :, 0], xs)
-        row_range = index_range(corners[:, :, 1], ys)
-        for chunk in candidate_chunks(col_range, row_range):
-            rasterize_chunk(corners[chunk], col_range[:, chunk], row_range[:, chunk], xs, ys, best)
+    checked(_raster.front_most(np.ascontiguousarray(points, dtype=np.float64).reshape(-1, 3),
+                               np.ascontiguousarray(triangles, dtype=np.int64).reshape(-1, 3), xs, ys,
+                               BARYCENTRIC_TOLERANCE, best))
     best[best == -np.inf] = np.nan
     return best.reshape(len(ys), len(xs))
-
-
-def non_degenerate(points, triangles):
-    """The triangles whose xy projection has an area (tested relative to their own size)."""
-    a, b, c = (points[triangles[:, i], :2] for i in range(3))
-    doubled_area = np.abs(cross2(b - a, c - a))
-    scale = np.maximum(of_each_row(np.max, np.abs(b - a)), of_each_row(np.max, np.abs(c - a))) ** 2
-    return triangles[doubled_area > 1e-12 * scale]
 
 
 def cross2(u, v):
@@ -51,12 +42,15 @@ def cross2(u, v):
 
 
 def index_range(coordinate, nodes):
-    """(2, m) first and last node index inside each triangle's [min, max] of ``coordinate``."""
-    step = nodes[1] - nodes[0] if len(nodes) > 1 else 1.0
-    slack = 1e-7  # in node steps: a node exactly on the box edge is always a candidate
-    low = np.ceil((of_each_row(np.min, coordinate) - nodes[0]) / step - slack)
-    high = np.floor((of_each_row(np.max, coordinate) - nodes[0]) / step + slack)
-    return np.stack([np.clip(low, 0, len(nodes)), np.clip(high, -1, len(nodes) - 1)]).astype(np.int64)
+    """(2, m) first and last node index inside each row's [min, max] of ``coordinate`` (m, k):
+    the node ranges of the planar rasterizer (``_raster.c``), with the slack that keeps a
+    node exactly on the box's edge a candidate; none (last < first) for a NaN."""
+    from mzc.ops import _raster
+
+    values = np.ascontiguousarray(coordinate, dtype=np.float64)
+    out = np.empty((2, len(values)), dtype=np.int64)
+    checked(_raster.ranges(values, values.shape[1], np.ascontiguousarray(nodes, dtype=np.float64), out))
+    return out
 
 
 def candidate_chunks(col_range, row_range):
@@ -76,13 +70,6 @@ def block_sizes(index_range_):
     return np.maximum(index_range_[1] - index_range_[0] + 1, 0)
 
 
-def rasterize_chunk(corners, col_range, row_range, xs, ys, best):
-    """Test every candidate node of these triangles and raise ``best`` to the heights that hit."""
-    owner, rows, cols = candidate_nodes(col_range, row_range)
-    z, hit = heights_on_triangles(corners, owner, xs[cols], ys[rows])
-    np.maximum.at(best, rows[hit] * len(xs) + cols[hit], z[hit])
-
-
 def candidate_nodes(col_range, row_range):
     """(triangle, row, column) of every node in the triangles' blocks of candidate nodes."""
     width, height = block_sizes(col_range), block_sizes(row_range)
@@ -93,15 +80,19 @@ def candidate_nodes(col_range, row_range):
 
 
 def heights_on_triangles(corners, owner, x, y):
-    """Barycentric test of points (x, y) against triangle ``owner``, and the height there."""
-    a, b, c = corners[:, 0], corners[:, 1], corners[:, 2]
-    ab, ac = b - a, c - a
-    inverse_area = (1.0 / cross2(ab[:, :2], ac[:, :2]))[owner]
-    at = lambda vectors, i: np.ascontiguousarray(vectors[:, i])[owner]  # noqa: E731 - a gather from a contiguous copy
-    px, py = x - at(a, 0), y - at(a, 1)
-    u = (px * at(ac, 1) - py * at(ac, 0)) * inverse_area
-    v = (py * at(ab, 0) - px * at(ab, 1)) * inverse_area
-    tolerance = -BARYCENTRIC_TOLERANCE
-    hit = (u >= tolerance) & (v >= tolerance) & (1.0 - u - v >= tolerance)
-    z = at(a, 2) + u * at(ab, 2) + v * at(ac, 2)
+    """(height, hit) of points (x, y) on triangles ``owner`` of ``corners`` (m, 3, 3): the height
+    of the triangle's plane there and the inclusive barycentric test (``_raster.c``)."""
+    from mzc.ops import _raster
+
+    z, hit = np.empty(len(owner)), np.empty(len(owner), dtype=bool)
+    checked(_raster.heights(np.ascontiguousarray(corners, dtype=np.float64),
+                            np.ascontiguousarray(owner, dtype=np.int64), np.ascontiguousarray(x, dtype=np.float64),
+                            np.ascontiguousarray(y, dtype=np.float64), BARYCENTRIC_TOLERANCE, z, hit))
     return z, hit
+
+
+def checked(status):
+    """Turn a status of ``_raster`` into an error: sizes that do not fit, or an index out of range."""
+    if status:
+        raise MzcError("the rasterizer was given " + ("buffers whose sizes do not fit" if status == 1
+                                                      else "a node or triangle index out of range"))
