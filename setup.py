@@ -16,4 +16,5 @@ setup(ext_modules=[
     kernel("mzc.measure._nearest"),
     kernel("mzc.meshes._lzf"),
     kernel("mzc.ops._raster"),
+    kernel("mzc.ops._plate"),
 ])

@@ -1,4 +1,4 @@
-"""How encode, decode and densify grow with the grid: wall time and peak memory per stage (issue 15).
+"""How encode, decode, densify and triangulate grow with the grid: wall time and peak memory per stage (issue 15).
 
 Generates synthetic terrain z-grids with holes at 0.1 .. 25 million nodes, runs each stage
 as its own ``mzc`` subprocess (so its peak RSS is the stage's alone) and prints a markdown
@@ -27,7 +27,7 @@ SIZES = (0.1, 0.4, 1.6, 6.4, 25.0)     # millions of nodes
 ROUGHNESS = 0.1                         # metres: amplitude of the finest noise octave (2 nodes)
 RMSE = 0.02                             # metres: a fifth of the roughness, so the fine detail is coded
 SPACING = 1.0                           # metres between nodes
-STAGES = ("encode", "decode", "densify")
+STAGES = ("encode", "decode", "densify", "triangulate")
 
 
 def terrain(rows, cols, seed):
@@ -107,12 +107,14 @@ def run(command):
 
 def measure(millions, mzc, folder, stages):
     """(the grid's shape, {stage: (seconds, MB, CPU seconds)}) for one size."""
-    grid, packed, decoded, dense = (folder / name for name in ("in.zg", "in.mzw2", "out.zg", "dense.zg"))
+    grid, packed, decoded, dense, mesh = (folder / name for name in ("in.zg", "in.mzw2", "out.zg", "dense.zg",
+                                                                     "mesh.ply"))
     shape = write_terrain(grid, millions)
     commands = {
         "encode": [*mzc, "encode", "--dwt2d", "--rmse", str(RMSE), str(grid), "-o", str(packed)],
         "decode": [*mzc, "decode", str(packed), "-o", str(decoded)],
         "densify": [*mzc, "densify", "-n", "1", str(grid), "-o", str(dense)],
+        "triangulate": [*mzc, "triangulate", str(grid), "-o", str(mesh)],
     }
     results = {}
     for stage in stages:
@@ -121,7 +123,7 @@ def measure(millions, mzc, folder, stages):
         print(f"  {millions:g} M {stage}: {wall:.1f} s ({cpu:.1f} s CPU), {mb:.0f} MB", file=sys.stderr, flush=True)
     if "encode" in stages:
         results["bytes"] = packed.stat().st_size
-    for path in (grid, packed, decoded, dense):
+    for path in (grid, packed, decoded, dense, mesh):
         path.unlink(missing_ok=True)
     return shape, results
 

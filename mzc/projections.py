@@ -29,15 +29,25 @@ FULL_TURN_TOLERANCE = 1e-9   # relative: columns spanning 2 pi R0 this closely m
 
 
 def to_points(projection, radius, u, v, value):
-    """Grid-frame points (..., 3) of nodes at (u, v) holding ``value`` (NaN stays NaN)."""
-    u, v, value = np.broadcast_arrays(*(np.asarray(a, dtype=float) for a in (u, v, value)))
+    """Grid-frame points (..., 3) of nodes at (u, v) holding ``value`` (NaN stays NaN); the
+    arrays broadcast, so a row of u and a column of v give a grid's nodes."""
+    return stacked(point_components(projection, radius, u, v, value))
+
+
+def point_components(projection, radius, u, v, value):
+    """(x, y, z): the grid-frame coordinates of ``to_points``, each as an array that broadcasts
+    to the shape of u, v and value together."""
+    u, v, value = (np.asarray(a, dtype=float) for a in (u, v, value))
     if projection == "planar":
-        return np.stack([u, v, value], axis=-1)
-    direction = ray_directions(projection, radius, u, v)
-    points = value[..., None] * direction
-    if projection == "cylindrical":
-        points[..., 1] = v
-    return points
+        return u, v, value
+    dx, dy, dz = ray_components(projection, radius, u, v)
+    return value * dx, v if projection == "cylindrical" else value * dy, value * dz
+
+
+def stacked(components, shape=()):
+    """(..., 3) from three arrays that broadcast together (and to ``shape``)."""
+    shape = np.broadcast_shapes(shape, *(np.shape(component) for component in components))
+    return np.stack([np.broadcast_to(component, shape) for component in components], axis=-1)
 
 
 def to_nodes(projection, radius, points):
@@ -55,30 +65,22 @@ def to_nodes(projection, radius, points):
 
 def ray_directions(projection, radius, u, v):
     """Unit directions (..., 3) of the node lines at (u, v): +z for planar grids."""
-    u, v = np.broadcast_arrays(np.asarray(u, dtype=float), np.asarray(v, dtype=float))
+    u, v = np.asarray(u, dtype=float), np.asarray(v, dtype=float)
+    return stacked(ray_components(projection, radius, u, v), np.broadcast_shapes(u.shape, v.shape))
+
+
+def ray_components(projection, radius, u, v):
+    """(dx, dy, dz): the components of ``ray_directions``, each as an array that broadcasts to
+    the shape of u and v. The angles' sines and cosines are taken before u and v broadcast (a
+    row of u and a column of v: one of each per column and per row, not per node)."""
     if projection == "planar":
-        return np.broadcast_to(np.array([0.0, 0.0, 1.0]), u.shape + (3,)).copy()
+        return np.zeros(()), np.zeros(()), np.ones(())
     azimuth = u / radius
     if projection == "cylindrical":
-        return np.stack([np.sin(azimuth), np.zeros_like(azimuth), np.cos(azimuth)], axis=-1)
+        return np.sin(azimuth), np.zeros(()), np.cos(azimuth)
     elevation = v / radius
     ring = np.cos(elevation)
-    return np.stack([ring * np.sin(azimuth), np.sin(elevation), ring * np.cos(azimuth)], axis=-1)
-
-
-def directions_through(projection, x, y, z):
-    """Unit directions (dx, dy, dz) of the node lines through the grid-frame points whose
-    coordinates are the arrays ``x``, ``y``, ``z``: +z on planar grids, away from the axis on
-    cylindrical ones, from the centre on spherical ones (zero on the axis or at the centre,
-    where no one line passes). Component arrays, not (..., 3) ones: several times faster on
-    grids of a million nodes."""
-    if projection == "planar":
-        return 0.0, 0.0, 1.0
-    if projection == "cylindrical":
-        y = np.zeros_like(y)
-    length = np.sqrt(x * x + y * y + z * z)
-    scale = np.divide(1.0, length, out=np.zeros_like(length), where=length > 0)
-    return x * scale, y * scale, z * scale
+    return ring * np.sin(azimuth), np.sin(elevation), ring * np.cos(azimuth)
 
 
 def ray_origins(projection, v):

@@ -33,11 +33,9 @@ output name gets:
 
 import errno
 import os
-import secrets
 import signal
 import stat
 import sys
-import tempfile
 
 from mzc.errors import MzcError
 
@@ -193,7 +191,11 @@ def check_distinct(outputs):
 
 
 def write_output(path, data):
-    """Write ``data`` (bytes) to ``path`` whole or not at all, or to stdout when ``path`` is ``-``/None."""
+    """Write ``data`` to ``path`` whole or not at all, or to stdout when ``path`` is ``-``/None.
+
+    ``data`` is bytes-like, or an iterable of bytes-like chunks: a new file is written as the
+    chunks are made (the file's bytes are never all in memory); stdout, devices and files
+    written in place get them only once all are made, so a failure writes nothing there."""
     write_outputs((path, data))
 
 
@@ -212,15 +214,21 @@ def write_outputs(*outputs):
 
 
 def stage(path, data):
-    """The output object that will write ``data`` to ``path``, prepared as far as it can be."""
+    """The output object that will write ``data`` (``write_output``'s) to ``path``, prepared as
+    far as it can be."""
     if is_stdio(path):
-        return Stdout(data)
+        return Stdout(whole(data))
     how, target, info = destination(path)
     kind = {"through": Through, "in place": InPlace, "replace": Replaced}[how]
     try:
-        return kind(path, target, info, data)
+        return kind(path, target, info, data if kind is Replaced else whole(data))
     except OSError as error:
         raise failure(error, path) from None
+
+
+def whole(data):
+    """``data`` as one bytes-like object: itself, or its chunks joined."""
+    return data if isinstance(data, (bytes, bytearray, memoryview)) else b"".join(data)
 
 
 class Stdout:
@@ -303,7 +311,8 @@ class InPlace:
 
 
 class Replaced:
-    """A new file written and synced beside the target now, renamed over it when published."""
+    """A new file written (chunk by chunk, as they are made) and synced beside the target now,
+    renamed over it when published."""
 
     ORDER = 3
 
@@ -311,7 +320,8 @@ class Replaced:
         self.path, self.target = path, target
         self.fd, self.temp = new_file(os.path.dirname(target))
         try:
-            write_all(self.fd, data)
+            for chunk in [data] if isinstance(data, (bytes, bytearray, memoryview)) else data:
+                write_all(self.fd, chunk)
             if info is not None:
                 keep_mode_and_owner(self.fd, info)
             os.fsync(self.fd)
@@ -356,6 +366,8 @@ def new_file(directory):
         except OSError as error:
             if error.errno not in NO_TMPFILE:
                 raise
+    import tempfile  # here, not at the top: only where O_TMPFILE is refused (its imports cost every command)
+
     fd, name = tempfile.mkstemp(prefix=HIDDEN_PREFIX, dir=directory)
     remember(name)
     os.fchmod(fd, mode & ~current_umask())   # mkstemp makes it 0600; a new file should follow the umask
@@ -379,7 +391,7 @@ def hidden_link(fd, directory):
     """Link the unnamed file ``fd`` to a fresh hidden name in ``directory`` (remembered for signal
     cleanup) and return that name."""
     while True:
-        name = os.path.join(directory, HIDDEN_PREFIX + secrets.token_hex(6))
+        name = os.path.join(directory, HIDDEN_PREFIX + os.urandom(6).hex())
         remember(name)
         try:
             if link_unnamed(fd, name):

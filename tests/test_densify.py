@@ -334,3 +334,38 @@ def test_cli_bad_file_is_one_line(mzc, tmp_path):
     assert result.returncode == 1
     assert len(result.stderr.decode().strip().splitlines()) == 1
     assert not (tmp_path / "out.zg").exists()
+
+
+def test_the_plate_kernels_check_their_buffers_and_refuse_what_is_not_positive_definite():
+    """mzc.ops._plate checks every buffer's size and every unknown number before use (a
+    mismatch is a ValueError, never a stray write), and its Cholesky factor names the row
+    where a band is not positive definite, which densify reports as one MzcError."""
+    from mzc.ops import _plate
+    from mzc.ops.densify import band_factor
+
+    band = np.zeros((4, 3))
+    band[:, 0] = 2.0
+    band[1:, 1] = -1.0                                   # the second difference matrix: SPD
+    x = np.arange(4.0)
+    out = np.empty(4)
+    _plate.product(band, 2, x, out)
+    np.testing.assert_array_equal(out, [-1.0, 0.0, 0.0, 4.0])
+    factor = band_factor(band.copy())
+    _plate.solve(factor, 2, out)
+    np.testing.assert_allclose(out, x, atol=1e-12)
+    for call in (lambda: _plate.solve(factor, 2, np.empty(5)), lambda: _plate.product(band, 2, x, np.empty(3)),
+                 lambda: _plate.product(band, 2, x, x), lambda: _plate.cholesky(np.empty((4, 2)), 2),
+                 lambda: _plate.cholesky(np.empty(12, dtype=np.float32), 2)):
+        with pytest.raises(ValueError):
+            call()
+    z, first = np.zeros((3, 4)), np.array([[0, 3, -1, 6], [9, 12, 15, 18]], dtype=np.int64)
+    ok = np.ones((3, 3), dtype=np.uint8)
+    out_band, rhs = np.empty((21, 7)), np.empty(21)
+    _plate.plate(z, first, ok, ok[:2], 2, 4, 3, (1.0, 1.0, 1.0), out_band, rhs)
+    for bad in (first + 1, np.where(first == 18, 19, first), np.where(first == 0, -2, first)):
+        with pytest.raises(ValueError):
+            _plate.plate(z, bad, ok, ok[:2], 2, 4, 3, (1.0, 1.0, 1.0), out_band, rhs)
+    singular = band.copy()
+    singular[2, 0] = -1.0
+    with pytest.raises(MzcError, match="singular at unknown 2"):
+        band_factor(singular)

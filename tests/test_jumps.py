@@ -126,23 +126,45 @@ def jumpy_grids():
     return planar, tube
 
 
+def jumps_by_the_definition(grid, angle):
+    """(across, along, diagonal) of spec/zgrid.md's test on the nodes' points: |e . d(m)| > cos(A) |e|."""
+    points = grid.node_points()
+    if grid.periodic:
+        points = np.concatenate([points, points[:, :1]], axis=1)
+
+    def jump(start, end):
+        edge, middle = end - start, (start + end) / 2
+        if grid.projection == "planar":
+            line = np.broadcast_to([0.0, 0.0, 1.0], middle.shape)
+        else:
+            middle[..., 1] *= grid.projection == "spherical"
+            line = middle / np.linalg.norm(middle, axis=-1, keepdims=True)
+        with np.errstate(invalid="ignore"):
+            return np.abs(np.sum(edge * line, axis=-1)) > np.cos(np.radians(angle)) * np.linalg.norm(edge, axis=-1)
+
+    along = jump(points[:, :-1], points[:, 1:])
+    along[grid.pole_rows()] = False
+    return jump(points[:-1], points[1:]), along, jump(points[:-1, 1:], points[1:, :-1])
+
+
 @pytest.mark.parametrize("strip", [1, 5, 64, 200, 10**9])
-def test_jumps_found_in_strips_of_rows_are_the_whole_grids(monkeypatch, strip):
-    """jump_edges without points makes them a strip of rows at a time: the same Jumps, with the
-    rows where strips meet, a periodic seam, one- and two-row grids and a spherical pole."""
+def test_jumps_found_in_strips_of_rows_are_those_of_the_definition(monkeypatch, strip):
+    """jump_edges tests the edges from the nodes' values a strip of rows at a time: the edges
+    that the spec's test on the points finds, with the rows where strips meet, a periodic seam,
+    one- and two-row grids and a spherical pole, at the default angle and steeper ones."""
     from mzc.ops import triangulation
 
     step = np.radians(2) * 100                  # rows from the equator to the pole, 2 degrees apart
     values = 100 + 400.0 * (np.add.outer(np.arange(46), np.arange(40)) % 7 == 0)
     cap = ZGrid(values, step, step, origin=(-np.radians(40) * 100, 0.0), projection="spherical", radius=100)
-    assert cap.pole_rows()[-1] and jump_edges(cap, None, cap.node_points()).across.any()
+    assert cap.pole_rows()[-1] and jumps_by_the_definition(cap, JUMP_ANGLE)[0].any()
     grids = [*jumpy_grids(), cap, cap.with_z(cap.z[:1]), cap.with_z(cap.z[:2])]
-    wholes = [jump_edges(grid, None, grid.node_points()) for grid in grids]
-    monkeypatch.setattr(triangulation, "JUMP_STRIP_NODES", strip)
-    for grid, whole in zip(grids, wholes):
-        stripped = jump_edges(grid)
-        for edges in ("across", "along", "diagonal"):
-            np.testing.assert_array_equal(getattr(stripped, edges), getattr(whole, edges))
+    monkeypatch.setattr(triangulation, "STRIP_NODES", strip)
+    for grid in grids:
+        for angle in (JUMP_ANGLE, 30.0, 80.0):
+            found = jump_edges(grid, angle)
+            for edges, expected in zip(("across", "along", "diagonal"), jumps_by_the_definition(grid, angle)):
+                np.testing.assert_array_equal(getattr(found, edges), expected)
 
 
 @pytest.mark.parametrize("method", ["biharmonic", "laplace", "thesis"])

@@ -295,3 +295,26 @@ def test_a_mesh_to_a_device_is_obj_and_a_file_without_extension_is_refused(mzc, 
     result = mzc("triangulate", grid, "-o", tmp_path / "noext")
     assert_one_line_error(result, "noext", "no mesh format")
     assert not (tmp_path / "noext").exists()
+
+
+def test_chunks_are_written_as_they_come_and_a_failure_leaves_nothing(tmp_path):
+    """write_output takes an iterator of chunks (triangulate's PLY strips): a new file gets them
+    as they are made, a file written in place gets them whole; one that fails half way (the
+    chunks raise) leaves the target as it was and no temporary behind."""
+    from mzc.streams import write_output
+
+    target, linked = tmp_path / "new.ply", tmp_path / "linked"
+    write_output(target, iter([b"ab", memoryview(b"cd"), bytearray(b"e")]))
+    assert target.read_bytes() == b"abcde"
+    os.link(target, linked)                   # two links: written in place
+    write_output(target, (chunk for chunk in (b"x", b"yz")))
+    assert target.read_bytes() == linked.read_bytes() == b"xyz"
+
+    def failing():
+        yield b"partial"
+        raise RuntimeError("a strip could not be made")
+
+    for path in (target, tmp_path / "other.ply"):
+        with pytest.raises(RuntimeError):
+            write_output(path, failing())
+    assert target.read_bytes() == b"xyz" and sorted(os.listdir(tmp_path)) == ["linked", "new.ply"]

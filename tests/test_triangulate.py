@@ -57,3 +57,48 @@ def test_triangulate_cli_writes_mesh_in_the_original_frame(tmp_path, mzc):
         assert sum(len(c.data) for c in mesh.cells if c.type == "triangle") == 2 * 2 * 3
     text = mzc("triangulate", input=grid_file.read_bytes(), check=True).stdout.decode()
     assert text.count("\nv ") + text.startswith("v ") == 12 and text.count("\nf ") == 12
+
+
+def strip_test_grids():
+    """A planar grid with holes and a jump, a full turn of a cylinder, and a spherical cap
+    whose last row is a pole (its nodes one vertex)."""
+    rng = np.random.default_rng(3)
+    planar = rng.normal(size=(9, 11)) + np.arange(11)
+    planar[3, 4:6] = planar[0, :3] = np.nan
+    planar[5:, 7] += 500.0
+    cols = 24
+    tube = ZGrid(50 + rng.normal(size=(7, cols)), 2.0, 2 * np.pi * 50 / cols, projection="cylindrical", radius=50)
+    step = np.radians(3) * 100
+    cap = ZGrid(100 + rng.normal(size=(31, 20)), step, step, origin=(0.0, 0.0), projection="spherical", radius=100)
+    assert tube.periodic and cap.pole_rows()[-1]
+    return [ZGrid(planar, 1.0, 0.5), tube, cap]
+
+
+@pytest.mark.parametrize("strip", [1, 40, 10**9])
+def test_a_mesh_made_in_strips_of_rows_is_the_whole_grids(monkeypatch, strip):
+    """GridMesh makes the jumps, triangles and points a strip of rows at a time: strips of one
+    row and more give the mesh of one strip, and a PLY file written from its chunks is the
+    whole mesh's, byte for byte."""
+    from mzc.meshes import Mesh, mesh_to_bytes
+    from mzc.ops import triangulation
+
+    grids = strip_test_grids()
+    wholes = [grid_to_mesh(grid) for grid in grids]
+    monkeypatch.setattr(triangulation, "STRIP_NODES", strip)
+    for grid, whole in zip(grids, wholes):
+        mesh = triangulation.GridMesh(grid)
+        assert (mesh.vertex_count, mesh.triangle_count) == (len(whole.points), len(whole.triangles)) != (0, 0)
+        assert mesh_to_bytes(mesh, "ply") == mesh_to_bytes(Mesh(whole.points, whole.triangles), "ply")
+        np.testing.assert_array_equal(mesh.triangles, whole.triangles)
+        np.testing.assert_array_equal(mesh.points, whole.points)
+
+
+def test_the_pole_row_is_one_vertex_and_the_fan_has_no_degenerate_triangle():
+    cap = strip_test_grids()[2]
+    mesh = grid_to_mesh(cap)
+    pole = cap.to_input_frame(cap.node_points()[-1]).mean(axis=0)
+    at_pole = np.flatnonzero(np.all(np.isclose(mesh.points, pole), axis=1))
+    assert len(at_pole) == 1
+    a, b, c = mesh.triangles.T
+    assert ((a != b) & (b != c) & (a != c)).all()
+    assert (mesh.triangles == at_pole[0]).any(axis=1).sum() == cap.shape[1] - 1   # a fan: one a cell

@@ -20,9 +20,9 @@ placed back in the input surface's frame. The output format follows the -o exten
               help="Mesh format (default: from the -o extension; obj on stdout).")
 @jump_angle_option
 def command(input, output, file_format, jump_angle):
-    from mzc.api import triangulate
     from mzc.meshes import write_mesh
+    from mzc.ops.triangulation import GridMesh
     from mzc.streams import check_not_input
 
     check_not_input(output, input)
-    write_mesh(output, triangulate(read_grid(input), jump_angle), file_format)
+    write_mesh(output, GridMesh(read_grid(input), jump_angle), file_format)   # made as it is written

@@ -18,7 +18,7 @@ from __future__ import annotations
 
 import os
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -74,6 +74,12 @@ class Mesh:
         """True for points alone: no triangles, and not derived from a grid."""
         return len(self.triangles) == 0 and self.grid is None
 
+    def parts(self) -> tuple:
+        """(vertex count, triangle count, the points in chunks, the triangles in chunks): what a
+        writer that streams a mesh reads (one chunk each here; a grid's mesh,
+        ``mzc.ops.triangulation.GridMesh``, makes them a strip of rows at a time)."""
+        return len(self.points), len(self.triangles), [self.points], [self.triangles]
+
 
 def read_mesh(path: str | os.PathLike | None) -> Mesh:
     """Read a mesh or point cloud from ``path`` (``-`` or None for stdin, recognised by its bytes)."""
@@ -120,7 +126,9 @@ def write_mesh(path: str | os.PathLike | None, mesh: Mesh, file_format: str | No
     """Write ``mesh`` to ``path`` atomically, as ``file_format`` or the format of its extension.
 
     ``-`` or None writes OBJ text to stdout whatever ``file_format`` says; a device or FIFO
-    (``/dev/null``) without ``file_format`` gets OBJ too.
+    (``/dev/null``) without ``file_format`` gets OBJ too. ``mesh`` may be a grid's mesh made
+    as it is written (``mzc.ops.triangulation.GridMesh``): a PLY file is then written a strip
+    of rows at a time.
     """
     if is_stdio(path):
         write_output(path, mesh_to_bytes(mesh, "obj"))
@@ -133,7 +141,7 @@ def write_mesh(path: str | os.PathLike | None, mesh: Mesh, file_format: str | No
                                "or --format", source=path)
             file_format = "obj"
     try:
-        data = mesh_to_bytes(mesh, file_format)
+        data = mesh_chunks(mesh, file_format)
     except MzcError as error:
         raise error.located(source=path) from None
     write_output(path, data)
@@ -141,6 +149,13 @@ def write_mesh(path: str | os.PathLike | None, mesh: Mesh, file_format: str | No
 
 def mesh_to_bytes(mesh: Mesh, file_format: str) -> bytes:
     """The bytes of ``mesh`` in ``file_format`` (obj, ply, vtk, stl or off; PLY is binary)."""
+    data = mesh_chunks(mesh, file_format)
+    return data if isinstance(data, bytes) else b"".join(data)
+
+
+def mesh_chunks(mesh: Mesh, file_format: str) -> Any:
+    """``mesh`` in ``file_format``: its bytes, or (PLY) an iterator of bytes-like chunks that
+    ``mzc.streams.write_output`` writes as they are made."""
     writer = registry.format_named(file_format).write if file_format in registry.FORMATS else None
     if writer is None:
         raise MzcError(f"cannot write mesh format {file_format!r} (choose one of "

@@ -308,10 +308,10 @@ def lattice_triangles(points, valid, origin):
     ``points``: a z-grid's two triangles a cell (``mzc.ops.triangulation.grid_triangles``)
     wherever their corners are ``valid``, none with an edge within JUMP_ANGLE of the line of
     sight from the sensor at ``origin``, each wound to face the sensor."""
-    from mzc.ops.triangulation import JUMP_ANGLE, grid_triangles, jumps_between
+    from mzc.ops.triangulation import grid_triangles, sight_jumps
 
     seen = points - origin   # lines of sight are the rays of a spherical grid about the sensor
-    triangles = grid_triangles(valid, jumps=jumps_between(seen, "spherical", False, JUMP_ANGLE))
+    triangles = grid_triangles(valid, jumps=sight_jumps(seen))
     flat = seen.reshape(-1, 3)
     a, b, c = (flat[triangles[:, i]] for i in range(3))
     normal, centre = np.cross(b - a, c - a), a + b + c

@@ -10,6 +10,7 @@ it declares and how many the file holds), and data after the last element is ref
 """
 
 import re
+from collections.abc import Iterator
 from dataclasses import dataclass, field
 from typing import NamedTuple
 
@@ -39,24 +40,33 @@ def read(data: bytes, source: str) -> Mesh:
     return ply_mesh(elements, tables, source)
 
 
-def write(mesh: Mesh) -> bytes:
-    """Binary little-endian PLY bytes of ``mesh``: double x y z per vertex, then (unless it is a
-    point cloud) a face element of uint8 counts and int32 indices, the layout meshio writes and
-    every PLY reader knows, without meshio's import or the time stamp it puts in a comment (the
-    same mesh gives the same bytes)."""
-    header = ["ply", "format binary_little_endian 1.0", f"element vertex {len(mesh.points)}",
+def write(mesh: Mesh) -> Iterator:
+    """Binary little-endian PLY of ``mesh`` as chunks of bytes (its ``parts``, which a grid's
+    mesh makes a strip at a time; ``mzc.streams`` writes them as they come): double x y z per
+    vertex, then (unless it is a point cloud) a face element of uint8 counts and int32
+    indices, the layout meshio writes and every PLY reader knows, without meshio's import or
+    the time stamp it puts in a comment (the same mesh gives the same bytes)."""
+    vertex_count, triangle_count, point_chunks, triangle_chunks = mesh.parts()
+    header = ["ply", "format binary_little_endian 1.0", f"element vertex {vertex_count}",
               "property double x", "property double y", "property double z"]
-    if len(mesh.points) > np.iinfo(np.int32).max:
-        raise MzcError(f"PLY's int32 indices cannot number {len(mesh.points)} vertices")
-    body = [np.ascontiguousarray(mesh.points, dtype="<f8").tobytes()]
-    if len(mesh.triangles):
-        header += [f"element face {len(mesh.triangles)}", "property list uint8 int32 vertex_indices"]
-        faces = np.empty(len(mesh.triangles), dtype=[("count", "u1"), ("indices", "<i4", (3,))])
-        faces["count"], faces["indices"] = 3, mesh.triangles
-        body.append(faces.tobytes())
-    return "\n".join(header + ["end_header", ""]).encode("ascii") + b"".join(body)
+    if vertex_count > np.iinfo(np.int32).max:
+        raise MzcError(f"PLY's int32 indices cannot number {vertex_count} vertices")
+    if triangle_count:
+        header += [f"element face {triangle_count}", "property list uint8 int32 vertex_indices"]
+
+    def chunks():
+        yield "\n".join(header + ["end_header", ""]).encode("ascii")
+        for points in point_chunks:
+            yield np.ascontiguousarray(points, dtype="<f8").reshape(-1).view(np.uint8)
+        for triangles in triangle_chunks if triangle_count else ():
+            faces = np.empty(len(triangles), dtype=FACE_RECORD)
+            faces["count"], faces["indices"] = 3, triangles
+            yield faces.view(np.uint8)
+
+    return chunks()
 
 
+FACE_RECORD = np.dtype([("count", "u1"), ("indices", "<i4", (3,))])   # a triangle as PLY writes it: 13 bytes
 PLY_TYPES = {
     "char": "i1", "int8": "i1", "uchar": "u1", "uint8": "u1", "short": "i2", "int16": "i2",
     "ushort": "u2", "uint16": "u2", "int": "i4", "int32": "i4", "uint": "u4", "uint32": "u4",

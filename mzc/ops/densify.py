@@ -87,17 +87,14 @@ def strip_jumps(grid, low, high, jump_angle, pad):
     """(across, along) depth jumps (``triangulation.jump_edges``) of original rows low..high
     of ``grid``, its columns padded by ``pad`` on each side, wrapped round.
 
-    Found on those rows alone, so their node points (24 bytes a node, and several times
-    that in passing) take a strip's memory, not the grid's. Each edge's test sees only its
-    two nodes, whose points are computed from the grid's own row positions: the same jumps
-    as the whole grid's (only a spherical grid's pole rows, found with a tolerance from the
-    strip's own row positions, could differ, for a row within rounding of that tolerance).
-    """
+    Each edge's test sees only its two nodes and the grid's own row positions: the same
+    jumps as the whole grid's (only a spherical grid's pole rows, found with a tolerance
+    from the strip's own row positions, could differ, for a row within rounding of that
+    tolerance)."""
     from mzc.ops.triangulation import jump_edges
 
     cols, rows = grid.shape[1], slice(low, high + 1)
-    part = grid.with_z(grid.z[rows], origin=(grid.origin[0], grid.ys()[low]))
-    jumps = jump_edges(part, jump_angle, grid.node_points(rows))
+    jumps = jump_edges(grid.with_z(grid.z[rows], origin=(grid.origin[0], grid.ys()[low])), jump_angle)
     across, along = jumps.across[:, :cols], jumps.along
     if pad:
         across = np.pad(across, ((0, 0), (pad, pad)), mode="wrap")
@@ -196,13 +193,6 @@ def check_request(z, n, d1, d2, method, iterations, tol):
     check_grid_size((z.shape[0] - 1) * (n + 1) + 1, z.shape[1], "use a smaller n", field="n")
 
 
-def interleave(z, inserted):
-    """Dense grid from the original rows and ``inserted`` (gaps, n, cols) rows between them."""
-    gaps, n, cols = inserted.shape
-    blocks = np.concatenate([z[:-1, None, :], inserted], axis=1)
-    return np.concatenate([blocks.reshape(gaps * (n + 1), cols), z[-1:]], axis=0)
-
-
 # --------------------------------------------------------------------------- domains
 
 
@@ -210,8 +200,9 @@ class Gaps:
     """Where rows are inserted between each pair of neighbouring rows (a gap) of ``z``.
 
     ``domain`` (gaps, cols): the columns valid in both rows of the gap, except where the
-    edge between them is a break; ``along`` (gaps, cols-1): the breaks between neighbouring
-    columns of a gap (a break in either of its rows); ``interior``: the domain columns whose
+    edge between them is a break; ``rows_along`` (rows, cols-1): the breaks between
+    neighbouring columns of each row; ``along`` (gaps, cols-1): those of a gap's inserted
+    rows (a break in either of its rows); ``interior``: the domain columns whose
     left and right neighbours are in the domain too, with no break between (not run ends).
     """
 
@@ -225,11 +216,6 @@ class Gaps:
         self.interior = np.zeros_like(self.domain)
         self.interior[:, 1:-1] = (self.domain[:, :-2] & self.domain[:, 1:-1] & self.domain[:, 2:]
                                   & ~self.along[:, :-1] & ~self.along[:, 1:])
-
-    def dense_along(self, n):
-        """(dense rows, cols-1) breaks of the dense grid: each original row's own, each
-        inserted row's those of its gap."""
-        return interleave(self.rows_along, np.repeat(self.along[:, None, :], n, axis=1))
 
 
 def straight_lines(z, n):
@@ -303,175 +289,145 @@ def laplace_inserted(z, n, gaps, step, d2):
 def biharmonic_inserted(z, n, gaps, step, d2):
     """Inserted rows minimising the thin-plate energy over the whole dense grid.
 
-    The energy's normal equations A u = b couple the gaps only through the across-row
-    second differences centred on the original rows. A is assembled straight from the
-    stencils (no difference matrix, no sparse products): its within-gap part as a
-    symmetric band (width 2n, unknowns numbered gap by gap, column by column, row by
-    row) and the cross-gap part as a few scattered pairs. Conjugate gradients
-    preconditioned by the exact banded Cholesky factor of the within-gap part reach
-    round-off in about 20 steps from the straight lines between the rows; a sparse LU of
-    A (SuperLU) takes seconds on a face.
+    The energy's normal equations A u = b (``plate_equations``) couple the gaps only through
+    the across-row second differences centred on the original rows; within a gap A is a
+    band of half-width 2n (unknowns numbered column by column, row by row). The unknowns
+    are numbered even gaps first, then odd ones, so each half is one band and the coupling
+    only joins the halves (``solve_plate``).
     """
-    from scipy.linalg import cho_solve_banded, cholesky_banded
-
     domain = gaps.domain
     inside = np.where(domain[:, None, :], straight_lines(z, n), np.nan)
-    dense = interleave(z, inside)
-    masks = stencil_masks(~np.isnan(dense), step, d2, gaps.dense_along(n))
-    keep = np.broadcast_to(domain[:, :, None], (len(domain), z.shape[1], n)).ravel()
-    if keep.any():
-        band, coupling = normal_matrix(masks, n, z.shape, keep)
-        known = np.nan_to_num(interleave(z, np.zeros_like(inside)))
-        rhs = -gap_unknowns(plate_gradient(known, masks), n, keep)
-        factor = cholesky_banded(band, check_finite=False)
-        within = band_matrix(band)
-        solution = conjugate_gradients(
-            lambda vector: within @ vector + coupling @ vector, rhs, gap_unknowns(dense, n, keep),
-            lambda vector: cho_solve_banded((factor, False), vector, check_finite=False))
-        ordered = inside.transpose(0, 2, 1).copy()
-        ordered.reshape(-1)[keep] = solution
-        inside = ordered.transpose(0, 2, 1)
+    if domain.any():
+        first, evens = unknown_numbers(domain, n)
+        band, rhs = plate_equations(z, n, gaps, step, d2, first)
+        unknowns = inside.transpose(0, 2, 1)             # (gaps, cols, n) views: unknown first[g, c] + r
+        start = np.empty(len(rhs))
+        start.reshape(-1, n)[first[domain] // n] = unknowns[domain]
+        solution = solve_plate(band, rhs, start, evens, coupled_pairs(domain, first, n, evens), step**-4)
+        unknowns[domain] = solution.reshape(-1, n)[first[domain] // n]
     return inside
 
 
-def gap_unknowns(field, n, keep):
-    """Values of a dense-grid ``field`` at the inserted nodes in domain, numbered gap, column, row."""
-    gaps = (len(field) - 1) // (n + 1)
-    inserted = field[:-1].reshape(gaps, n + 1, -1)[:, 1:]
-    return inserted.transpose(0, 2, 1).reshape(-1)[keep]
+def unknown_numbers(domain, n):
+    """(first, evens): the number of the first unknown (row 0) of each domain column of each
+    gap (-1 elsewhere), its n rows numbered on from it, the even gaps' columns first, then the
+    odd ones', each gap by gap and column by column; and how many unknowns the even gaps hold."""
+    order = np.r_[np.arange(0, len(domain), 2), np.arange(1, len(domain), 2)]
+    count = np.cumsum(domain[order]).reshape(domain.shape) - 1
+    first = np.full(domain.shape, -1, dtype=np.int64)
+    first[order] = np.where(domain[order], count * n, -1)
+    return first, int(domain[::2].sum()) * n
 
 
-def conjugate_gradients(apply, rhs, start, preconditioner, rtol=1e-12, max_steps=1000):
-    """Preconditioned conjugate gradients for an SPD ``apply`` (v -> A v) until |residual| <= rtol |rhs|.
+def plate_equations(z, n, gaps, step, d2, first):
+    """The normal equations A u = b of the discrete thin-plate energy (u_xx² + 2u_xy² + u_yy²,
+    true steps) over the inserted nodes, the original rows held fixed: (band, rhs).
 
-    Inner products are plain numpy sums, not BLAS: threaded BLAS on a busy machine
-    costs more in synchronisation than these short vectors take to multiply.
+    Unknown first[g, c] + r is inserted row r (0..n-1) of gap g at column c. The energy has
+    one term per stencil whose nodes all hold data (the free plate's natural boundary
+    conditions) and that crosses no break along the rows: second differences along rows
+    (/d2²) and across rows (/step²), and the twist over each 2x2 cell (/(step·d2), weight √2
+    for the factor 2 of u_xy²); A sums weight·a_j·a_k over the stencils holding both nodes.
+    ``band`` holds, per unknown j, A[j, j-k] for k = 0..2n (``_plate`` storage); b is ``rhs``.
+    The across-row stencils centred on an original row join the last inserted node of the
+    gap above to the first of the gap below, off the band: their share of the diagonal and of
+    b is here, the pair is ``coupled_pairs``'s. Assembled by ``_plate.plate`` (C): numpy's
+    products of stencil masks over the dense grid took 6x as long.
     """
-    solution = start.copy()
-    residual = rhs - apply(solution)
-    direction = preconditioner(residual)
-    product = inner(residual, direction)
+    from mzc.ops import _plate
+
+    size = int(first.max()) + n
+    band, rhs = np.empty((size, 2 * n + 1)), np.empty(size)
+    _plate.plate(np.ascontiguousarray(z, dtype=np.float64), first, np.ascontiguousarray(~gaps.rows_along),
+                 np.ascontiguousarray(~gaps.along), len(first), z.shape[1], n, (d2**-4, step**-4, 2 / (step * d2) ** 2),
+                 band, rhs)
+    return band, rhs
+
+
+def coupled_pairs(domain, first, n, evens):
+    """The unknowns that the across-row stencils centred on an original row join (the last
+    inserted node of gap g and the first of gap g+1, at each column in both domains): one in
+    an even gap, one in an odd gap, the odd ones counted from the first odd one (the
+    ``evens``-th unknown), as (even, odd)."""
+    gap, col = np.nonzero(domain[:-1] & domain[1:])
+    last, after = first[gap, col] + n - 1, first[gap + 1, col]
+    even_above = gap % 2 == 0
+    return np.where(even_above, last, after), np.where(even_above, after, last) - evens
+
+
+def solve_plate(band, rhs, start, evens, pairs, weight, rtol=1e-12, max_steps=1000):
+    """The solution of A u = b, A = [[E, C], [C^T, O]] with E and O the bands (``_plate``
+    storage) of the first ``evens`` unknowns and of the rest, and C ``weight`` at each of
+    ``pairs`` (``coupled_pairs``), from ``start``: until |residual| <= rtol |b|. ``band`` is
+    spent (factored in place).
+
+    The even gaps are eliminated: conjugate gradients solve the odd ones' Schur complement
+    S = O - C^T E^-1 C, preconditioned by the exact Cholesky factor of O, then the even ones
+    follow from one solve with E. Alternate gaps never touch, so E and O are bands. S's
+    spectrum, so preconditioned, lies in [1 - rho², 1] when that of A preconditioned by E and
+    O lies within rho of 1: half the steps (9 for n = 3 on a face) of conjugate gradients on
+    the whole of A so preconditioned, at the same cost a step (a solve with E and one with
+    O). O's product is taken once, at the start: the steps keep O p up to date as they go
+    (O p = r + beta O p_before, since O z = r for the preconditioned residual z), so O's band
+    is factored in place. Inner products are plain numpy sums, not BLAS: threaded BLAS on a
+    busy machine costs more in synchronisation than these short vectors take to multiply.
+    """
+    from mzc.ops import _plate
+
+    even_factor, odd_band = band_factor(band[:evens]), band[evens:]
+    coupled = lambda vector: weight**2 * carried(band_solve(even_factor, carried(vector, pairs, 1, 0, evens)),  # noqa: E731
+                                                 pairs, 0, 1, len(vector))
+    right = rhs[evens:] - weight * carried(band_solve(even_factor, rhs[:evens].copy()), pairs, 0, 1, len(rhs) - evens)
+    odd = start[evens:].copy()
+    image = np.empty_like(odd)
+    _plate.product(odd_band, odd_band.shape[1] - 1, odd, image)
+    odd_factor = band_factor(odd_band)
+    residual = right - (image - coupled(odd))
+    direction = band_solve(odd_factor, residual.copy())
+    product, kept_image = inner(residual, direction), residual.copy()   # r.z, and O p (= r: p = z)
     goal = rtol**2 * inner(rhs, rhs)
     for _ in range(max_steps):
         if inner(residual, residual) <= goal:
             break
-        image = apply(direction)
+        image = kept_image - coupled(direction)                        # S p
         length = product / inner(direction, image)
-        solution += length * direction
+        odd += length * direction
         residual -= length * image
-        smoothed = preconditioner(residual)
+        smoothed = band_solve(odd_factor, residual.copy())
         product, previous = inner(residual, smoothed), product
         direction = smoothed + (product / previous) * direction
-    return solution
+        kept_image = residual + (product / previous) * kept_image
+    return np.concatenate([band_solve(even_factor, rhs[:evens] - weight * carried(odd, pairs, 1, 0, evens)), odd])
+
+
+def carried(vector, pairs, source, target, size):
+    """(size,): the sum at each pair's ``target`` end of ``vector`` at its ``source`` end (the
+    coupling C or C^T of ``solve_plate`` without its weight)."""
+    out = np.zeros(size)
+    np.add.at(out, pairs[target], vector[pairs[source]])
+    return out
+
+
+def band_factor(band):
+    """``band`` overwritten with the Cholesky factor of the symmetric positive definite band
+    matrix it holds (``_plate`` storage: rows of A[j, j-k], k = 0..width)."""
+    from mzc.ops import _plate
+
+    failed = _plate.cholesky(band, band.shape[1] - 1)
+    if failed >= 0:
+        raise MzcError(f"the thin-plate equations are singular at unknown {failed} (try --method laplace)")
+    return band
+
+
+def band_solve(factor, vector):
+    """``vector`` overwritten with A^-1 ``vector``, A the matrix whose Cholesky ``factor``
+    (``band_factor``) is given."""
+    from mzc.ops import _plate
+
+    _plate.solve(factor, factor.shape[1] - 1, vector)
+    return vector
 
 
 def inner(u, v):
     """Inner product of two vectors."""
     return float(np.sum(u * v))
-
-
-def stencil_masks(valid, step, d2, along=None):
-    """The thin-plate stencils as (offsets, coefficients, weights): weights = scale² where the stencil fits.
-
-    |D u|² = the discrete thin-plate energy of u on the ``valid`` nodes: one term per
-    stencil whose nodes all hold data (the free plate's natural boundary conditions) and
-    that crosses none of the ``along`` breaks between neighbouring columns (rows, cols-1):
-    second differences along rows (/d2²) and across rows (/step²), and the twist over
-    each 2x2 cell (/(step·d2), weight √2 for the factor 2 of u_xy²). weights[p] belongs
-    to the stencil on the nodes p + offsets.
-    """
-    stencils = [
-        ([(0, -1), (0, 0), (0, 1)], [1.0, -2.0, 1.0], d2**-2),
-        ([(-1, 0), (0, 0), (1, 0)], [1.0, -2.0, 1.0], step**-2),
-        ([(0, 0), (0, 1), (1, 0), (1, 1)], [1.0, -1.0, -1.0, 1.0], np.sqrt(2) / (step * d2)),
-    ]
-    joined = np.ones(valid.shape, dtype=bool)   # joined[p]: no break between p and p + (0, 1)
-    if along is not None:
-        joined[:, :-1] = ~along
-    masks = []
-    for offsets, coefficients, scale in stencils:
-        fits = np.ones(valid.shape, dtype=bool)
-        for drow, dcol in offsets:
-            fits &= shifted(valid, -drow, -dcol)
-            if (drow, dcol + 1) in offsets:
-                fits &= shifted(joined, -drow, -dcol)
-        masks.append((offsets, coefficients, np.where(fits, scale**2, 0.0)))
-    return masks
-
-
-def shifted(field, drow, dcol):
-    """``field`` moved by (drow, dcol): result[p] = field[p - (drow, dcol)], zero where that leaves the grid."""
-    rows, cols = field.shape
-    out = np.zeros_like(field)
-    out[max(drow, 0): rows + min(drow, 0), max(dcol, 0): cols + min(dcol, 0)] = \
-        field[max(-drow, 0): rows + min(-drow, 0), max(-dcol, 0): cols + min(-dcol, 0)]
-    return out
-
-
-def plate_gradient(u, masks):
-    """D^T D u on the dense grid: half the gradient of the thin-plate energy of ``u`` (NaN-free)."""
-    out = np.zeros_like(u)
-    for offsets, coefficients, weights in masks:
-        difference = weights * sum(a * shifted(u, -dr, -dc) for (dr, dc), a in zip(offsets, coefficients))
-        for (drow, dcol), coefficient in zip(offsets, coefficients):
-            out += coefficient * shifted(difference, drow, dcol)
-    return out
-
-
-def normal_matrix(masks, n, shape, keep):
-    """The normal matrix A on the ``keep`` unknowns: (within-gap upper band, cross-gap CSR).
-
-    Entry A[p, p+d] sums weight·a_j·a_k over the stencils holding p and p+d; it is
-    gathered per displacement d on the dense grid, then laid out on the padded
-    (gap, col, row) numbering. Removing the columns outside the domain keeps every
-    non-zero band entry on its offset: nodes on both sides of a removed column share
-    no stencil. Across-row stencils centred on an original row pair the last inserted
-    row of a gap with the first of the next: those pairs lie off the band.
-    """
-    from scipy.sparse import csr_matrix
-
-    gaps, cols = shape[0] - 1, shape[1]
-    fields = {}
-    for offsets, coefficients, weights in masks:
-        for j, (first, a) in enumerate(zip(offsets, coefficients)):
-            for second, b in zip(offsets[j:], coefficients[j:]):
-                d = (second[0] - first[0], second[1] - first[1])
-                fields[d] = fields.get(d, 0.0) + a * b * shifted(weights, *first)
-    width = 2 * n
-    band = np.zeros((width + 1, gaps, cols, n))
-    for (drow, dcol), field in fields.items():
-        at = field[:-1].reshape(gaps, n + 1, cols)[:, 1:].transpose(0, 2, 1)  # at p: (gap, col, row)
-        offset = dcol * n + drow
-        if (drow, dcol) == (2, 0):
-            cross = at[:-1, :, n - 1]             # pairs (g, c, n-1) - (g+1, c, 0)
-        if drow > n - 1:
-            continue
-        if offset >= 0:                           # stored on the later node p + d
-            band[width - offset, :, dcol:, drow:] += at[:, :cols - dcol, :n - drow]
-        else:                                     # stored on p itself
-            band[width + offset, :, :, :n - drow] += at[:, :, :n - drow]
-    band = band.reshape(width + 1, -1)[:, keep]
-    number = np.cumsum(keep) - 1
-    padded = np.arange(keep.size).reshape(gaps, cols, n)
-    pairs = cross != 0
-    last, first = number[padded[:-1, :, n - 1][pairs]], number[padded[1:, :, 0][pairs]]
-    coupling = csr_matrix((np.tile(cross[pairs], 2), (np.r_[last, first], np.r_[first, last])),
-                          shape=(keep.sum(),) * 2)
-    return band, coupling
-
-
-def band_matrix(band):
-    """Sparse symmetric matrix from its upper band in LAPACK storage (band[w - o, j] = A[j - o, j]).
-
-    Kept in diagonal (DIA) form, all-zero diagonals dropped: its product needs no index arrays.
-    """
-    from scipy.sparse import dia_array
-
-    width, size = len(band) - 1, band.shape[1]
-    offsets = [0] + [offset for offset in range(1, width + 1) if band[width - offset].any()]
-    diagonals = [band[width]]
-    for offset in offsets[1:]:
-        diagonals.append(band[width - offset])
-        diagonals.insert(0, np.r_[band[width - offset, offset:], np.zeros(offset)])
-    lower = [-offset for offset in reversed(offsets[1:])]
-    return dia_array((np.array(diagonals), lower + offsets), shape=(size, size))

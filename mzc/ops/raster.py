@@ -13,7 +13,7 @@ import numpy as np
 from mzc.errors import MzcError
 
 BARYCENTRIC_TOLERANCE = 1e-9  # nodes on shared edges belong to both triangles
-CANDIDATES_PER_CHUNK = 2_000_000
+CANDIDATES_PER_CHUNK = 1 << 15   # (triangle, node) pairs tested at a time: a few MB of temporaries
 
 
 def rasterize(points, triangles, xs, ys):
@@ -75,8 +75,8 @@ def candidate_nodes(col_range, row_range):
     width, height = block_sizes(col_range), block_sizes(row_range)
     counts = width * height
     owner = np.repeat(np.arange(len(counts)), counts)
-    local = np.arange(len(owner)) - np.repeat(np.cumsum(counts) - counts, counts)
-    return owner, row_range[0, owner] + local // width[owner], col_range[0, owner] + local % width[owner]
+    down, across = np.divmod(np.arange(len(owner)) - np.repeat(np.cumsum(counts) - counts, counts), width[owner])
+    return owner, row_range[0, owner] + down, col_range[0, owner] + across
 
 
 def heights_on_triangles(corners, owner, x, y):

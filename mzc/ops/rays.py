@@ -144,14 +144,16 @@ def cast_chunk(planes, chunk, col_range, row_range, rays, cols_count, best):
 def ray_hits(planes, triangle, rays, rows, cols):
     """(distance along the ray, hit) of the rays of nodes (rows, cols) against ``triangle``s."""
     direction = rays.directions(rows, cols)
-    facing = np.einsum("ij,ij->i", direction, planes.normal[triangle])
+    of = lambda vectors: vectors.take(triangle, axis=0)  # noqa: E731 - take: 4x faster than [triangle] on rows of 3
+    normal = of(planes.normal)
+    facing = np.einsum("ij,ij->i", direction, normal)
     cylindrical = rays.projection == "cylindrical"
     v = rays.ys[rows] if cylindrical else 0.0
     weights = []
     for product, shift in zip(planes.products, planes.shifts):
-        weight = np.einsum("ij,ij->i", direction, product[triangle])
+        weight = np.einsum("ij,ij->i", direction, of(product))
         if cylindrical:
-            weight -= v * np.einsum("ij,ij->i", direction, shift[triangle])
+            weight -= v * np.einsum("ij,ij->i", direction, of(shift))
         weights.append(weight)
     with np.errstate(divide="ignore", invalid="ignore"):
         scale = 1.0 / facing
@@ -159,5 +161,5 @@ def ray_hits(planes, triangle, rays, rows, cols):
         hit = np.isfinite(scale)
         for weight in weights:
             hit &= weight * scale >= tolerance
-        t = (planes.offset[triangle] - (v * planes.normal[triangle, 1] if cylindrical else 0.0)) * scale
+        t = (planes.offset[triangle] - (v * normal[:, 1] if cylindrical else 0.0)) * scale
     return t, hit & (t > 0)

@@ -25,13 +25,13 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from mzc import projections
-from mzc.meshes import Mesh
 
 if TYPE_CHECKING:
     from mzc.grid import ZGrid
+    from mzc.meshes import Mesh
 
 JUMP_ANGLE = 3.0   # degrees between an edge and the node line below which the edge is a jump
-JUMP_STRIP_NODES = 1 << 20   # nodes whose points jump_edges makes at a time when it is given none
+STRIP_NODES = 1 << 16   # nodes whose edges, triangles or points are made at a time (half a MB a value)
 
 
 @dataclass
@@ -46,100 +46,267 @@ class Jumps:
     diagonal: np.ndarray
 
 
-def jump_edges(grid, angle=None, points=None):
+def jump_edges(grid, angle=None):
     """The Jumps of a ZGrid: edges between valid nodes within ``angle`` degrees (default
     JUMP_ANGLE) of the node line through their midpoint (none when ``angle`` is 0); edges
     along a pole row join nodes of one ray, which are one vertex, and are never jumps.
-    ``points``: the grid's ``node_points()`` when the caller has them already; without, they
-    are made a strip of rows at a time (each edge's test sees only its two nodes, so the
-    jumps are the same), which keeps the memory a strip's (several times 24 bytes a node in
-    passing), not the grid's."""
+
+    Each edge's test reads its two nodes' values and where the grid puts their lines
+    (``is_jump``), so the grid is tested a strip of rows at a time (``row_strips``): the
+    temporaries are a strip's (several times 8 bytes a node), not the grid's."""
+    parts = [jumps_between(grid, low, high, angle) for low, high in row_strips(grid.shape)]
+    last = len(parts) - 1
+    return Jumps(across=np.concatenate([part.across for part in parts]),
+                 along=np.concatenate([part.along[: None if i == last else -1] for i, part in enumerate(parts)]),
+                 diagonal=np.concatenate([part.diagonal for part in parts]))
+
+
+def row_strips(shape):
+    """(low, high) per strip of about STRIP_NODES nodes: the cells between rows low and high
+    (the last strip's high is the last row; a grid of one row is one strip of no cells)."""
+    rows, step = shape[0], max(1, STRIP_NODES // shape[1])
+    return [(low, min(low + step, rows - 1)) for low in range(0, max(rows - 1, 1), step)]
+
+
+def jumps_between(grid, low, high, angle=None):
+    """The Jumps of the edges between rows low..high of ``grid`` (``jump_edges``)."""
     angle = JUMP_ANGLE if angle is None else angle
-    if points is not None:
-        jumps = jumps_between(points, grid.projection, grid.periodic, angle)
-    else:
-        rows, step = grid.shape[0], max(1, JUMP_STRIP_NODES // grid.shape[1])
-        starts = range(0, max(rows - 1, 1), step)
-        parts = [jumps_between(grid.node_points(slice(low, min(low + step, rows - 1) + 1)), grid.projection,
-                               grid.periodic, angle) for low in starts]
-        last = len(parts) - 1
-        jumps = Jumps(across=np.concatenate([part.across for part in parts]),
-                      along=np.concatenate([part.along[: None if i == last else -1] for i, part in enumerate(parts)]),
-                      diagonal=np.concatenate([part.diagonal for part in parts]))
-    jumps.along[grid.pole_rows()] = False
+    z = grid.z[low:high + 1]
+    if grid.periodic:
+        z = np.concatenate([z, z[:, :1]], axis=1)
+    if angle <= 0:
+        return Jumps(across=np.zeros((len(z) - 1, z.shape[1]), dtype=bool),
+                     along=np.zeros((len(z), z.shape[1] - 1), dtype=bool),
+                     diagonal=np.zeros((len(z) - 1, z.shape[1] - 1), dtype=bool))
+    chords = EdgeChords.of(grid, grid.ys()[low:high + 1])
+    cosine2 = np.cos(np.radians(angle)) ** 2
+    jumps = Jumps(across=is_jump(z[:-1], z[1:], chords.across, cosine2),
+                  along=is_jump(z[:, :-1], z[:, 1:], chords.along, cosine2),
+                  diagonal=is_jump(z[:-1, 1:], z[1:, :-1], chords.diagonal, cosine2))
+    jumps.along[grid.pole_rows()[low:high + 1]] = False
     return jumps
 
 
-def jumps_between(points, projection, periodic, angle):
-    """The Jumps of the edges between grid-frame node ``points`` (rows, cols, 3), pole rows aside."""
-    if periodic:
-        points = np.concatenate([points, points[:, :1]], axis=1)
-    cosine = np.cos(np.radians(angle))
-    return Jumps(across=is_jump(points[:-1], points[1:], projection, cosine, angle),
-                 along=is_jump(points[:, :-1], points[:, 1:], projection, cosine, angle),
-                 diagonal=is_jump(points[:-1, 1:], points[1:, :-1], projection, cosine, angle))
+@dataclass
+class EdgeChords:
+    """The grid's geometry as each kind of edge sees it: (spread, rise) for edges ``across``
+    rows, ``along`` them and along the cells' ``diagonal``s, each a number or a column of one
+    per row (per row pair), such that the edge between nodes of values a and b has
+
+        |e|^2 = (b - a)^2 + a b spread + rise   and   4 |m|^2 = (a + b)^2 - a b spread,
+
+    m the part of its midpoint that fixes the node line through it (its projection on the xz
+    plane for cylindrical grids, the point itself for spherical ones; None on planar grids,
+    whose lines are all +z). For central grids spread = 2 - 2 cos(angle between the rays)
+    and rise the squared step along the axis; for planar ones rise is the squared step
+    across the lines."""
+
+    across: tuple
+    along: tuple
+    diagonal: tuple
+
+    @classmethod
+    def of(cls, grid, ys):
+        """The chords of ``grid``'s edges between the rows at ``ys``."""
+        d1, d2 = grid.d1, grid.d2
+        if grid.projection == "planar":
+            return cls(across=(None, d1 * d1), along=(None, d2 * d2), diagonal=(None, d1 * d1 + d2 * d2))
+        turn = 4 * np.sin(d2 / grid.radius / 2) ** 2             # 2 - 2 cos of the columns' angle
+        if grid.projection == "cylindrical":
+            return cls(across=(0.0, d1 * d1), along=(turn, 0.0), diagonal=(turn, d1 * d1))
+        ring = np.cos(ys / grid.radius)[:, None]                 # spherical: rows are cones of elevation ys / R
+        tilt = 4 * np.sin(d1 / grid.radius / 2) ** 2
+        return cls(across=(tilt, 0.0), along=(ring * ring * turn, 0.0),
+                   diagonal=(tilt + ring[:-1] * ring[1:] * turn, 0.0))
 
 
-def is_jump(start, end, projection, cosine, angle):
-    """Per edge from ``start`` to ``end`` (grid-frame points, NaN where invalid): True where it
-    lies within the angle whose cosine is ``cosine`` of the node line through its midpoint."""
-    if angle <= 0:
-        return np.zeros(start.shape[:-1], dtype=bool)
-    ex, ey, ez = (end[..., i] - start[..., i] for i in range(3))
-    lx, ly, lz = projections.directions_through(projection, *((start[..., i] + end[..., i]) / 2 for i in range(3)))
+def is_jump(start, end, chord, cosine2):
+    """Per edge between nodes of values ``start`` and ``end`` (NaN where invalid), whose
+    geometry is ``chord`` = (spread, rise) (``EdgeChords``): True where the edge e lies within
+    the angle whose squared cosine is ``cosine2`` of the node line through its midpoint m.
+
+    With a, b the values, e . m = (b^2 - a^2) / 2 (both points lie at their value's distance
+    along their lines), so |e . d(m)| > cos(A) |e| (spec/zgrid.md) becomes
+    (b^2 - a^2)^2 > cos^2(A) |e|^2 4 |m|^2, and on planar grids (b - a)^2 > cos^2(A) |e|^2:
+    no points, square roots or divisions, and the same edges as the test on the points but
+    for an edge within rounding of the angle."""
+    spread, rise = chord
+    delta = end - start
+    if spread is None:
+        return delta * delta > cosine2 * (delta * delta + rise)
+    total = end + start
+    product = start * end * spread
+    return (delta * total) ** 2 > cosine2 * (delta * delta + product + rise) * (total * total - product)
+
+
+def sight_jumps(points, angle=JUMP_ANGLE):
+    """The Jumps of the edges between the (rows, cols, 3) ``points`` of an organised cloud,
+    whose node lines are the lines of sight from the origin (a spherical grid's rays, but not
+    on a regular grid of angles): the spec's test on the points themselves, with ``is_jump``'s
+    algebra (2 e . m = |end|^2 - |start|^2, 2m = start + end)."""
+    cosine2 = np.cos(np.radians(angle)) ** 2
+
+    def jump(start, end):
+        squared = lambda vectors: np.sum(vectors * vectors, axis=-1)  # noqa: E731
+        return (squared(end) - squared(start)) ** 2 > cosine2 * squared(end - start) * squared(end + start)
+
     with np.errstate(invalid="ignore"):
-        return np.abs(ex * lx + ey * ly + ez * lz) > cosine * np.sqrt(ex * ex + ey * ey + ez * ez)
+        return Jumps(across=jump(points[:-1], points[1:]), along=jump(points[:, :-1], points[:, 1:]),
+                     diagonal=jump(points[:-1, 1:], points[1:, :-1]))
 
 
 def grid_triangles(valid, periodic=False, jumps=None):
-    """Triangles (m, 3) over the flat node indices of a (rows, cols) validity mask; with
-    ``periodic`` the cells between the last column and the first too; with ``jumps`` (a
-    Jumps) only the triangles none of whose edges is a jump."""
-    rows, cols = valid.shape
-    index = np.arange(rows * cols).reshape(rows, cols)
+    """Triangles (m, 3) over the flat node indices of a (rows, cols) validity mask: those of
+    ``cell_triangles``, 1-2-3 first."""
+    kept = kept_cells(valid, periodic, jumps)
+    return np.concatenate([corners(kept, which, valid.shape[1], periodic) for which in (0, 1)])
+
+
+def kept_cells(valid, periodic=False, jumps=None):
+    """(rows-1, cells per row, 2): per cell, whether its triangles 1-2-3 and 2-4-3 are made over
+    a (rows, cols) validity mask: where their corners are valid (with ``periodic`` the cells
+    between the last column and the first too) and, with ``jumps`` (a Jumps), none of their
+    edges is a jump."""
     if periodic:
-        index, valid = np.hstack([index, index[:, :1]]), np.hstack([valid, valid[:, :1]])
-    corner1, corner2 = index[:-1, :-1], index[:-1, 1:]
-    corner3, corner4 = index[1:, :-1], index[1:, 1:]
-    keep_first = valid[:-1, :-1] & valid[:-1, 1:] & valid[1:, :-1]
-    keep_second = valid[:-1, 1:] & valid[1:, 1:] & valid[1:, :-1]
+        valid = np.hstack([valid, valid[:, :1]])
+    kept = np.empty((len(valid) - 1, valid.shape[1] - 1, 2), dtype=bool)
+    np.logical_and(valid[:-1, :-1] & valid[:-1, 1:], valid[1:, :-1], out=kept[..., 0])
+    np.logical_and(valid[:-1, 1:] & valid[1:, 1:], valid[1:, :-1], out=kept[..., 1])
     if jumps is not None:
-        keep_first &= ~(jumps.along[:-1] | jumps.across[:, :-1] | jumps.diagonal)
-        keep_second &= ~(jumps.across[:, 1:] | jumps.along[1:] | jumps.diagonal)
-    first = np.stack([corner1, corner2, corner3], axis=-1)[keep_first]
-    second = np.stack([corner2, corner4, corner3], axis=-1)[keep_second]
-    return np.concatenate([first, second]).reshape(-1, 3)
+        kept[..., 0] &= ~(jumps.along[:-1] | jumps.across[:, :-1] | jumps.diagonal)
+        kept[..., 1] &= ~(jumps.across[:, 1:] | jumps.along[1:] | jumps.diagonal)
+    return kept
 
 
-def grid_to_mesh(grid: "ZGrid", jump_angle: float | None = None) -> Mesh:
-    """The Mesh of a ZGrid (its ``grid`` set to it): valid nodes in the input frame, unused
-    nodes dropped, no triangle across a depth jump of ``jump_angle`` degrees (default
-    JUMP_ANGLE; 0 keeps them all). A geographic grid (longitude and latitude in degrees) is
-    placed in metres about its centre (``mzc.georef.metric_frame``): a mesh is lengths."""
-    from mzc.georef import metric_frame
-
-    grid = metric_frame(grid)
-    valid = grid.valid
-    nodes = grid.node_points()
-    triangles = grid_triangles(valid, grid.periodic, jump_edges(grid, jump_angle, nodes))
-    points = nodes.reshape(-1, 3)
-    triangles = merge_poles(triangles, points, valid, grid.pole_rows())
-    used = np.zeros(valid.size, dtype=bool)
-    used[triangles.ravel()] = True
-    new_index = np.cumsum(used) - 1
-    return Mesh(grid.to_input_frame(points[used]), new_index[triangles], grid=grid)
+def corners(kept, which, cols, periodic):
+    """(m, 3): the triangles 1-2-3 (``which`` 0) or 2-4-3 (1) of the ``kept`` cells (``kept_cells``),
+    cell by cell, row by row, over the flat node indices of a grid of ``cols`` columns."""
+    cell = np.flatnonzero(kept[..., which])
+    row, col = np.divmod(cell, kept.shape[1])
+    corner1 = row * cols + col
+    corner2 = corner1 + 1 if not periodic else row * cols + (col + 1) % cols
+    triangles = np.empty((len(cell), 3), dtype=np.int64)
+    triangles[:, 0], triangles[:, 1], triangles[:, 2] = (corner1, corner2, corner1 + cols) if which == 0 else \
+        (corner2, corner2 + cols, corner1 + cols)
+    return triangles
 
 
-def merge_poles(triangles, points, valid, poles):
-    """Triangles with the valid nodes of each pole row made one vertex (their mean point,
-    written into ``points``) and the triangles that collapse to an edge dropped."""
-    cols = valid.shape[1]
-    for row in np.flatnonzero(poles):
-        nodes = row * cols + np.flatnonzero(valid[row])
-        if not len(nodes):
-            continue
-        points[nodes[0]] = points[nodes].mean(axis=0)
-        triangles = np.where(np.isin(triangles, nodes), nodes[0], triangles)
-    distinct = ((triangles[:, 0] != triangles[:, 1]) & (triangles[:, 1] != triangles[:, 2])
-                & (triangles[:, 0] != triangles[:, 2]))
-    return triangles[distinct]
+def grid_to_mesh(grid: "ZGrid", jump_angle: float | None = None) -> "Mesh":
+    """The Mesh of a ZGrid (its ``grid`` set to it): ``GridMesh``'s, whole."""
+    return GridMesh(grid, jump_angle).mesh()
+
+
+class GridMesh:
+    """The mesh of a ZGrid, made a strip of rows at a time (``row_strips``), for writers that
+    stream it (``parts``): its valid nodes in the input frame, unused nodes dropped; the
+    triangles 1-2-3 of every cell first, row by row, then the triangles 2-4-3; none across a
+    depth jump of ``jump_angle`` degrees (default JUMP_ANGLE; 0 keeps them all); the valid
+    nodes of a pole row one vertex (the first, at their mean point) and the triangles this
+    collapses to an edge dropped. A geographic grid (longitude and latitude in degrees) is
+    placed in metres about its centre (``mzc.georef.metric_frame``): a mesh is lengths.
+
+    Made when it is read: each strip's jumps (from the values) and kept cells first, the
+    nodes their triangles use and the counts; then, a strip at a time, the points and the
+    triangles. So the memory beside the grid is a strip's and two bytes a cell, and a file
+    written from the parts holds no copy of the mesh (the points and triangles of ``mesh()``
+    or of the attributes are its arrays, made on first use)."""
+
+    def __init__(self, grid, jump_angle=None):
+        from mzc.georef import metric_frame
+
+        self.grid = grid = metric_frame(grid)
+        self.valid, self.poles = grid.valid, grid.pole_rows()
+        self.strips = row_strips(grid.shape)
+        self.kept = [kept_cells(self.valid[low:high + 1], grid.periodic, jumps_between(grid, low, high, jump_angle))
+                     for low, high in self.strips]
+        self.used = np.zeros(self.valid.size, dtype=bool)
+        self.triangle_count = 0
+        for index in range(len(self.strips)):
+            for which in (0, 1):
+                triangles = self.strip_triangles(index, which)
+                self.used[triangles.ravel()] = True
+                self.triangle_count += len(triangles)
+        self.vertex_count = int(np.count_nonzero(self.used))
+        self.whole = None
+
+    def strip_triangles(self, index, which):
+        """The triangles 1-2-3 (``which`` 0) or 2-4-3 (1) of strip ``index`` over the grid's flat
+        node indices, pole rows merged."""
+        low, high = self.strips[index]
+        cols = self.grid.shape[1]
+        triangles = corners(self.kept[index], which, cols, self.grid.periodic) + low * cols
+        merged = False
+        for row in low + np.flatnonzero(self.poles[low:high + 1]):
+            valid_columns = np.flatnonzero(self.valid[row])
+            if len(valid_columns):
+                on_row = (triangles >= row * cols) & (triangles < (row + 1) * cols)
+                triangles[on_row] = row * cols + valid_columns[0]
+                merged = True
+        if merged or cols == 1:   # a periodic grid of one column joins each node to itself
+            triangles = triangles[(triangles[:, 0] != triangles[:, 1]) & (triangles[:, 1] != triangles[:, 2])
+                                  & (triangles[:, 0] != triangles[:, 2])]
+        return triangles
+
+    def triangle_chunks(self):
+        """The triangles over the used nodes' numbers, a strip at a time: 1-2-3, then 2-4-3."""
+        rows, cols = self.grid.shape
+        before = np.r_[0, np.cumsum(np.count_nonzero(self.used.reshape(rows, cols), axis=1))]   # used, by row
+        for which in (0, 1):
+            for index, (low, high) in enumerate(self.strips):
+                number = before[low] - 1 + np.cumsum(self.used[low * cols:(high + 1) * cols])
+                yield number[self.strip_triangles(index, which) - low * cols]
+
+    def point_chunks(self):
+        """(k, 3) input-frame points of the used nodes, in node order, a strip of rows at a
+        time, coordinate by coordinate (the components of the points a strip chooses are
+        gathered into the rows of one array, which the frame's rotation reads as it is)."""
+        grid, (rows, cols) = self.grid, self.grid.shape
+        step = max(1, STRIP_NODES // cols)
+        for low in range(0, rows, step):
+            strip = slice(low, min(low + step, rows))
+            shape = grid.z[strip].shape
+            coordinates = [np.broadcast_to(c, shape) for c in projections.point_components(
+                grid.projection, grid.radius, grid.xs()[None, :], grid.ys()[strip, None], grid.z[strip])]
+            chosen = self.used[strip.start * cols:strip.stop * cols].reshape(shape)
+            components = np.empty((3, np.count_nonzero(chosen)))
+            for component, coordinate in zip(components, coordinates):
+                component[:] = coordinate[chosen]
+            for row in np.flatnonzero(self.poles[strip]):
+                on_row = np.flatnonzero(self.valid[low + row])
+                if len(on_row) and chosen[row, on_row[0]]:
+                    mean = np.stack([coordinate[row, on_row] for coordinate in coordinates], axis=-1).mean(axis=0)
+                    components[:, np.count_nonzero(chosen.ravel()[:row * cols + on_row[0]])] = mean
+            yield grid.to_input_frame(components.T)
+
+    def parts(self):
+        """(vertex count, triangle count, point chunks, triangle chunks), as ``Mesh.parts``."""
+        return self.vertex_count, self.triangle_count, self.point_chunks(), self.triangle_chunks()
+
+    def mesh(self):
+        """The whole Mesh (its ``grid`` set), made on first use."""
+        from mzc.meshes import Mesh  # here: densify and encode find jumps without the mesh modules
+
+        if self.whole is None:
+            self.whole = Mesh(filled(self.point_chunks(), self.vertex_count, np.float64),
+                              filled(self.triangle_chunks(), self.triangle_count, np.int64), grid=self.grid)
+        return self.whole
+
+    @property
+    def points(self):
+        """The mesh's (n, 3) points (``mesh()``'s), for writers that take the whole arrays."""
+        return self.mesh().points
+
+    @property
+    def triangles(self):
+        """The mesh's (m, 3) triangles (``mesh()``'s)."""
+        return self.mesh().triangles
+
+
+def filled(chunks, count, dtype):
+    """(count, 3) of ``dtype``: the (k, 3) ``chunks`` one after the other."""
+    out = np.empty((count, 3), dtype=dtype)
+    done = 0
+    for chunk in chunks:
+        out[done:done + len(chunk)] = chunk
+        done += len(chunk)
+    return out
