@@ -149,6 +149,41 @@ def test_the_fill_of_a_full_or_empty_or_one_node_grid():
     assert not w2.laplace_fill(np.array([[np.nan, 0.0]]), np.array([[False, True]])).any()   # zero data: zero fill
 
 
+def fill_multigrid(shape=(40, 50), seed=0):
+    """The packed levels and right-hand side of a fill with holes (several levels)."""
+    rng = np.random.default_rng(seed)
+    valid = rng.random(shape) < 0.5
+    fine, rhs = w2.FillLevel.of_mask(np.where(valid, rng.normal(size=shape), 0.0), valid, False)
+    levels = [fine]
+    while levels[-1].size > 1:
+        levels.append(levels[-1].coarser())
+    return w2.Multigrid(levels), rhs
+
+
+@pytest.mark.parametrize("damage", ["neighbour", "negative neighbour", "parent", "red count", "sizes", "weights"])
+def test_the_compiled_fill_refuses_levels_that_disagree_with_their_buffers(damage):
+    multigrid, rhs = fill_multigrid()
+    assert len(multigrid.sizes) > 3 and np.isfinite(multigrid.cycle(rhs)).all()
+    if damage == "neighbour":
+        multigrid.neighbours[5] = multigrid.sizes[0] + 1
+    elif damage == "negative neighbour":
+        multigrid.neighbours[4 * multigrid.sizes[0]] = -2     # on the second level
+    elif damage == "parent":
+        multigrid.parents[-1] = 2
+    elif damage == "red count":
+        multigrid.reds[1] = multigrid.sizes[1] + 1
+    elif damage == "sizes":
+        multigrid.sizes[2] += 1
+    else:
+        multigrid.weights = multigrid.weights[:-1]
+    with pytest.raises(MzcError, match="inconsistent"):
+        multigrid.cycle(rhs)
+    if damage == "neighbour":   # the finest level's stencil, which conjugate gradients applies
+        multigrid.finest.neighbours[0, 5] = multigrid.sizes[0] + 1
+        with pytest.raises(MzcError, match="inconsistent"):
+            multigrid.times(rhs)
+
+
 def test_odd_columns_see_their_left_and_right_neighbours():
     assert dwt2d.beside([1, 2, 3, 4, 5]).tolist() == [0, 4, 0, 8, 0]
     assert dwt2d.beside([[1, 2, 3, 4]]).tolist() == [[0, 4, 0, 3]]      # the last odd column has no right
