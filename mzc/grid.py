@@ -118,8 +118,8 @@ class ZGrid:
     def node_points(self, rows: slice = slice(None)) -> np.ndarray:
         """(rows, cols, 3) grid-frame coordinates of every node (NaN where invalid), or of the
         nodes of the ``rows`` slice only (the same values)."""
-        u, v = np.meshgrid(self.xs(), self.ys()[rows])
-        return projections.to_points(self.projection, self.radius, u, v, self.z[rows])
+        return projections.to_points(self.projection, self.radius, self.xs()[None, :], self.ys()[rows][:, None],
+                                     self.z[rows])
 
     def to_input_frame(self, points: np.ndarray) -> np.ndarray:
         """Map (..., 3) grid-frame points to the input surface's frame."""

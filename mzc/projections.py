@@ -29,12 +29,12 @@ FULL_TURN_TOLERANCE = 1e-9   # relative: columns spanning 2 pi R0 this closely m
 
 
 def to_points(projection, radius, u, v, value):
-    """Grid-frame points (..., 3) of nodes at (u, v) holding ``value`` (NaN stays NaN)."""
-    u, v, value = np.broadcast_arrays(*(np.asarray(a, dtype=float) for a in (u, v, value)))
+    """Grid-frame points (..., 3) of nodes at (u, v) holding ``value`` (NaN stays NaN); the
+    three broadcast together (a row of u and a column of v make a grid)."""
+    u, v, value = (np.asarray(a, dtype=float) for a in (u, v, value))
     if projection == "planar":
-        return np.stack([u, v, value], axis=-1)
-    direction = ray_directions(projection, radius, u, v)
-    points = value[..., None] * direction
+        return np.stack(np.broadcast_arrays(u, v, value), axis=-1)
+    points = value[..., None] * ray_directions(projection, radius, u, v)
     if projection == "cylindrical":
         points[..., 1] = v
     return points
@@ -54,16 +54,19 @@ def to_nodes(projection, radius, points):
 
 
 def ray_directions(projection, radius, u, v):
-    """Unit directions (..., 3) of the node lines at (u, v): +z for planar grids."""
-    u, v = np.broadcast_arrays(np.asarray(u, dtype=float), np.asarray(v, dtype=float))
+    """Unit directions (..., 3) of the node lines at (u, v), broadcast together: +z for planar
+    grids. The sines and cosines are taken before broadcasting (of a row of u and a column of
+    v, not of every node: they were a fifth of an --rmse encode)."""
+    u, v = np.asarray(u, dtype=float), np.asarray(v, dtype=float)
+    shape = np.broadcast_shapes(u.shape, v.shape)
     if projection == "planar":
-        return np.broadcast_to(np.array([0.0, 0.0, 1.0]), u.shape + (3,)).copy()
+        return np.broadcast_to(np.array([0.0, 0.0, 1.0]), shape + (3,)).copy()
     azimuth = u / radius
     if projection == "cylindrical":
-        return np.stack([np.sin(azimuth), np.zeros_like(azimuth), np.cos(azimuth)], axis=-1)
+        return np.stack(np.broadcast_arrays(np.sin(azimuth), np.zeros(shape), np.cos(azimuth)), axis=-1)
     elevation = v / radius
     ring = np.cos(elevation)
-    return np.stack([ring * np.sin(azimuth), np.sin(elevation), ring * np.cos(azimuth)], axis=-1)
+    return np.stack(np.broadcast_arrays(ring * np.sin(azimuth), np.sin(elevation), ring * np.cos(azimuth)), axis=-1)
 
 
 def directions_through(projection, x, y, z):

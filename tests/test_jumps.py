@@ -143,6 +143,10 @@ def test_jumps_found_in_strips_of_rows_are_the_whole_grids(monkeypatch, strip):
         stripped = jump_edges(grid)
         for edges in ("across", "along", "diagonal"):
             np.testing.assert_array_equal(getattr(stripped, edges), getattr(whole, edges))
+        without = jump_edges(grid, diagonal=False)   # the lean of the surface (an --rmse encode) needs no diagonals
+        assert without.diagonal is None
+        np.testing.assert_array_equal(without.across, whole.across)
+        np.testing.assert_array_equal(without.along, whole.along)
 
 
 @pytest.mark.parametrize("method", ["biharmonic", "laplace", "thesis"])

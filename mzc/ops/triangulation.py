@@ -39,45 +39,47 @@ class Jumps:
     """Which edges of a grid are depth jumps: ``across`` rows (rows-1, cols; cols+1 on a
     periodic grid, column 0 repeated after the last), ``along`` rows
     (rows, cols-1; cols on a periodic grid, the last joining column cols-1 to 0) and the
-    cells' ``diagonal`` from corner 2 to corner 3 (rows-1, cells per row)."""
+    cells' ``diagonal`` from corner 2 to corner 3 (rows-1, cells per row; None when not
+    asked for: the lean of the surface at the nodes needs only the other two)."""
 
     across: np.ndarray
     along: np.ndarray
-    diagonal: np.ndarray
+    diagonal: np.ndarray | None
 
 
-def jump_edges(grid, angle=None, points=None):
+def jump_edges(grid, angle=None, points=None, diagonal=True):
     """The Jumps of a ZGrid: edges between valid nodes within ``angle`` degrees (default
     JUMP_ANGLE) of the node line through their midpoint (none when ``angle`` is 0); edges
     along a pole row join nodes of one ray, which are one vertex, and are never jumps.
     ``points``: the grid's ``node_points()`` when the caller has them already; without, they
     are made a strip of rows at a time (each edge's test sees only its two nodes, so the
     jumps are the same), which keeps the memory a strip's (several times 24 bytes a node in
-    passing), not the grid's."""
+    passing), not the grid's. ``diagonal=False`` leaves the diagonals out (None)."""
     angle = JUMP_ANGLE if angle is None else angle
     if points is not None:
-        jumps = jumps_between(points, grid.projection, grid.periodic, angle)
+        jumps = jumps_between(points, grid.projection, grid.periodic, angle, diagonal)
     else:
         rows, step = grid.shape[0], max(1, JUMP_STRIP_NODES // grid.shape[1])
         starts = range(0, max(rows - 1, 1), step)
         parts = [jumps_between(grid.node_points(slice(low, min(low + step, rows - 1) + 1)), grid.projection,
-                               grid.periodic, angle) for low in starts]
+                               grid.periodic, angle, diagonal) for low in starts]
         last = len(parts) - 1
         jumps = Jumps(across=np.concatenate([part.across for part in parts]),
                       along=np.concatenate([part.along[: None if i == last else -1] for i, part in enumerate(parts)]),
-                      diagonal=np.concatenate([part.diagonal for part in parts]))
+                      diagonal=np.concatenate([part.diagonal for part in parts]) if diagonal else None)
     jumps.along[grid.pole_rows()] = False
     return jumps
 
 
-def jumps_between(points, projection, periodic, angle):
-    """The Jumps of the edges between grid-frame node ``points`` (rows, cols, 3), pole rows aside."""
+def jumps_between(points, projection, periodic, angle, diagonal=True):
+    """The Jumps of the edges between grid-frame node ``points`` (rows, cols, 3), pole rows
+    aside; the diagonals only with ``diagonal``."""
     if periodic:
         points = np.concatenate([points, points[:, :1]], axis=1)
     cosine = np.cos(np.radians(angle))
     return Jumps(across=is_jump(points[:-1], points[1:], projection, cosine, angle),
                  along=is_jump(points[:, :-1], points[:, 1:], projection, cosine, angle),
-                 diagonal=is_jump(points[:-1, 1:], points[1:, :-1], projection, cosine, angle))
+                 diagonal=is_jump(points[:-1, 1:], points[1:, :-1], projection, cosine, angle) if diagonal else None)
 
 
 def is_jump(start, end, projection, cosine, angle):

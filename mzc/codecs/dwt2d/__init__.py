@@ -301,7 +301,7 @@ class Prepared:
         the rmse target needs them (the depth jumps they avoid took a sixth of an encode)."""
         from mzc.ops.triangulation import jump_edges
 
-        lean, metric = w2.node_areas(self.filled, self.geometry, jump_edges(self.grid))
+        lean, metric = w2.node_areas(self.filled, self.geometry, jump_edges(self.grid, diagonal=False))
         return lean[self.valid], metric[self.valid]
 
     def decoded(self, step, deadzone=DEADZONE):
