@@ -80,7 +80,9 @@ class FillLevel:
     meets the zero slot, so the products are the same numbers). A coarser level aggregates
     2x2 blocks: its weights are the sums of the fine edges between two blocks, its leak the
     sum of the block's (the Galerkin operator of piecewise-constant interpolation), so it
-    stays a 5-point stencil.
+    stays a 5-point stencil. ``index`` holds each node's position in the level's grid padded
+    by a border (``padded``; ``size`` where there is no node), ``at`` each node's place in it:
+    a neighbour is one gather, with no test for the border.
     """
 
     def __init__(self, rows, cols, shape, periodic):
@@ -89,34 +91,40 @@ class FillLevel:
         self.rows, self.cols = rows[order].astype(np.int32), cols[order].astype(np.int32)   # half the traffic of int64
         self.shape, self.periodic = shape, periodic
         self.size, self.red = len(order), int(np.count_nonzero(~odd))
-        self.index = np.full(shape, self.size, dtype=np.int32)
-        self.index[self.rows, self.cols] = np.arange(self.size)
+        index = np.full(shape, self.size, dtype=np.int32)
+        index[self.rows, self.cols] = np.arange(self.size)
+        self.index = self.padded(index, self.size)
+        self.at = (self.rows + 1) * (shape[1] + 2) + (self.cols + 1)   # each node's place in a padded grid
 
     @classmethod
     def of_mask(cls, filled, valid, periodic):
         """(the finest level: the invalid nodes, unit weights, leak = count of valid
         neighbours; the right-hand side: the sum of the valid neighbours' heights)."""
         level = cls(*np.nonzero(~valid), valid.shape, periodic)
+        known, heights = level.padded(valid, False), level.padded(filled, 0.0)
         neighbours, leak, rhs = [], np.zeros(level.size), np.zeros(level.size)
         for step in NEIGHBOURS:
-            inside, r, c = level.beside(*step)
-            known = inside & valid[r, c]
-            leak += known
-            rhs += np.where(known, filled[r, c], 0.0)
-            neighbours.append(np.where(inside & ~known, level.index[r, c], level.size))
+            leak += level.beside(known, *step)
+            rhs += level.beside(heights, *step)   # 0 beside an invalid node or the border, as the sum wants
+            neighbours.append(level.beside(level.index, *step))
         neighbours = np.array(neighbours, dtype=np.int32)
         level.neighbours, level.weights = neighbours, None
         level.diagonal = leak + (neighbours < level.size).sum(axis=0)
         return level, rhs
 
-    def beside(self, dr, dc):
-        """(whether each node has a neighbour (dr, dc) away, its row, its column): the
-        grid border ends the grid, except that periodic columns wrap (never onto the node itself)."""
-        r, c = self.rows + dr, self.cols + dc
-        if self.periodic:
-            c = np.mod(c, self.shape[1])
-        inside = (r >= 0) & (r < self.shape[0]) & (c >= 0) & (c < self.shape[1]) & ((dc == 0) | (c != self.cols))
-        return inside, np.where(inside, r, 0), np.where(inside, c, 0)
+    def padded(self, grid, outside):
+        """``grid`` (of this level's shape) in a border one node wide: ``outside`` beyond the
+        rows and the ends of the rows, except that periodic columns wrap (never onto the node
+        itself: a grid of one column has no neighbours along its rows)."""
+        out = np.full((self.shape[0] + 2, self.shape[1] + 2), outside, dtype=grid.dtype)
+        out[1:-1, 1:-1] = grid
+        if self.periodic and self.shape[1] > 1:
+            out[1:-1, 0], out[1:-1, -1] = grid[:, -1], grid[:, 0]
+        return out
+
+    def beside(self, padded, dr, dc):
+        """Each node's neighbour (dr, dc) away in a ``padded`` grid."""
+        return padded.ravel()[self.at + (dr * padded.shape[1] + dc)]
 
     def connect(self, neighbours, weights, leak):
         """Set the stencil: the diagonal is the leak plus every edge's weight."""
@@ -128,15 +136,14 @@ class FillLevel:
         occupied = np.zeros(shape, dtype=bool)
         occupied[self.rows // 2, self.cols // 2] = True
         coarse = FillLevel(*np.nonzero(occupied), shape, self.periodic)
-        self.parent = coarse.index[self.rows // 2, self.cols // 2]
+        self.parent = coarse.index[self.rows // 2 + 1, self.cols // 2 + 1]
         target = np.append(self.parent, -1)[self.neighbours]
         neighbours, weights = [], []
         for k, step in enumerate(NEIGHBOURS):
             crossing = (target[k] >= 0) & (target[k] != self.parent)
             weight = 1.0 if self.weights is None else self.weights[k]
             weights.append(np.bincount(self.parent, np.where(crossing, weight, 0.0), minlength=coarse.size))
-            inside, r, c = coarse.beside(*step)
-            neighbours.append(np.where(inside & (weights[-1] > 0), coarse.index[r, c], coarse.size))
+            neighbours.append(np.where(weights[-1] > 0, coarse.beside(coarse.index, *step), coarse.size))
         coarse.connect(np.array(neighbours, dtype=np.int32), np.array(weights),
                        np.bincount(self.parent, self.leak_of(), minlength=coarse.size))
         return coarse
