@@ -491,18 +491,86 @@ def corrections(z, decoded, valid, step):
 # --------------------------------------------------------------------------- rate control
 
 
-def search_step(cost, target, low, high, iterations=14):
-    """Largest x in [low, high] (log bisection) whose ``cost(x)`` stays <= target.
+SEARCH_TOLERANCE = 1.005   # the search ends with an x that meets the target and one within 0.5% above that does not
+SEARCH_OVERSHOOT = 1.01    # a point aimed at the side of the target not yet seen lands this far past the crossing
+SEARCH_LIMIT = 40          # costs taken at most (the faces take 3-11)
 
-    ``cost`` must grow with x; returns the best feasible x, or ``low`` when none is.
+
+def search_step(cost, target, low, high, guess, slope, snap=float):
+    """The largest x found in [low, high] whose ``cost(x)`` <= target (``low`` when none is).
+
+    ``cost`` grows with x, about as x**slope near the target, but neither exactly nor
+    monotonically (a quantiser's error jitters from one step to the next): hence 'found'.
+    The search starts at ``guess`` and ends when the smallest x found above the best one
+    costs more than the target and lies within SEARCH_TOLERANCE of it. Each next x comes from
+    the power law through two points: while they are all on one side of the target, the
+    two nearest it (the given ``slope`` while there is one), aimed SEARCH_OVERSHOOT past the
+    crossing and past every point taken, to reach the other side; then the best x and that
+    smallest one above it (regula falsi on log x and log cost, with the Illinois rule: an
+    end kept twice running counts half its distance from the target, so both ends close in),
+    placed so that one more point can close the bracket where it is narrow enough. ``snap``
+    maps x to the values it may take (the steps a header can write); an x snapped onto one
+    already taken ends the search.
     """
-    best = low
-    for _ in range(iterations):
-        middle = np.sqrt(low * high)
-        if cost(middle) <= target:
-            best = low = middle
-        else:
-            high = middle
-        if high / low < 1.01:
+    points, sides = {}, []   # x: cost; whether each cost taken met the target
+    x = snap(min(max(guess, low), high))
+    best = None
+    for _ in range(SEARCH_LIMIT):
+        points[x] = cost(x)
+        sides.append(points[x] <= target)
+        met = [p for p in points if points[p] <= target]
+        best = max(met) if met else None
+        above = [p for p in points if points[p] > target and (best is None or p > best)]
+        ceiling = min(above) if above else None
+        if (best is not None and ceiling is not None and ceiling <= best * SEARCH_TOLERANCE) \
+                or (best is None and x <= low) or (ceiling is None and x >= high):
             break
-    return best
+        if best is not None and ceiling is not None:
+            x = closing_point(points, target, best, ceiling, sides)
+        else:
+            x = min(max(reaching_point(points, target, slope, best is not None), low), high)
+        x = snap(x)
+        if x in points:
+            break
+    return low if best is None else best
+
+
+def log_cost(points, x, target):
+    """log(cost(x) / target), -inf for a cost of 0."""
+    with np.errstate(divide="ignore"):
+        return float(np.log(points[x] / target))
+
+
+def reaching_point(points, target, slope, upwards):
+    """The next x while every cost taken is on one side of the target (``upwards``: below it):
+    the power law through the two points nearest the target (of x at least 2% apart; the
+    default ``slope`` while there is one) solved for the target, then SEARCH_OVERSHOOT past
+    that and past every point taken, towards the other side."""
+    near = sorted(points, key=lambda p: abs(log_cost(points, p, target)))
+    x0, f0 = near[0], log_cost(points, near[0], target)
+    lever = [p for p in near[1:] if abs(np.log(p / x0)) > np.log(1.02) and np.isfinite(log_cost(points, p, target))]
+    if lever and np.isfinite(f0):
+        rise = (log_cost(points, lever[0], target) - f0) / np.log(lever[0] / x0)
+        slope = float(np.clip(rise, slope / 4, slope * 4))   # a jitter between the two must not fling x far
+    jump = np.clip(-f0 / slope, -np.log(1000.0), np.log(1000.0)) if np.isfinite(f0) else np.log(1000.0)
+    if upwards:
+        return max(x0 * np.exp(jump), max(points)) * SEARCH_OVERSHOOT
+    return min(x0 * np.exp(jump), min(points)) / SEARCH_OVERSHOOT
+
+
+def closing_point(points, target, best, ceiling, sides):
+    """The next x between the best x and the smallest x above it that costs more (Illinois
+    regula falsi on the logs), where one more point closes the bracket when it can (within
+    SEARCH_TOLERANCE of both ends), else at least half the tolerance inside each end."""
+    low, high = np.log(best), np.log(ceiling)
+    f_low, f_high = log_cost(points, best, target), log_cost(points, ceiling, target)
+    if len(sides) > 1 and sides[-1] == sides[-2]:
+        if sides[-1]:
+            f_high /= 2
+        else:
+            f_low /= 2
+    middle = low + (high - low) * f_low / (f_low - f_high) if np.isfinite(f_low) else (low + high) / 2
+    tolerance = np.log(SEARCH_TOLERANCE)
+    if high - tolerance <= low + tolerance:
+        return float(np.exp(np.clip(middle, high - tolerance, low + tolerance)))
+    return float(np.exp(np.clip(middle, low + tolerance / 2, high - tolerance / 2)))
