@@ -13,4 +13,5 @@ def kernel(name):
 
 setup(ext_modules=[
     kernel("mzc.codecs.dwt2d._fill"),
+    kernel("mzc.ops._jumps"),
 ])

@@ -69,21 +69,6 @@ def ray_directions(projection, radius, u, v):
     return np.stack(np.broadcast_arrays(ring * np.sin(azimuth), np.sin(elevation), ring * np.cos(azimuth)), axis=-1)
 
 
-def directions_through(projection, x, y, z):
-    """Unit directions (dx, dy, dz) of the node lines through the grid-frame points whose
-    coordinates are the arrays ``x``, ``y``, ``z``: +z on planar grids, away from the axis on
-    cylindrical ones, from the centre on spherical ones (zero on the axis or at the centre,
-    where no one line passes). Component arrays, not (..., 3) ones: several times faster on
-    grids of a million nodes."""
-    if projection == "planar":
-        return 0.0, 0.0, 1.0
-    if projection == "cylindrical":
-        y = np.zeros_like(y)
-    length = np.sqrt(x * x + y * y + z * z)
-    scale = np.divide(1.0, length, out=np.zeros_like(length), where=length > 0)
-    return x * scale, y * scale, z * scale
-
-
 def ray_origins(projection, v):
     """Grid-frame origins (..., 3) of the rays of central projections at row coordinate v:
     the centre for spherical grids, the point of the axis at height v for cylindrical ones."""

@@ -25,6 +25,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from mzc import projections
+from mzc.errors import MzcError
 from mzc.meshes import Mesh
 
 if TYPE_CHECKING:
@@ -76,21 +77,28 @@ def jumps_between(points, projection, periodic, angle, diagonal=True):
     aside; the diagonals only with ``diagonal``."""
     if periodic:
         points = np.concatenate([points, points[:, :1]], axis=1)
-    cosine = np.cos(np.radians(angle))
-    return Jumps(across=is_jump(points[:-1], points[1:], projection, cosine, angle),
-                 along=is_jump(points[:, :-1], points[:, 1:], projection, cosine, angle),
-                 diagonal=is_jump(points[:-1, 1:], points[1:, :-1], projection, cosine, angle) if diagonal else None)
+    planes = [np.ascontiguousarray(points[..., i]) for i in range(3)]   # x, y, z
+    return Jumps(across=is_jump(planes, (1, 0, 0), projection, angle),
+                 along=is_jump(planes, (0, 0, 1), projection, angle),
+                 diagonal=is_jump(planes, (1, 1, 0), projection, angle) if diagonal else None)
 
 
-def is_jump(start, end, projection, cosine, angle):
-    """Per edge from ``start`` to ``end`` (grid-frame points, NaN where invalid): True where it
-    lies within the angle whose cosine is ``cosine`` of the node line through its midpoint."""
+def is_jump(planes, kind, projection, angle):
+    """Per edge of one ``kind`` (dr, start_dc, end_dc: from node (r, c + start_dc) to node
+    (r + dr, c + end_dc)) between the grid-frame points whose x, y and z are ``planes`` (NaN
+    where invalid): True where it lies within ``angle`` degrees of the node line through its
+    midpoint (the compiled loop of mzc.ops._jumps)."""
+    from mzc.ops import _jumps
+
+    dr, start_dc, end_dc = kind
+    rows, cols = planes[0].shape
+    out = np.zeros((max(rows - dr, 0), max(cols - max(start_dc, end_dc), 0)), dtype=bool)
     if angle <= 0:
-        return np.zeros(start.shape[:-1], dtype=bool)
-    ex, ey, ez = (end[..., i] - start[..., i] for i in range(3))
-    lx, ly, lz = projections.directions_through(projection, *((start[..., i] + end[..., i]) / 2 for i in range(3)))
-    with np.errstate(invalid="ignore"):
-        return np.abs(ex * lx + ey * ly + ez * lz) > cosine * np.sqrt(ex * ex + ey * ey + ez * ez)
+        return out
+    if _jumps.jumps(out.view(np.uint8), *planes, rows, cols, dr, start_dc, end_dc,
+                    projections.PROJECTIONS.index(projection), float(np.cos(np.radians(angle)))):
+        raise MzcError("the depth-jump test was given planes of different shapes (an internal error)")
+    return out
 
 
 def grid_triangles(valid, periodic=False, jumps=None):
