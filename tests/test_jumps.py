@@ -5,13 +5,14 @@ import numpy as np
 import pytest
 
 from mzc.codecs import dwt2d
+from mzc.errors import MzcError
 from mzc.formats import zgrid
 from mzc.grid import ZGrid
 from mzc.measure.metrics import surface_distance
 from mzc.meshes import Mesh
 from mzc.ops.densify import densify_grid
 from mzc.ops.slicing import slice_surface
-from mzc.ops.triangulation import JUMP_ANGLE, grid_to_mesh, grid_triangles, jump_edges
+from mzc.ops.triangulation import JUMP_ANGLE, grid_to_mesh, grid_triangles, is_jump, jump_edges
 
 from conftest import FACE_NAMES, face_path
 
@@ -191,3 +192,10 @@ def test_the_command_line_drops_jumps_unless_told(mzc, tmp_path):
     dense = mzc("densify", "-n", "2", input=data, check=True).stdout
     assert np.isnan(zgrid.read(dense).z).sum() > np.isnan(
         zgrid.read(mzc("densify", "-n", "2", "--jump-angle", "0", input=data, check=True).stdout).z).sum()
+
+
+def test_the_compiled_jump_test_refuses_planes_of_different_shapes():
+    planes = [np.zeros((4, 5)), np.zeros((4, 5)), np.zeros((4, 4))]
+    with pytest.raises(MzcError, match="different shapes"):
+        is_jump(planes, (0, 0, 1), "spherical", 3.0)
+    assert not is_jump([np.zeros((1, 5))] * 3, (1, 0, 0), "planar", 3.0).size   # one row: no edges across
