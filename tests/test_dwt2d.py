@@ -160,10 +160,13 @@ def fill_multigrid(shape=(40, 50), seed=0):
     return w2.Multigrid(levels), rhs
 
 
-@pytest.mark.parametrize("damage", ["neighbour", "negative neighbour", "parent", "red count", "sizes", "weights"])
+@pytest.mark.parametrize("damage", ["neighbour", "negative neighbour", "parent", "red count", "sizes", "weights",
+                                    "space"])
 def test_the_compiled_fill_refuses_levels_that_disagree_with_their_buffers(damage):
     multigrid, rhs = fill_multigrid()
-    assert len(multigrid.sizes) > 3 and np.isfinite(multigrid.cycle(rhs)).all()
+    out = np.full_like(rhs, np.nan)
+    multigrid.cycle(rhs, out)
+    assert len(multigrid.sizes) > 3 and np.isfinite(out).all()
     if damage == "neighbour":
         multigrid.neighbours[5] = multigrid.sizes[0] + 1
     elif damage == "negative neighbour":
@@ -174,14 +177,16 @@ def test_the_compiled_fill_refuses_levels_that_disagree_with_their_buffers(damag
         multigrid.reds[1] = multigrid.sizes[1] + 1
     elif damage == "sizes":
         multigrid.sizes[2] += 1
-    else:
+    elif damage == "weights":
         multigrid.weights = multigrid.weights[:-1]
+    else:
+        multigrid.space = multigrid.space[:-1]
     with pytest.raises(MzcError, match="inconsistent"):
-        multigrid.cycle(rhs)
+        multigrid.cycle(rhs, out)
     if damage == "neighbour":   # the finest level's stencil, which conjugate gradients applies
         multigrid.finest.neighbours[0, 5] = multigrid.sizes[0] + 1
         with pytest.raises(MzcError, match="inconsistent"):
-            multigrid.times(rhs)
+            multigrid.times(rhs, out)
 
 
 def test_odd_columns_see_their_left_and_right_neighbours():

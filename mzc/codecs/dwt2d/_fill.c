@@ -10,8 +10,10 @@
    The levels come packed: sizes and red counts (int64, one per level, finest first),
    then, level after level, the neighbours (int32, 4 x size: slot `size` means none),
    the edge weights (float64, 4 x size, levels 1 on), the diagonals (float64) and the
-   parents (int32, every level but the coarsest). Every count is checked against the
-   buffers and every index before use; a bad one gives FILL_BAD_LEVELS. */
+   parents (int32, every level but the coarsest). The caller lends the work space (float64:
+   three values per node of the coarser levels, and `block` more), taken again at every
+   cycle: a big grid's fresh memory costs the kernel time to hand out. Every count is checked
+   against the buffers and every index before use; a bad one gives FILL_BAD_LEVELS. */
 
 #define PY_SSIZE_T_CLEAN
 #include <Python.h>
@@ -158,17 +160,16 @@ static int unpack(Level *levels, Py_ssize_t count, const Py_buffer *sizes, const
 
 static PyObject *fill_cycle(PyObject *self, PyObject *args)
 {
-    Py_buffer out, b, sizes, reds, neighbours, weights, diagonals, parents;
+    Py_buffer out, b, sizes, reds, neighbours, weights, diagonals, parents, space;
     Py_ssize_t block, w_cycle;
     double overcorrection;
     (void)self;
-    if (!PyArg_ParseTuple(args, "w*y*y*y*y*y*y*y*nnd", &out, &b, &sizes, &reds, &neighbours, &weights, &diagonals,
-                          &parents, &block, &w_cycle, &overcorrection))
+    if (!PyArg_ParseTuple(args, "w*y*y*y*y*y*y*y*w*nnd", &out, &b, &sizes, &reds, &neighbours, &weights, &diagonals,
+                          &parents, &space, &block, &w_cycle, &overcorrection))
         return NULL;
     int status = FILL_BAD_LEVELS;
     Py_ssize_t count = sizes.len / (Py_ssize_t)sizeof(int64_t);
     Level *levels = NULL;
-    double *work = NULL, *scratch = NULL;
     if (count < 1 || sizes.len != count * (Py_ssize_t)sizeof(int64_t) || reds.len != sizes.len || block < 1)
         goto done;
     levels = calloc((size_t)count, sizeof(Level));
@@ -179,10 +180,9 @@ static PyObject *fill_cycle(PyObject *self, PyObject *args)
     if (b.len != levels[0].size * (Py_ssize_t)sizeof(double) || out.len != b.len) goto done;
     Py_ssize_t coarse_nodes = 0;
     for (Py_ssize_t l = 1; l < count; l++) coarse_nodes += levels[l].size;
-    work = malloc((size_t)(3 * coarse_nodes + 1) * sizeof(double));
-    scratch = malloc((size_t)block * sizeof(double));
-    if (!work || !scratch) { PyErr_NoMemory(); goto done; }
-    double *next = work;
+    if (block > PY_SSIZE_T_MAX / 8 - 3 * coarse_nodes || space.len != (3 * coarse_nodes + block) * (Py_ssize_t)sizeof(double))
+        goto done;
+    double *next = space.buf, *scratch = next + 3 * coarse_nodes;
     for (Py_ssize_t l = 0; l + 1 < count; l++) {
         Py_ssize_t m = levels[l + 1].size;
         levels[l].rhs = next;
@@ -197,11 +197,9 @@ static PyObject *fill_cycle(PyObject *self, PyObject *args)
     status = cycle.status;
 done:
     free(levels);
-    free(work);
-    free(scratch);
     PyBuffer_Release(&out); PyBuffer_Release(&b); PyBuffer_Release(&sizes); PyBuffer_Release(&reds);
     PyBuffer_Release(&neighbours); PyBuffer_Release(&weights); PyBuffer_Release(&diagonals);
-    PyBuffer_Release(&parents);
+    PyBuffer_Release(&parents); PyBuffer_Release(&space);
     if (PyErr_Occurred()) return NULL;
     return PyLong_FromLong(status);
 }
@@ -228,7 +226,8 @@ static PyObject *fill_apply(PyObject *self, PyObject *args)
 
 static PyMethodDef methods[] = {
     {"cycle", fill_cycle, METH_VARARGS,
-     "cycle(out, b, sizes, reds, neighbours, weights, diagonals, parents, block, w_cycle, overcorrection) -> status: "
+     "cycle(out, b, sizes, reds, neighbours, weights, diagonals, parents, space, block, w_cycle, overcorrection) -> "
+     "status: "
      "out = one multigrid cycle's approximate solution of the finest level's system for b."},
     {"apply", fill_apply, METH_VARARGS,
      "apply(out, v, neighbours, diagonal) -> status: out = the finest level's stencil (unit weights) applied to v."},

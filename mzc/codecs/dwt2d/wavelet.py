@@ -177,23 +177,20 @@ class Multigrid:
         self.weights = np.concatenate([np.zeros(0)] + [level.weights.ravel() for level in levels[1:]])
         self.diagonals = np.concatenate([level.diagonal for level in levels])
         self.parents = np.concatenate([np.zeros(0, dtype=np.int32)] + [level.parent for level in levels[:-1]])
+        self.space = np.empty(3 * int(self.sizes[1:].sum()) + FILL_BLOCK)   # the cycle's, lent at every call
 
-    def cycle(self, b):
-        """The preconditioner: approximately solve the finest level's system for ``b``."""
+    def cycle(self, b, out):
+        """The preconditioner: approximately solve the finest level's system for ``b``, into ``out``."""
         from mzc.codecs.dwt2d import _fill
 
-        out = np.empty(self.finest.size)
         checked(_fill.cycle(out, b, self.sizes, self.reds, self.neighbours, self.weights, self.diagonals,
-                            self.parents, FILL_BLOCK, FILL_W_CYCLE, FILL_OVERCORRECTION))
-        return out
+                            self.parents, self.space, FILL_BLOCK, FILL_W_CYCLE, FILL_OVERCORRECTION))
 
-    def times(self, v):
-        """The finest level's stencil applied to ``v`` (one value per node)."""
+    def times(self, v, out):
+        """The finest level's stencil applied to ``v`` (one value per node), into ``out``."""
         from mzc.codecs.dwt2d import _fill
 
-        out = np.empty(self.finest.size)
-        checked(_fill.apply(out, np.ascontiguousarray(v), self.finest.neighbours, self.finest.diagonal))
-        return out
+        checked(_fill.apply(out, v, self.finest.neighbours, self.finest.diagonal))
 
 
 def checked(status):
@@ -204,20 +201,25 @@ def checked(status):
 
 def conjugate_gradients(multigrid, b):
     """Solve the finest level's system x = b to FILL_TOLERANCE (relative residual) by conjugate
-    gradients preconditioned with the multigrid cycle."""
-    x, residual = np.zeros_like(b), b.copy()
-    direction = preconditioned = multigrid.cycle(residual)
+    gradients preconditioned with the multigrid cycle. Every vector is updated in place (the
+    same numbers: x += length * direction and so on), as fresh ones cost a big grid more in
+    the kernel's page handling than in the arithmetic."""
+    x, preconditioned, image, change = (np.zeros_like(b) for _ in range(4))
+    residual = b.copy()
+    multigrid.cycle(residual, preconditioned)
+    direction = preconditioned.copy()
     product, limit = inner(residual, preconditioned), FILL_TOLERANCE * np.sqrt(inner(b, b))
     for _ in range(100):
         if np.sqrt(inner(residual, residual)) <= limit:   # before the first step too: b = 0 is solved by 0
             break
-        image = multigrid.times(direction)
+        multigrid.times(direction, image)
         length = product / inner(direction, image)
-        x += length * direction
-        residual -= length * image
-        preconditioned = multigrid.cycle(residual)
+        x += np.multiply(direction, length, out=change)
+        residual -= np.multiply(image, length, out=change)
+        multigrid.cycle(residual, preconditioned)
         product, previous = inner(residual, preconditioned), product
-        direction = preconditioned + (product / previous) * direction
+        direction *= product / previous
+        direction += preconditioned
     return x
 
 
@@ -418,7 +420,11 @@ def resample(values, size, axis):
     if n == 1:
         return np.repeat(values, size, axis=axis)
     low, high, weight, complement = resampling(n, size, axis, values.ndim)
-    return np.take(values, low, axis=axis) * complement + np.take(values, high, axis=axis) * weight
+    out, upper = np.take(values, low, axis=axis), np.take(values, high, axis=axis)
+    out *= complement   # in place: on big grids every new array is pages the kernel must hand out afresh
+    upper *= weight
+    out += upper
+    return out
 
 
 @functools.lru_cache(maxsize=256)
@@ -439,7 +445,9 @@ def step_maps(steps, approximation_q, levels, geometry, shapes, limit):
     if limit <= 1 or levels == 0:
         return list(steps)
     factors = slope_factors(approximation_q * steps[0], levels, geometry, shapes[1:], limit)
-    return [steps[0]] + [step * factor for step, factor in zip(steps[1:], factors)]
+    for step, factor in zip(steps[1:], factors):
+        factor *= step
+    return [steps[0]] + factors
 
 
 # --------------------------------------------------------------------------- quantisation
@@ -457,7 +465,11 @@ def quantise_band(magnitude, sign, step, deadzone=0.5):
     scaled = magnitude / step
     if scaled.size and scaled.max() >= MAX_QUANTUM:
         raise MzcError(f"quantisation step {np.min(step):g} is too small for these heights")
-    return (sign * np.floor(scaled + 1.0 - deadzone)).astype(np.int64)
+    scaled += 1.0   # in place, the same numbers: (|c|/step + 1) - deadzone, floored, times the sign
+    scaled -= deadzone
+    np.floor(scaled, out=scaled)
+    scaled *= sign
+    return scaled.astype(np.int64)
 
 
 def dequantise(qflat, steps):
