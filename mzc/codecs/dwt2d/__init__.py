@@ -59,8 +59,8 @@ DEADZONE = 0.6             # encoder-only rounding offset; the decoder never see
 RMS_GUESS = 20.0           # rmse: the search's first step, times the target (the faces' steps are 5-116 times
                            # their targets of 0.01-0.64 mm, the DEMs' 33-34 times)...
 RMS_SLOPE = 0.6            # ...and their RMS error grows about as step**0.5-0.6 near them (the DEMs' as step)
-SIZE_GUESS = 100.0         # size: the first 1/step, over the height range, and the file's growth with it
-SIZE_SLOPE = 0.6
+SIZE_GUESS = 100.0         # size: the first step is 1/100 of the height range, and the file grows about
+SIZE_SLOPE = 0.6           # as (1/step)**0.6 (f18 and the DEMs at 1.5-60 KB)
 FINEST_MARGIN = 1000.0     # the searches' smallest step quantises the largest coefficient to MAX_QUANTUM / 1000
 
 # model ids (the order of first use in the payload)
@@ -308,8 +308,7 @@ class Prepared:
     def surface_terms(self):
         """(the valid heights, the weight a*cos(t) of each one's squared error, the area sum of
         a/cos(t)) of surface_rms, from the lean t of the surface from each node's line and its
-        metric area a. Only the rmse target needs them (the depth jumps they avoid took a sixth
-        of an encode)."""
+        metric area a: only the rmse target needs them."""
         from mzc.ops.triangulation import jump_edges
 
         lean, metric = w2.node_areas(self.filled, self.geometry, jump_edges(self.grid, diagonal=False))

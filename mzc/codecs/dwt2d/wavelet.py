@@ -505,7 +505,7 @@ def corrections(z, decoded, valid, step):
 
 SEARCH_TOLERANCE = 1.005   # the search ends with an x that meets the target and one within 0.5% above that does not
 SEARCH_OVERSHOOT = 1.01    # a point aimed at the side of the target not yet seen lands this far past the crossing
-SEARCH_LIMIT = 40          # costs taken at most (the faces take 3-11)
+SEARCH_LIMIT = 40          # costs taken at most (the rd corpus's --rmse encodes take 3-8, --size ones 4-7)
 
 
 def search_step(cost, target, low, high, guess, slope, snap=float):
@@ -522,7 +522,10 @@ def search_step(cost, target, low, high, guess, slope, snap=float):
     end kept twice running counts half its distance from the target, so both ends close in),
     placed so that one more point can close the bracket where it is narrow enough. ``snap``
     maps x to the values it may take (the steps a header can write); an x snapped onto one
-    already taken ends the search.
+    already taken ends the search. On the 13 faces and 2 DEMs at 11 RMS targets it takes 5.3
+    costs (3-8) where a log bisection to 1% took 12, and its files were 0.07% smaller
+    (geometric mean; the largest 1.0% larger: where the error jitters, the bisection can end
+    on a step above the first one that fails).
     """
     points, sides = {}, []   # x: cost; whether each cost taken met the target
     x = snap(min(max(guess, low), high))
