@@ -152,14 +152,16 @@ def parent_map(flat, index):
     return parent[np.ix_(r, c)]
 
 
-def activity(flat, index, steps):
+def activity(flat, index, steps, parent=None):
     """Activity of every coefficient of detail band ``index`` from the other bands already coded.
 
     |parent| (in this band's step units) plus |q| of the earlier orientations of the same
     level at the same place (0 where the place lies outside them: in dwt2d 3.0 the bands of
-    one level may differ by a row or a column).
+    one level may differ by a row or a column). ``parent``: parent_map's, when the caller
+    has it already.
     """
-    active = np.abs(parent_map(flat, index)) * (steps[index - 3] / steps[index] if index > 3 else 0.0)
+    parent = parent_map(flat, index) if parent is None else parent
+    active = np.abs(parent) * (steps[index - 3] / steps[index] if index > 3 else 0.0)
     orientation = (index - 1) % 3
     for sibling in range(index - orientation, index):
         active += np.abs(cropped(flat[sibling], active.shape))
@@ -235,8 +237,17 @@ def row_order(where, context):
     sort by pass and context does it: a 4-key lexsort took a third of an encode's entropy coding)."""
     rows, cols = np.nonzero(where)
     ks = context[rows, cols]
-    order = np.argsort(pass_index(rows, cols) * (ks.max(initial=0) + 1) + ks, kind="stable")
+    order = stable_order(pass_index(rows, cols) * (ks.max(initial=0) + 1) + ks)
     return rows[order], cols[order], ks[order]
+
+
+def stable_order(keys):
+    """np.argsort(keys, kind="stable") of integer keys >= 0, taken as 16-bit integers where
+    they fit, which numpy sorts by radix (3.4x faster on a face's bands). A stable sort has
+    one order, so it is the same."""
+    if keys.size and keys.max() < 1 << 16:
+        keys = keys.astype(np.uint16)
+    return np.argsort(keys, kind="stable")
 
 
 def encode_corrections(encoder, k, valid):
@@ -252,15 +263,14 @@ def encode_bands(encoder, qflat, relevant, steps):
     of its nonzero values left to right."""
     encoder.add(APPROXIMATION, np.diff(np.diff(qflat[0], axis=0, prepend=0), axis=1, prepend=0))
     for index in range(1, len(qflat)):
-        band = qflat[index]
-        rows, cols, ks = row_order(relevant[index], contexts(band, activity(qflat, index, steps)))
+        band, parent = qflat[index], parent_map(qflat, index)
+        rows, cols, ks = row_order(relevant[index], contexts(band, activity(qflat, index, steps, parent)))
         odd = np.broadcast_to(np.arange(band.shape[1]) % 2, band.shape)
-        sign_context, predicted = sign_prediction(shifted_down(band, 1), parent_map(qflat, index),
-                                                  beside(np.sign(band)), (index - 1) % 3, odd)
+        sign_context, predicted = sign_prediction(shifted_down(band, 1), parent, beside(np.sign(band)),
+                                                  (index - 1) % 3, odd)
         signed_rows, signed_cols = np.nonzero(band)
         # each pass's magnitudes (in row_order's order), then its signs (left to right, as np.nonzero lists them)
-        order = np.argsort(np.concatenate([2 * pass_index(rows, cols), 2 * pass_index(signed_rows, signed_cols) + 1]),
-                           kind="stable")
+        order = stable_order(np.concatenate([2 * pass_index(rows, cols), 2 * pass_index(signed_rows, signed_cols) + 1]))
         models = np.concatenate([detail_model(ks), sign_model(sign_context[signed_rows, signed_cols])])
         values = np.concatenate([np.abs(band[rows, cols]),
                                  sign_bits(band[signed_rows, signed_cols], predicted[signed_rows, signed_cols])])
