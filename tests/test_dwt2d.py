@@ -87,6 +87,35 @@ def test_slope_scaled_steps_make_smaller_files_at_equal_surface_error(f18):
     assert len(sized[2]) < 0.99 * len(sized[1])
 
 
+@settings(max_examples=300, deadline=None)
+@given(st.floats(0.2, 2.0), st.floats(1e-3, 1e3), st.floats(0.0, 0.01), st.integers(0, 2**32 - 1),
+       st.floats(1e-2, 1e2))
+def test_the_step_search_ends_on_the_largest_step_found_under_the_target(slope, scale, jitter, seed, guess):
+    """A cost growing as a power of x with a jitter (as a quantiser's error does): the search
+    returns a step whose cost meets the target with a failing one found within its tolerance
+    above (and the 4-digit steps' resolution), in a few costs, from any first guess within a
+    factor 100."""
+    rng = np.random.default_rng(seed)
+    noise = {}
+
+    def cost(x):
+        costs[x] = (x / scale) ** slope * (1 + jitter * noise.setdefault(x, rng.uniform(-1, 1)))
+        return costs[x]
+
+    costs = {}
+    best = w2.search_step(cost, 1.0, 1e-9, 1e9, guess * scale, 0.6, snap=w2.round_step)
+    assert costs[best] <= 1.0 and best == max(x for x, c in costs.items() if c <= 1.0)
+    resolution = 1.001   # round_step's 4 digits
+    assert any(best < x <= best * w2.SEARCH_TOLERANCE * resolution for x, c in costs.items() if c > 1.0)
+    assert len(costs) <= 15
+
+
+def test_the_step_search_stops_at_its_ends():
+    assert w2.search_step(lambda x: 0.0, 1.0, 1e-3, 1e3, 1.0, 0.6) == 1e3          # every step meets the target
+    assert w2.search_step(lambda x: 2.0, 1.0, 1e-3, 1e3, 1.0, 0.6) == 1e-3         # none does: the smallest
+    assert w2.search_step(lambda x: x, 1.0, 1e-3, 1e3, 1.0, 0.6) == 1.0            # the first guess, exactly
+
+
 def test_two_value_steps_line_gives_coarser_levels_finer_steps():
     """Band 0's step, then level 1's D and D * 0.9 per level up, as repeated products."""
     level2 = 0.12 * 0.9

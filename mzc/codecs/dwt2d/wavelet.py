@@ -522,10 +522,11 @@ def search_step(cost, target, low, high, guess, slope, snap=float):
     end kept twice running counts half its distance from the target, so both ends close in),
     placed so that one more point can close the bracket where it is narrow enough. ``snap``
     maps x to the values it may take (the steps a header can write); an x snapped onto one
-    already taken ends the search. On the 13 faces and 2 DEMs at 11 RMS targets it takes 5.3
-    costs (3-8) where a log bisection to 1% took 12, and its files were 0.07% smaller
-    (geometric mean; the largest 1.0% larger: where the error jitters, the bisection can end
-    on a step above the first one that fails).
+    already taken ends the search (the bracket as narrow as the tolerance and the snapping
+    allow). On the 13 faces and 2 DEMs at 11 RMS targets it takes 5.3 costs (3-8) where a
+    log bisection to 1% took 12, and its files were 0.07% smaller (geometric mean; the
+    largest 1.0% larger: where the error jitters, the bisection can end on a step above the
+    first one that fails).
     """
     points, sides = {}, []   # x: cost; whether each cost taken met the target
     x = snap(min(max(guess, low), high))
