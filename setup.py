@@ -12,9 +12,10 @@ def kernel(name):
 
 
 setup(ext_modules=[
+    kernel("mzc.codecs.dwt2d._fill"),
     kernel("mzc.codecs.dwt2d._rows"),
     kernel("mzc.measure._nearest"),
     kernel("mzc.meshes._lzf"),
-    kernel("mzc.ops._raster"),
     kernel("mzc.ops._plate"),
+    kernel("mzc.ops._raster"),
 ])

@@ -209,3 +209,4 @@ def test_the_command_line_drops_jumps_unless_told(mzc, tmp_path):
     dense = mzc("densify", "-n", "2", input=data, check=True).stdout
     assert np.isnan(zgrid.read(dense).z).sum() > np.isnan(
         zgrid.read(mzc("densify", "-n", "2", "--jump-angle", "0", input=data, check=True).stdout).z).sum()
+

@@ -64,6 +64,7 @@ def group():
 
 def main():
     """Entry point: run the group, turning MzcError and other failures into one line on stderr."""
+    reuse_freed_memory()
     # numpy's RuntimeWarnings and the libraries' own warnings are not for the user: mzc checks its
     # results itself (non-finite heights and coefficients are errors); only its own warnings show
     warnings.simplefilter("ignore")
@@ -99,6 +100,30 @@ def main():
         click.echo(f"mzc: internal error: {type(error).__name__}: {error} "
                    "(set MZC_DEBUG=1 for a traceback)", err=True)
         sys.exit(3)
+
+
+M_TRIM_THRESHOLD, M_MMAP_MAX = -1, -4   # glibc's mallopt parameters
+KEPT_FREE_BYTES = 1 << 30               # freed heap memory the process keeps for reuse before returning any
+
+
+def reuse_freed_memory():
+    """Make this process's allocator (glibc's; elsewhere nothing changes) reuse the memory
+    of freed arrays. It gives every block over 32 MB pages of its own from the kernel and
+    returns them when the block is freed, so each big temporary of a big grid's numpy code
+    (200 MB at 25 M nodes) is pages the kernel zeroes and maps again: 20.7 s of system time
+    against 15.3 s of user time in an --rmse encode of 25 M nodes. Big blocks from the heap,
+    and up to KEPT_FREE_BYTES of it kept when freed: that encode's page faults fell from
+    515 000 to 147 000 and its CPU time from 24.9 to 16.2 s (system 11.7 -> 3.8 s), its peak
+    RSS rising from 3347 to 3558 MB (the heap's holes). A command's process, not the
+    library: a host program keeps its own allocator's settings."""
+    import ctypes
+
+    try:
+        libc = ctypes.CDLL("libc.so.6")
+        libc.mallopt(M_MMAP_MAX, 0)
+        libc.mallopt(M_TRIM_THRESHOLD, KEPT_FREE_BYTES)
+    except (OSError, AttributeError):   # not glibc
+        return
 
 
 def one_line(problem):

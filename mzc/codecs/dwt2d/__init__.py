@@ -60,6 +60,12 @@ APPROXIMATION_GAIN = 0.7   # band 0's step over the finest detail step (measured
 LEVEL_RATIO = 0.9          # each coarser detail level's step over the next finer one's (measured: 0.4-3.6%)
 TARGETS = ("max_error", "rmse", "size")   # exactly one of them says what the encoder aims at
 DEADZONE = 0.6             # encoder-only rounding offset; the decoder never sees it
+RMS_GUESS = 20.0           # rmse: the search's first step, times the target (the faces' steps are 5-116 times
+                           # their targets of 0.01-0.64 mm, the DEMs' 33-34 times)...
+RMS_SLOPE = 0.6            # ...and their RMS error grows about as step**0.5-0.6 near them (the DEMs' as step)
+SIZE_GUESS = 100.0         # size: the first step is 1/100 of the height range, and the file grows about
+SIZE_SLOPE = 0.6           # as (1/step)**0.6 (f18 and the DEMs at 1.5-60 KB)
+FINEST_MARGIN = 1000.0     # the searches' smallest step quantises the largest coefficient to MAX_QUANTUM / 1000
 
 # model ids (the order of first use in the payload)
 MASK_COUNT, MASK_SAME, MASK_NEW, APPROXIMATION = 0, 1, 2, 3
@@ -230,8 +236,17 @@ def row_order(where, context):
     sort by pass and context does it: a 4-key lexsort took a third of an encode's entropy coding)."""
     rows, cols = np.nonzero(where)
     ks = context[rows, cols]
-    order = np.argsort(pass_index(rows, cols) * (ks.max(initial=0) + 1) + ks, kind="stable")
+    order = stable_order(pass_index(rows, cols) * (ks.max(initial=0) + 1) + ks)
     return rows[order], cols[order], ks[order]
+
+
+def stable_order(keys):
+    """np.argsort(keys, kind="stable") of integer keys >= 0, taken as 16-bit integers where
+    they fit, which numpy sorts by radix (3.4x faster on a face's bands). A stable sort has
+    one order, so it is the same."""
+    if keys.size and keys.max() < 1 << 16:
+        keys = keys.astype(np.uint16)
+    return np.argsort(keys, kind="stable")
 
 
 def encode_corrections(encoder, k, valid):
@@ -255,8 +270,7 @@ def encode_bands(encoder, qflat, relevant, steps):
                                                   beside(np.sign(band)), (index - 1) % 3, odd)
         signed_rows, signed_cols = np.nonzero(band)
         # each pass's magnitudes (in row_order's order), then its signs (left to right, as np.nonzero lists them)
-        order = np.argsort(np.concatenate([2 * pass_index(rows, cols), 2 * pass_index(signed_rows, signed_cols) + 1]),
-                           kind="stable")
+        order = stable_order(np.concatenate([2 * pass_index(rows, cols), 2 * pass_index(signed_rows, signed_cols) + 1]))
         models = np.concatenate([detail_model(ks), sign_model(sign_context[signed_rows, signed_cols])])
         values = np.concatenate([np.abs(band[rows, cols]),
                                  sign_bits(band[signed_rows, signed_cols], predicted[signed_rows, signed_cols])])
@@ -280,7 +294,9 @@ def decode_bands(decoder, relevant, steps):
 
 class Prepared:
     """Everything about one grid that does not depend on the steps: mask, fill, transform (and
-    each band's magnitudes and signs, for quantising it at every step the rate control tries)."""
+    each band's magnitudes and signs, for quantising it at every step the rate control tries;
+    the magnitude is 0 where the coefficient is not relevant, so it quantises to the 0 that
+    is never coded)."""
 
     def __init__(self, grid, wavelet, levels, slope_limit):
         self.transform = w2.TRANSFORMS[VERSION[0]]
@@ -293,22 +309,25 @@ class Prepared:
         self.filled = w2.laplace_fill(grid.z, self.valid, self.geometry.periodic)
         periodic = self.geometry.periodic
         self.bands = w2.flatten(self.transform.forward(self.filled, wavelet, self.levels, periodic))
-        self.magnitudes, self.signs = [np.abs(b) for b in self.bands], [np.sign(b) for b in self.bands]
         self.relevant = w2.flatten(self.transform.relevance(self.valid, wavelet, self.levels, periodic))
+        self.magnitudes = [np.where(relevant, np.abs(b), 0.0) for b, relevant in zip(self.bands, self.relevant)]
+        self.signs = [np.sign(b) for b in self.bands]
 
     @functools.cached_property
-    def areas(self):
-        """(1/cos t, metric area) at the valid nodes, which surface_rms weighs errors by: only
-        the rmse target needs them (the depth jumps they avoid took a sixth of an encode)."""
+    def surface_terms(self):
+        """(the valid heights, the weight a*cos(t) of each one's squared error, the area sum of
+        a/cos(t)) of surface_rms, from the lean t of the surface from each node's line and its
+        metric area a: only the rmse target needs them."""
         from mzc.ops.triangulation import jump_edges
 
         lean, metric = w2.node_areas(self.filled, self.geometry, jump_edges(self.grid))
-        return lean[self.valid], metric[self.valid]
+        lean, metric = lean[self.valid], metric[self.valid]
+        return self.grid.z[self.valid], metric / lean, float(np.sum(metric * lean))
 
     def decoded(self, step, deadzone=DEADZONE):
         """(integer bands as coded, the decoder's wavelet-only reconstruction) for one detail step."""
-        quantised = lambda index, band_step: np.where(  # noqa: E731
-            self.relevant[index], w2.quantise_band(self.magnitudes[index], self.signs[index], band_step, deadzone), 0)
+        quantised = lambda index, band_step: w2.quantise_band(  # noqa: E731
+            self.magnitudes[index], self.signs[index], band_step, deadzone)
         written = header_steps(step, self.levels)
         qflat = [quantised(0, written[0])]
         steps = band_steps(self.geometry, written, [b.shape for b in self.bands], qflat[0], self.slope_limit)
@@ -317,12 +336,13 @@ class Prepared:
                                    self.geometry.periodic)
         return qflat, z
 
-    def encode(self, step, max_error=None):
+    def encode(self, step, max_error=None, decoded=None):
         """(file bytes, the heights a decoder gets from them) for one detail step; with ``max_error``
-        a correction layer bounds every valid node."""
+        a correction layer bounds every valid node. ``decoded``: what ``decoded(step)`` gives, when
+        the caller has it already (it is changed)."""
         from mzc.codecs.dwt2d.entropy import Encoder  # here, not at the top: `mzc encode` builds this
                                                        # module's CODEC whatever codec it runs
-        qflat, decoded = self.decoded(step)
+        qflat, decoded = self.decoded(step) if decoded is None else decoded
         encoder = Encoder(same_size=SAME_SIZE)
         encode_mask(encoder, self.valid)
         encode_bands(encoder, qflat, self.relevant, expand_steps(header_steps(step, self.levels), len(qflat)))
@@ -354,17 +374,26 @@ class Prepared:
             lines.append(f"max_error {format_number(max_error)}")
         return [*lines, "data"]
 
-    def surface_rms(self, step):
-        """RMS surface error of the wavelet-only reconstruction, estimated at the valid nodes:
-        the value error times cos(t) (the distance along the normal, t the lean of the
-        surface from the node's line), weighted by the surface area of each node, a/cos(t)
-        (a = 1 on planar grids, the projection's metric area on central ones)."""
-        _, decoded = self.decoded(step)
-        error = (decoded - self.grid.z)[self.valid]
-        if not error.size:
+    def surface_rms(self, decoded):
+        """RMS surface error of a wavelet-only reconstruction (``decoded`` of a step), estimated
+        at the valid nodes: the value error times cos(t) (the distance along the normal, t the
+        lean of the surface from the node's line), weighted by the surface area of each node,
+        a/cos(t) (a = 1 on planar grids, the projection's metric area on central ones)."""
+        heights, weight, area = self.surface_terms
+        if not heights.size:
             return 0.0
-        lean, metric = self.areas
-        return float(np.sqrt(np.sum(error ** 2 * metric / lean) / np.sum(metric * lean)))
+        error = decoded[1][self.valid]
+        error -= heights   # in place, the same numbers: ((z' - z)^2 w) summed
+        np.square(error, out=error)
+        error *= weight
+        return float(np.sqrt(np.sum(error) / area))
+
+    def finest_step(self):
+        """The smallest detail step the searches try: FINEST_MARGIN times the one that would
+        quantise the largest coefficient to MAX_QUANTUM (the margin covers band 0's smaller step,
+        the coarser levels' and the slope factors), or 0 for a grid of zeros."""
+        largest = max(float(m.max(initial=0.0)) for m in self.magnitudes)
+        return FINEST_MARGIN * largest / w2.MAX_QUANTUM
 
     def height_range(self):
         """Spread of the valid heights (at least 1e-6): scales the step searches."""
@@ -432,13 +461,33 @@ def encode_grid_with_decoded(grid, max_error=None, rmse=None, size=None, wavelet
         smallest = min(len(data) for data, _ in files)
         return next(file for file in files if len(file[0]) <= smallest * (1 + ALPHA_SLACK))
     span = prepared.height_range()
+    finest = max(1e-9 * span, prepared.finest_step())
     if rmse is not None:
-        step = w2.search_step(lambda s: prepared.surface_rms(w2.round_step(s)), target, 1e-9 * span, 4.0 * span)
-        return prepared.encode(w2.round_step(step))
+        cost, kept = keeping_best(prepared.decoded, prepared.surface_rms, target)
+        step = w2.search_step(cost, target, finest, 4.0 * span, RMS_GUESS * target, RMS_SLOPE, snap=w2.round_step)
+        return prepared.encode(step, decoded=kept.get(step))
     # size falls as the step grows, so search the largest 1/step whose file still fits
-    step = 1.0 / w2.search_step(lambda inv: len(prepared.encode(w2.round_step(1.0 / inv))[0]), target,
-                                1.0 / (4.0 * span), 1e9 / span, iterations=20)
-    return prepared.encode(w2.round_step(step))
+    cost, kept = keeping_best(lambda inv: prepared.encode(w2.round_step(1.0 / inv)), lambda file: len(file[0]), target)
+    inverse = w2.search_step(cost, target, 1.0 / (4.0 * span), 1.0 / finest, SIZE_GUESS / span, SIZE_SLOPE,
+                             snap=lambda inv: 1.0 / w2.round_step(1.0 / inv))
+    return kept.get(inverse) or prepared.encode(w2.round_step(1.0 / inverse))
+
+
+def keeping_best(work, measure, target):
+    """(cost, kept) for a search of the largest x whose cost meets ``target``: cost(x) is
+    measure(work(x)), and ``kept`` holds {x: work(x)} of the largest x so far whose cost met
+    it: what the search returns, whose work is then not done again."""
+    kept = {}
+
+    def cost(x):
+        result = work(x)
+        value = measure(result)
+        if value <= target and all(x > best for best in kept):
+            kept.clear()
+            kept[x] = result
+        return value
+
+    return cost, kept
 
 
 def check_shared_unit(grid, field):

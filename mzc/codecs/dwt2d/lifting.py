@@ -18,6 +18,8 @@ LEGALL53 = ((-0.5, 0.25), 1.0)
 LIFTINGS = {"bior4.4": CDF97, "bior2.2": LEGALL53}
 # synthesis reach of a low and a high coefficient (samples either side of its own)
 REACH = {"bior4.4": (3, 4), "bior2.2": (1, 2)}
+STRIP_VALUES = 1 << 20   # a pass lifts this many values at a time (columns of axis 0's strips): its temporaries
+                         # are reused and stay in cache, where whole-grid ones made the kernel hand out fresh pages
 
 
 def scales(wavelet):
@@ -64,17 +66,30 @@ def extended(values, count):
 
 
 def lift(even, odd, steps, cyclic, sign):
-    """Apply (sign +1) or undo (sign -1, in reverse order) the lifting steps: even steps
-    predict the odd samples from their two even neighbours, odd steps update the even
-    samples from their two odd neighbours."""
+    """Apply (sign +1) or undo (sign -1, in reverse order) the lifting steps to ``even`` and
+    ``odd`` in place: even steps predict the odd samples from their two even neighbours, odd
+    steps update the even samples from their two odd neighbours (odd += sign c (e[k] +
+    e[k+1]), even += sign c (o[k-1] + o[k]))."""
     order = list(enumerate(steps)) if sign > 0 else list(enumerate(steps))[::-1]
     for index, c in order:
         if index % 2 == 0:
-            odd = odd + sign * c * (even[:len(odd)] + following(even, len(odd), cyclic))
+            change = even[:len(odd)] + following(even, len(odd), cyclic)
+            change *= sign * c
+            odd += change
         else:
             here = odd if cyclic else extended(odd, len(even))
-            even = even + sign * c * (preceding(odd, len(even), cyclic) + here)
-    return even, odd
+            change = preceding(odd, len(even), cyclic) + here
+            change *= sign * c
+            even += change
+
+
+def strips(shape):
+    """Index tuples that cut an array of ``shape`` into strips of whole columns of axis 0,
+    about STRIP_VALUES values each (the whole of a 1-D array)."""
+    if len(shape) < 2:
+        return [...]
+    width = max(1, STRIP_VALUES // max(shape[0], 1))
+    return [(slice(None), slice(first, first + width)) for first in range(0, max(shape[1], 1), width)]
 
 
 def analyse(x, wavelet, periodic=False):
@@ -84,8 +99,14 @@ def analyse(x, wavelet, periodic=False):
     x = np.asarray(x, dtype=np.float64)
     if len(x) == 1:   # a constant's low coefficient: the DC gain, sqrt 2
         return x * np.sqrt(2), x[:0]
-    even, odd = lift(x[0::2], x[1::2], steps, wraps(periodic, len(x)), +1)
-    return even * low_scale, odd * high_scale
+    cyclic = wraps(periodic, len(x))
+    low, high = np.empty(((len(x) + 1) // 2,) + x.shape[1:]), np.empty((len(x) // 2,) + x.shape[1:])
+    for part in strips(x.shape):
+        even, odd = x[0::2][part].copy(), x[1::2][part].copy()
+        lift(even, odd, steps, cyclic, +1)
+        np.multiply(even, low_scale, out=low[part])
+        np.multiply(odd, high_scale, out=high[part])
+    return low, high
 
 
 def synthesise(low, high, wavelet, periodic=False):
@@ -95,9 +116,12 @@ def synthesise(low, high, wavelet, periodic=False):
     n = len(low) + len(high)
     if n == 1:
         return low / np.sqrt(2)
-    even, odd = lift(low / low_scale, high / high_scale, steps, wraps(periodic, n), -1)
+    cyclic = wraps(periodic, n)
     x = np.empty((n,) + low.shape[1:])
-    x[0::2], x[1::2] = even, odd
+    for part in strips(x.shape):
+        even, odd = low[part] / low_scale, high[part] / high_scale
+        lift(even, odd, steps, cyclic, -1)
+        x[0::2][part], x[1::2][part] = even, odd
     return x
 
 
