@@ -89,6 +89,11 @@ SEED = 15
 LAZ_POINTS = 1_000_000          # issue 16: a LAZ cloud of about a million points ...
 QUICK_LAZ_POINTS = 100_000
 LAZ_SECONDS = 10.0              # ... slices in under 10 s (command line, wall)
+FACE_DIFF_SECONDS = 1.0         # issue 15: `mzc diff --surface` on a face within a second (wall)
+LARGE_SIDE = 1000               # issue 16: `diff --surface` of two 1,000,000-vertex meshes ...
+QUICK_LARGE_SIDE = 100
+LARGE_DIFF_SECONDS = 30.0       # ... in under 30 s (wall) ...
+LARGE_DIFF_BYTES = 2e9          # ... and 2 GB (peak RSS)
 PACKAGES = ("numpy", "scipy", "PyWavelets", "constriction", "DracoPy", "imagecodecs")
 SCALE_STAGES = ("encode", "decode", f"densify -n {SCALE_DENSIFY}", "triangulate")
 MEMORY_STAGES = SCALE_STAGES[:3]   # the issue's memory condition: encode, decode, densify
@@ -503,6 +508,47 @@ def laz_checks(laz):
              f"{laz['bytes'] / 1e6:.1f} MB of LAZ", laz["median_s"] < LAZ_SECONDS)]
 
 
+# --------------------------------------------------------------------------- diff --surface (issues 15, 16)
+
+
+def surface_diffs(face, rebuilt, folder, side, repeats):
+    """`mzc diff A B --surface` as a process, wall time and peak RSS (``summary``): the face
+    against its rebuild (``rebuilt``, a triangulate output of part 1) ``repeats`` times, and
+    each pair of ``surface_distance.SHAPES`` (side x side vertices, the second jittered) once."""
+    from surface_distance import SHAPES
+
+    import mzc
+
+    diffs = {"face": summary([run_command(mzc_command("diff", face, rebuilt, "--surface")) for _ in range(repeats)])}
+    rng = np.random.default_rng(1)
+    for shape, make in SHAPES.items():
+        paths = [folder / f"{shape.replace(' ', '-')}-{i}.ply" for i in range(2)]
+        for path, jittered in zip(paths, (False, True)):
+            mzc.write(path, mzc.Mesh(*make(side, rng, jittered)))
+        progress(f"diff --surface: {shape}")
+        diffs[shape] = {"vertices": side * side, **summary([run_command(mzc_command("diff", *paths, "--surface"))])}
+    return diffs
+
+
+def surface_checks(diffs, rebuilt_grid):
+    """Issue 15's line (a face within FACE_DIFF_SECONDS) and issue 16's (each large pair within
+    LARGE_DIFF_SECONDS and LARGE_DIFF_BYTES)."""
+    face = diffs["face"]
+    label = f"`mzc diff {FACE} rebuilt.ply --surface` ({rebuilt_grid} grid): within {FACE_DIFF_SECONDS:g} s wall"
+    lines = [(label, f"failed: {face['error']}", False) if face["median_s"] is None else
+             (label, f"median {face['median_s']:.2f} s (min {face['min_s']:.2f}), peak RSS {face['peak_mb']:.0f} MB",
+              face["median_s"] <= FACE_DIFF_SECONDS)]
+    for shape, row in diffs.items():
+        if shape == "face":
+            continue
+        label = (f"`mzc diff --surface` of two {row['vertices']:,}-vertex meshes ({shape}): under "
+                 f"{LARGE_DIFF_SECONDS:g} s and {LARGE_DIFF_BYTES / 1e9:g} GB")
+        lines.append((label, f"failed: {row['error']}", False) if row["median_s"] is None else
+                     (label, f"{row['median_s']:.2f} s, peak RSS {row['peak_mb']:.0f} MB",
+                      row["median_s"] < LARGE_DIFF_SECONDS and row["peak_mb"] * 1e6 < LARGE_DIFF_BYTES))
+    return lines
+
+
 # --------------------------------------------------------------------------- report
 
 
@@ -561,7 +607,8 @@ def markdown(document):
         f"`os.wait4`. {s['repeats']} rounds; each runs every row once, in an order shuffled per round (the "
         "stages of one grid stay in order, each reading the file the one before wrote). The pipeline is "
         f"`mzc slice {FACE} [grid options] | mzc encode {' '.join(ENCODE)} | mzc decode | mzc densify -n "
-        f"{DENSIFY} | mzc triangulate -o out.ply`, five processes joined by pipes (`report.run_stages`).",
+        f"{DENSIFY} | mzc triangulate -o out.ply`, five processes joined by pipes (`report.run_stages`). mzc's "
+        "modules are compiled to bytecode first, as installing a wheel does (`compile_bytecode`).",
         f"- In process: `mzc.slice(mesh, ...)`, `mzc.encode(grid, rmse={RMSE})`, `mzc.decode(data)`, "
         f"`mzc.densify(grid, {DENSIFY})`, `mzc.triangulate(grid)` on inputs made once beforehand (the mesh read "
         f"once); wall time (`time.perf_counter`) of each call, {s['repeats']} rounds, the order of the calls "
@@ -587,6 +634,11 @@ def markdown(document):
         "65% ground points, 35% vegetation above it, LAS 1.2 with 1 cm quanta, as LAZ); `mzc slice survey.laz "
         f"--classes 2 -o survey.zg` runs {s['repeats']} times, each a process (wall time and peak RSS, the "
         "LAZ read through laspy and lazrs included).",
+        "- `diff --surface` (issues 15 and 16): `mzc diff f18.ply rebuilt.ply --surface`, the rebuild being the "
+        "triangulate output of part 1 on the first checked grid, a process per round; then the pairs of "
+        "`surface_distance.py`'s large meshes (a wavy sheet and a closed bumpy torus of side x side vertices, the "
+        "second of each pair jittered), written as binary PLY, `mzc diff a.ply b.ply --surface` once each; wall "
+        "time and peak RSS from the wrapper.",
         "",
         *cli_section(d),
         *stage_section(d),
@@ -708,6 +760,17 @@ def scaling_section(d):
 # --------------------------------------------------------------------------- main
 
 
+def compile_bytecode():
+    """Compile mzc's modules to bytecode, as installing a wheel does: an editable install leaves
+    it to the first import, and where PYTHONDONTWRITEBYTECODE is set (as on the machines these
+    reports come from) every command would compile them from source again (20-40 ms a process)."""
+    import compileall
+
+    import mzc
+
+    compileall.compile_dir(Path(mzc.__file__).parent, quiet=1)
+
+
 def parse_args(argv):
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--quick", action="store_true", help="one round, the 0.5 mm grid only, tiny scaling sizes")
@@ -744,6 +807,7 @@ def main(argv=None):
     with tempfile.TemporaryDirectory(prefix="bench-speed-", dir="/tmp") as scratch:
         scratch = Path(scratch)
         (scratch / "cli").mkdir()
+        compile_bytecode()
         cli_runs = cli_rounds(face, grids, args.repeats, scratch / "cli")
         load.append(os.getloadavg()[0])
         mesh = as_mesh(face)
@@ -753,6 +817,9 @@ def main(argv=None):
         (scratch / "scale").mkdir()
         scale_rows = scaling(args.sizes, scratch / "scale", args.stage_timeout, args.memory_cap_gb * 1e9, args.quick)
         laz = laz_slice(scratch, QUICK_LAZ_POINTS if args.quick else LAZ_POINTS, args.repeats)
+        rebuilt_grid = next((g for g in CHECKED_GRIDS if g in grids), grids[0])
+        diffs = surface_diffs(face, scratch / "cli" / f"{rebuilt_grid.replace(' ', '-')}.ply", scratch,
+                              QUICK_LARGE_SIDE if args.quick else LARGE_SIDE, args.repeats)
     load.append(os.getloadavg()[0])
     cli = {row: summary(runs) for row, runs in cli_runs.items()}
     api = {name: {"median_s": float(np.median(t)), "min_s": min(t), "runs": t} for name, t in api_times.items()}
@@ -767,9 +834,10 @@ def main(argv=None):
                      "threads": {k: os.environ.get(k) for k in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS")}},
         "face": {"name": FACE, "vertices": len(mesh.points), "triangles": len(mesh.triangles)},
         "grids": grid_facts, "cli": cli, "cli_runs": cli_runs, "api": api, "facts": facts,
-        "scaling": scale_rows, "missing": missing, "laz": laz,
+        "scaling": scale_rows, "missing": missing, "laz": laz, "surface_diffs": diffs,
     }
-    document["checks"] = checks(cli, api, scale_rows, args.sizes, grids) + laz_checks(laz)
+    document["checks"] = (checks(cli, api, scale_rows, args.sizes, grids) + laz_checks(laz)
+                          + surface_checks(diffs, rebuilt_grid))
     document["wall_s"] = time.perf_counter() - started
     args.out.mkdir(parents=True, exist_ok=True)
     (args.out / "speed-results.json").write_text(json.dumps(document, indent=1, default=float) + "\n")

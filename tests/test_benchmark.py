@@ -303,7 +303,7 @@ def test_speed_report_has_every_section_and_a_verdict_per_check(speed_run):
     text, document = speed_run
     positions = [text.index(section) for section in SPEED_SECTIONS]
     assert positions == sorted(positions)
-    assert len(document["checks"]) == 12   # 2 pipeline, 2 Draco ratios, 3 memory, 4 exponents (quick: one grid), LAZ
+    assert len(document["checks"]) == 15   # 2 pipeline, 2 Draco, 3 memory, 4 exponents (quick: one grid), LAZ, 3 diffs
     for label, _measured, _ok in document["checks"]:
         assert f"| {label} |" in text
     assert document["commit"] and len(document["load"]) == 4
