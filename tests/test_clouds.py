@@ -311,6 +311,43 @@ def test_las_crs_is_kept_on_the_cloud(name, crs):
     assert found == crs if crs is None or crs.startswith("EPSG") else found.startswith(crs)
 
 
+def test_a_planar_grid_keeps_the_clouds_wkt_crs_through_its_file(tmp_path):
+    import mzc
+
+    mesh = read_mesh(PUBLIC / "1_4_w_evlr.laz")
+    grid = mzc.slice(mesh, projection="planar")
+    mzc.write(tmp_path / "g.zg", grid)
+    assert grid.crs == mesh.crs and mzc.read(tmp_path / "g.zg").crs == mesh.crs
+    assert mzc.slice(read_mesh(PUBLIC / "autzen_geo_proj.las")).crs is None   # EPSG:2994 is no WKT
+
+
+GEOGRAPHIC_WKT = ('GEOGCS["WGS 84",DATUM["WGS_1984",SPHEROID["WGS 84",6378137,298.257223563]],'
+                  'PRIMEM["Greenwich",0],UNIT["degree",0.0174532925199433]]')
+
+
+@pytest.mark.parametrize("record", ["wkt", "geokeys"])
+def test_a_las_cloud_in_longitude_and_latitude_is_refused_in_one_line(mzc, tmp_path, record):
+    import laspy
+    from laspy.vlrs.geotiff import GeoKeyEntryStruct
+    from laspy.vlrs.known import GeoKeyDirectoryVlr, WktCoordinateSystemVlr
+
+    header = laspy.LasHeader(point_format=6, version="1.4")
+    header.scales, header.offsets = [1e-7, 1e-7, 0.01], [-105, 40, 0]
+    if record == "wkt":
+        header.vlrs.append(WktCoordinateSystemVlr(GEOGRAPHIC_WKT))
+    else:
+        keys = GeoKeyDirectoryVlr()
+        keys.geo_keys_header.number_of_keys = 2
+        keys.geo_keys = [GeoKeyEntryStruct(1024, 0, 1, 2), GeoKeyEntryStruct(2048, 0, 1, 4326)]
+        header.vlrs.append(keys)
+    data = laspy.LasData(header)
+    rng = np.random.default_rng(0)
+    data.x, data.y, data.z = -105 + 0.01 * rng.random(200), 40 + 0.01 * rng.random(200), 1600 + rng.random(200)
+    path = tmp_path / "degrees.las"
+    data.write(path)
+    assert_one_line_error(mzc("slice", path), "degrees.las: crs: the cloud's x and y are longitude and latitude")
+
+
 @pytest.mark.parametrize("compressed", [False, True])
 def test_generated_las_applies_scale_and_offset(tmp_path, compressed):
     import laspy

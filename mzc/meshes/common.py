@@ -66,6 +66,8 @@ def fan_triangulate(polygons) -> np.ndarray:
 def fan_triangulate_ragged(flat: np.ndarray, counts) -> np.ndarray:
     """Fan-triangulate polygons stored as a flat index list and a corner count per polygon."""
     counts = np.asarray(counts, dtype=np.int64)
+    if len(counts) and (counts == counts[0]).all():   # one polygon size (a mesher's file): rows of the list
+        return fan_triangulate(flat.reshape(len(counts), int(counts[0])))
     starts = np.cumsum(counts) - counts
     pieces = counts - 2
     owner_start = np.repeat(starts, pieces)

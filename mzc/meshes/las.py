@@ -22,6 +22,7 @@ EXTENSIONS = (".las", ".laz")
 write = None   # mzc reads LiDAR clouds; what it writes are meshes
 CHUNK_POINTS = 1_000_000
 GEO_KEYS_CRS = (3072, 2048)   # ProjectedCSTypeGeoKey, then GeographicTypeGeoKey
+MODEL_TYPE_KEY, MODEL_GEOGRAPHIC = 1024, 2   # GTModelTypeGeoKey: 2 = longitude and latitude
 MISSING_EXTRA = "reading LAS/LAZ needs laspy and lazrs: pip install 'mzc[las]'"
 
 
@@ -47,7 +48,7 @@ def read(data: bytes, source: str) -> Mesh:
                     break
                 chunks.append((np.column_stack([np.asarray(chunk.x), np.asarray(chunk.y), np.asarray(chunk.z)]),
                                np.asarray(chunk.classification, dtype=np.uint8)))
-            crs = header_crs(reader.header)
+            crs, geographic = header_crs(reader.header)
     except MzcError:
         raise
     except reading_errors() as error:
@@ -56,6 +57,11 @@ def read(data: bytes, source: str) -> Mesh:
     held = sum(len(chunk[0]) for chunk in chunks)
     if held < declared:
         raise MzcError(f"truncated: the header declares {declared} points, the file holds {held}", source=source)
+    if geographic:
+        raise MzcError(f"the cloud's x and y are longitude and latitude in degrees (its CRS{', ' + crs[:60] + ',' if crs else ''} "
+                       f"is geographic) and its heights are lengths, which mzc cannot measure in one unit: reproject "
+                       f"it to a projected CRS first (PDAL's filters.reprojection, las2las -target_epsg)",
+                       source=source, field="crs")
     points = np.concatenate([chunk[0] for chunk in chunks] or [np.empty((0, 3))])
     classes = np.concatenate([chunk[1] for chunk in chunks] or [np.empty(0, dtype=np.uint8)])
     return Mesh(points, classification=classes, crs=crs)
@@ -103,18 +109,25 @@ def las_problem(error, held, declared):
 
 
 def header_crs(header):
-    """The CRS a LAS header names: its WKT VLR, else the EPSG code of its GeoTIFF keys, else None
+    """(the CRS a LAS header names, whether its x and y are longitude and latitude): its WKT VLR
+    (geographic by its keywords, ``georef.crs_kind``), else the EPSG code of its GeoTIFF keys
+    (geographic by the model type key, or a geographic code with no projected one), else None
     (also for a user-defined CRS, code 32767, which has no code to give)."""
     from laspy.vlrs.known import GeoKeyDirectoryVlr, WktCoordinateSystemVlr
+
+    from mzc.georef import crs_kind
 
     records = list(header.vlrs) + list(getattr(header, "evlrs", None) or [])
     for record in records:
         if isinstance(record, WktCoordinateSystemVlr) and record.string.strip("\0 \n"):
-            return record.string.strip("\0 \n")
+            wkt = record.string.strip("\0 \n")
+            return wkt, crs_kind(wkt) == "geographic"
     for record in records:
         if isinstance(record, GeoKeyDirectoryVlr):
             codes = {key.id: key.value_offset for key in record.geo_keys if key.tiff_tag_location == 0}
             code = next((codes[key] for key in GEO_KEYS_CRS if 0 < codes.get(key, 0) < 32767), None)
-            if code is not None:
-                return f"EPSG:{code}"
-    return None
+            geographic = codes.get(MODEL_TYPE_KEY) == MODEL_GEOGRAPHIC or (
+                0 < codes.get(GEO_KEYS_CRS[1], 0) and not 0 < codes.get(GEO_KEYS_CRS[0], 0))
+            if code is not None or geographic:
+                return (None if code is None else f"EPSG:{code}"), geographic
+    return None, False

@@ -107,7 +107,7 @@ def slice_surface(mesh, d1=None, d2=None, rows=None, cols=None, align="none", un
     (across u), else from the data (``spacings``); ``thesis_grid``: 72 rows, as the
     thesis's ~70 planes, and d2 = d1/10. ``classes`` (ASPRS codes) keeps only the points of
     those classes of a LAS/LAZ cloud (``Mesh.with_classes``); ``cloud`` says how a cloud
-    becomes a surface (``slice_in_frame``). Warns (MzcWarning) when the grid's lines meet
+    becomes a surface (``slice_in_frame``). A planar grid keeps the cloud's CRS when it is WKT. Warns (MzcWarning) when the grid's lines meet
     less than SEEN_WARNING of the area well.
     """
     from mzc.limits import check_magnitude
@@ -122,6 +122,8 @@ def slice_surface(mesh, d1=None, d2=None, rows=None, cols=None, align="none", un
                           thesis_grid=thesis_grid, cloud=cloud)
     if np.isnan(grid.z).all():
         raise MzcError("no grid node meets the surface (seen edge-on? try --view or --align pca)")
+    if grid.projection == "planar" and is_wkt(getattr(mesh, "crs", None)):
+        grid = grid.with_z(grid.z, crs=mesh.crs)   # the transform maps the grid to the cloud's frame, the CRS's
     if chosen.seen is not None and chosen.seen < SEEN_WARNING:
         import warnings
 
@@ -132,6 +134,14 @@ def slice_surface(mesh, d1=None, d2=None, rows=None, cols=None, align="none", un
             f"60 degrees of its node lines; the rest comes back coarse or not at all (try --projection auto, "
             f"--view or --align pca)"), stacklevel=2)
     return grid
+
+
+def is_wkt(crs):
+    """True for a CRS given as WKT (a LAS file's WKT record), which a grid's ``crs`` line holds;
+    not for an ``EPSG:code`` (GeoTIFF keys), which would need a CRS library to spell out."""
+    from mzc.georef import crs_kind
+
+    return crs is not None and crs_kind(crs) != "unknown"
 
 
 def slice_in_frame(mesh, rotation, shift, d1=None, d2=None, rows=None, cols=None, units=None,
