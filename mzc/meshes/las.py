@@ -58,9 +58,10 @@ def read(data: bytes, source: str) -> Mesh:
     if held < declared:
         raise MzcError(f"truncated: the header declares {declared} points, the file holds {held}", source=source)
     if geographic:
-        raise MzcError(f"the cloud's x and y are longitude and latitude in degrees (its CRS{', ' + crs[:60] + ',' if crs else ''} "
-                       f"is geographic) and its heights are lengths, which mzc cannot measure in one unit: reproject "
-                       f"it to a projected CRS first (PDAL's filters.reprojection, las2las -target_epsg)",
+        named = f", {crs[:60]}," if crs else ""
+        raise MzcError(f"the cloud's x and y are longitude and latitude in degrees (its CRS{named} is geographic) "
+                       f"and its heights are lengths, which mzc cannot measure in one unit: reproject it to a "
+                       f"projected CRS first (PDAL's filters.reprojection, las2las -target_epsg)",
                        source=source, field="crs")
     points = np.concatenate([chunk[0] for chunk in chunks] or [np.empty((0, 3))])
     classes = np.concatenate([chunk[1] for chunk in chunks] or [np.empty(0, dtype=np.uint8)])

@@ -107,8 +107,8 @@ def slice_surface(mesh, d1=None, d2=None, rows=None, cols=None, align="none", un
     (across u), else from the data (``spacings``); ``thesis_grid``: 72 rows, as the
     thesis's ~70 planes, and d2 = d1/10. ``classes`` (ASPRS codes) keeps only the points of
     those classes of a LAS/LAZ cloud (``Mesh.with_classes``); ``cloud`` says how a cloud
-    becomes a surface (``slice_in_frame``). A planar grid keeps the cloud's CRS when it is WKT. Warns (MzcWarning) when the grid's lines meet
-    less than SEEN_WARNING of the area well.
+    becomes a surface (``slice_in_frame``). A planar grid keeps the cloud's CRS when it is WKT.
+    Warns (MzcWarning) when the grid's lines meet less than SEEN_WARNING of the area well.
     """
     from mzc.limits import check_magnitude
     from mzc.ops.views import SEEN_WARNING, choose_view
