@@ -8,12 +8,15 @@ image: the azimuths of its corners (an edge not crossing the axis sweeps its azi
 monotonically), its heights (cylindrical) or a bound of its elevations (spherical: a
 chord can rise above both its ends towards a pole), all columns for a triangle that the
 axis passes through, and a second copy one turn over for a triangle across the seam of
-the grid's azimuth window. Each candidate gets an exact ray-triangle test.
+the grid's azimuth window. The boxes are numpy's work (a few operations per triangle); the loop
+over their candidate nodes, each with an exact ray-triangle test, is the C kernel of the
+planar rasterizer (``_raster.c``'s ``farthest``), which finds a box's nodes as it finds a
+triangle's block there.
 """
 
 import numpy as np
 
-from mzc.ops.raster import BARYCENTRIC_TOLERANCE, candidate_chunks, candidate_nodes, index_range
+from mzc.ops.raster import BARYCENTRIC_TOLERANCE, checked
 from mzc.vectors import of_each_row
 
 TURN = 2 * np.pi
@@ -25,18 +28,15 @@ def cast(points, triangles, projection, radius, xs, ys):
     ``points`` are grid-frame coordinates (centre at the origin, axis along y); ``xs`` and
     ``ys`` are uniform and increasing. Triangles seen edge-on by a ray never count as hits.
     """
+    from mzc.ops import _raster
+
     points = np.asarray(points, dtype=np.float64)
-    corners = points[np.asarray(triangles, dtype=np.int64).reshape(-1, 3)]
-    xs, ys = np.asarray(xs, dtype=np.float64), np.asarray(ys, dtype=np.float64)
+    corners = np.ascontiguousarray(points[np.asarray(triangles, dtype=np.int64).reshape(-1, 3)])
+    xs, ys = np.ascontiguousarray(xs, dtype=np.float64), np.ascontiguousarray(ys, dtype=np.float64)
     best = np.full(len(ys) * len(xs), -np.inf)
     boxes, owners = candidate_boxes(corners, projection, radius, xs[0])
-    if len(owners):
-        col_range = index_range(boxes[:, 0], xs)
-        row_range = index_range(boxes[:, 1], ys)
-        planes = TrianglePlanes(corners[owners])
-        rays = RayTable(projection, radius, xs, ys)
-        for chunk in candidate_chunks(col_range, row_range):
-            cast_chunk(planes, chunk, col_range[:, chunk], row_range[:, chunk], rays, len(xs), best)
+    checked(_raster.farthest(corners, owners, boxes, xs, ys, *direction_factors(projection, radius, xs, ys),
+                             projection == "cylindrical", BARYCENTRIC_TOLERANCE, best))
     best[best == -np.inf] = np.nan
     return best.reshape(len(ys), len(xs))
 
@@ -62,7 +62,7 @@ def candidate_boxes(corners, projection, radius, u_start):
     again = np.flatnonzero(straddles)
     shifted = boxes[again].copy()
     shifted[:, 0] -= turn
-    owners = np.concatenate([np.arange(len(corners)), again])
+    owners = np.concatenate([np.arange(len(corners), dtype=np.int64), again])
     return np.concatenate([boxes, shifted]), owners
 
 
@@ -95,71 +95,13 @@ def v_bounds(corners, projection, radius, around, u_box):
     return radius * np.stack([bottom, top], axis=1)
 
 
-class TrianglePlanes:
-    """What the exact test needs of each triangle: its normal n, n . a, and the corner
-    products whose dot with a ray's direction are the ray's barycentric weights.
-
-    For a ray from O in direction D, the weights of corners a, b, c are D . ((b-O) x (c-O))
-    and its cyclic shifts; (b-O) x (c-O) = b x c - v (y x (c - b)) when O = v y (the
-    axis point of a cylindrical ray; v = 0 for the centre of a spherical one). The weights
-    sum to D . n, and the ray meets the triangle's plane at t = (n . a - v n_y) / (D . n).
-    """
-
-    def __init__(self, corners):
-        a, b, c = corners[:, 0], corners[:, 1], corners[:, 2]
-        self.normal = np.cross(b - a, c - a)
-        self.offset = np.einsum("ij,ij->i", self.normal, a)
-        self.products = [np.cross(b, c), np.cross(c, a), np.cross(a, b)]
-        axis = np.array([0.0, 1.0, 0.0])
-        self.shifts = [np.cross(axis, c - b), np.cross(axis, a - c), np.cross(axis, b - a)]
-
-
-class RayTable:
-    """Direction factors of every column and row, so a node's ray is two lookups away."""
-
-    def __init__(self, projection, radius, xs, ys):
-        self.projection = projection
-        self.ys = ys
-        azimuth = xs / radius
-        self.sin_u, self.cos_u = np.sin(azimuth), np.cos(azimuth)
-        if projection == "spherical":
-            elevation = ys / radius
-            self.ring, self.rise = np.cos(elevation), np.sin(elevation)
-        else:
-            self.ring, self.rise = np.ones(len(ys)), np.zeros(len(ys))
-
-    def directions(self, rows, cols):
-        """(n, 3) unit directions of the nodes (rows, cols)."""
-        ring = self.ring[rows]
-        return np.stack([ring * self.sin_u[cols], self.rise[rows], ring * self.cos_u[cols]], axis=1)
-
-
-def cast_chunk(planes, chunk, col_range, row_range, rays, cols_count, best):
-    """Test every candidate node of the triangles of ``chunk`` and raise ``best`` to their hits."""
-    owner, rows, cols = candidate_nodes(col_range, row_range)
-    t, hit = ray_hits(planes, np.arange(chunk.start, chunk.stop)[owner], rays, rows, cols)
-    np.maximum.at(best, rows[hit] * cols_count + cols[hit], t[hit])
-
-
-def ray_hits(planes, triangle, rays, rows, cols):
-    """(distance along the ray, hit) of the rays of nodes (rows, cols) against ``triangle``s."""
-    direction = rays.directions(rows, cols)
-    of = lambda vectors: vectors.take(triangle, axis=0)  # noqa: E731 - take: 4x faster than [triangle] on rows of 3
-    normal = of(planes.normal)
-    facing = np.einsum("ij,ij->i", direction, normal)
-    cylindrical = rays.projection == "cylindrical"
-    v = rays.ys[rows] if cylindrical else 0.0
-    weights = []
-    for product, shift in zip(planes.products, planes.shifts):
-        weight = np.einsum("ij,ij->i", direction, of(product))
-        if cylindrical:
-            weight -= v * np.einsum("ij,ij->i", direction, of(shift))
-        weights.append(weight)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        scale = 1.0 / facing
-        tolerance = -BARYCENTRIC_TOLERANCE
-        hit = np.isfinite(scale)
-        for weight in weights:
-            hit &= weight * scale >= tolerance
-        t = (planes.offset[triangle] - (v * normal[:, 1] if cylindrical else 0.0)) * scale
-    return t, hit & (t > 0)
+def direction_factors(projection, radius, xs, ys):
+    """(2, len(xs)) sine and cosine of each column's azimuth, and (2, len(ys)) cosine and sine of
+    each row's elevation (1 and 0 on cylindrical rays): node (row, column)'s ray runs along
+    (ring sin, rise, ring cos), ring and rise the row's factors (``mzc.projections``)."""
+    azimuth = xs / radius
+    columns = np.stack([np.sin(azimuth), np.cos(azimuth)])
+    if projection == "spherical":
+        elevation = ys / radius
+        return columns, np.stack([np.cos(elevation), np.sin(elevation)])
+    return columns, np.stack([np.ones(len(ys)), np.zeros(len(ys))])
