@@ -146,7 +146,7 @@ def test_the_caster_equals_every_ray_against_every_triangle(seed, projection, st
     xs = radius * start + step * np.arange(columns)
     top = np.pi / 2 * radius if projection == "spherical" else 50.0
     ys = np.linspace(-top, top, 13)
-    boxes, owners = candidate_boxes(points[triangles], projection, radius, xs[0])
+    boxes, owners = candidate_boxes(points, triangles, projection, radius, xs[0])
     assert np.isinf(boxes[:, 0]).any() and len(owners) > len(triangles)   # around the axis, across the seam
     got = cast(points, triangles, projection, radius, xs, ys)
     assert np.isfinite(got).any()
@@ -154,27 +154,28 @@ def test_the_caster_equals_every_ray_against_every_triangle(seed, projection, st
 
 
 def test_the_caster_refuses_indices_and_buffers_that_do_not_fit():
-    """The kernel checks every buffer's size and every box's triangle before it reads or writes:
-    a bad one is refused and nothing is written."""
+    """The kernel checks every buffer's size, corner index and box's triangle before it reads or
+    writes: a bad one is refused and nothing is written."""
     from mzc.ops import _raster
     from mzc.ops.raster import checked
 
-    corners, owners = np.array([[[0, 0, 5], [5, 0, 5], [0, 5, 5.0]]]), np.array([0])
+    points, triangle = np.array([[0, 0, 5], [5, 0, 5], [0, 5, 5.0]]), np.array([[0, 1, 2]])
     boxes, nodes = np.array([[[-9, 9], [-9, 9.0]]]), np.arange(-1, 2.0)
     factors = np.array([np.sin(nodes / 10), np.cos(nodes / 10)])
-    good = [corners, owners, boxes, nodes, nodes, factors, factors[::-1].copy()]
+    good = [points, triangle, np.array([0]), boxes, nodes, nodes, factors, factors[::-1].copy()]
     best = np.full(9, -np.inf)
     assert _raster.farthest(*good, False, 1e-9, best) == 0 and np.isfinite(best).any()
-    for owner in (1, -1):
-        best = np.full(9, -np.inf)
+    best = np.full(9, -np.inf)
+    for bad in ([[0, 3, 2]], [[0, -1, 2]]):
         with pytest.raises(MzcError, match="out of range"):
-            checked(_raster.farthest(*good[:1], np.array([owner]), *good[2:], True, 1e-9, best))
-        assert (best == -np.inf).all()
+            checked(_raster.farthest(points, np.array(bad), *good[2:], False, 1e-9, best))
+    for owner in (1, -1):
+        with pytest.raises(MzcError, match="out of range"):
+            checked(_raster.farthest(*good[:2], np.array([owner]), *good[3:], True, 1e-9, best))
     for i, argument in enumerate(good):
-        best = np.full(9, -np.inf)
-        short = argument.ravel()[:-1]
-        assert _raster.farthest(*good[:i], short, *good[i + 1:], False, 1e-9, best) == 1 and (best == -np.inf).all()
-    assert _raster.farthest(*good, False, 1e-9, np.full(8, -np.inf)) == 1
+        assert _raster.farthest(*good[:i], argument.ravel()[:-1], *good[i + 1:], False, 1e-9, best) == 1
+    assert _raster.farthest(*good, False, 1e-9, best[:8].copy()) == 1
+    assert (best == -np.inf).all()
 
 
 def test_a_triangle_around_the_pole_covers_the_pole_row_and_the_rows_below_it():

@@ -13,8 +13,9 @@
  *   corners    float64 (m, 3, 3); owner int64 (k), a triangle for each point (x, y), float64 (k)
  *   z, hit     float64 (k), bool (k): written with the height of the triangle's plane there and
  *              whether the point lies in the triangle
- * farthest(corners, owners, boxes, xs, ys, columns, rows, cylindrical, tolerance, best) -> status
- *   corners    float64 (m, 3, 3): triangles in the grid's frame (centre at the origin, axis along y)
+ * farthest(points, triangles, owners, boxes, xs, ys, columns, rows, cylindrical, tolerance, best) -> status
+ *   points     float64 (n, 3): in the grid's frame (centre at the origin, axis along y)
+ *   triangles  int64 (m, 3), corner indices checked to be in 0..n-1
  *   owners     int64 (k): the triangle of each box, checked to be in 0..m-1
  *   boxes      float64 (k, 2, 2): [[u_low, u_high], [v_low, v_high]], each triangle's candidate nodes
  *              (a NaN: none), found as front_most finds a triangle's block
@@ -100,6 +101,40 @@ static void raise_to(double *best, double z) {
     if (!isnan(*best) && (z > *best || isnan(z))) *best = z;
 }
 
+/* Whether every corner index of the m triangles is a point, in 0..n-1. */
+static int corners_in_range(const int64_t *triangles, Py_ssize_t m, Py_ssize_t n) {
+    for (Py_ssize_t i = 0; i < 3 * m; i++)
+        if (triangles[i] < 0 || triangles[i] >= n) return 0;
+    return 1;
+}
+
+/* The corners c[0..8] of a triangle, from its three checked point indices. */
+static void corners_of(const double *points, const int64_t *triangle, double *c) {
+    for (int corner = 0; corner < 3; corner++) memcpy(c + 3 * corner, points + 3 * triangle[corner], 3 * sizeof(double));
+}
+
+/* The whole raster on checked sizes; RASTER_BAD_INDEX for a corner index out of range. */
+static int raster(const double *points, Py_ssize_t n, const int64_t *triangles, Py_ssize_t m, const double *xs,
+                  Py_ssize_t nx, const double *ys, Py_ssize_t ny, double tolerance, double *best) {
+    if (!corners_in_range(triangles, m, n)) return RASTER_BAD_INDEX;
+    for (Py_ssize_t t = 0; t < m; t++) {
+        double c[9];
+        corners_of(points, triangles + 3 * t, c);
+        int64_t col, col_last, row, row_last;
+        node_range(fmin(fmin(c[0], c[3]), c[6]), fmax(fmax(c[0], c[3]), c[6]), xs, nx, &col, &col_last);
+        node_range(fmin(fmin(c[1], c[4]), c[7]), fmax(fmax(c[1], c[4]), c[7]), ys, ny, &row, &row_last);
+        if (col > col_last || row > row_last) continue; /* no candidate node (most triangles of a fine mesh) */
+        Plane plane = plane_of(c);
+        if (!has_area(&plane)) continue;
+        for (int64_t r = row; r <= row_last; r++)
+            for (int64_t k = col; k <= col_last; k++) {
+                double z;
+                if (height_at(&plane, xs[k], ys[r], -tolerance, &z)) raise_to(&best[r * nx + k], z);
+            }
+    }
+    return 0;
+}
+
 /* p x q, as np.cross computes it. */
 static void cross(const double *p, const double *q, double *out) {
     out[0] = p[1] * q[2] - p[2] * q[1];
@@ -165,10 +200,11 @@ static void cast_block(const Facet *f, int64_t row, int64_t row_last, int64_t co
     }
 }
 
-/* Every box's candidate rays on checked sizes; RASTER_BAD_INDEX for an owner out of range. */
-static int cast(const double *corners, Py_ssize_t m, const int64_t *owners, const double *boxes, Py_ssize_t k,
-                const double *xs, Py_ssize_t nx, const double *ys, Py_ssize_t ny, const double *columns,
-                const double *rows, int cylindrical, double tolerance, double *best) {
+/* Every box's candidate rays on checked sizes; RASTER_BAD_INDEX for a corner index or owner out of range. */
+static int cast(const double *points, Py_ssize_t n, const int64_t *triangles, Py_ssize_t m, const int64_t *owners,
+                const double *boxes, Py_ssize_t k, const double *xs, Py_ssize_t nx, const double *ys, Py_ssize_t ny,
+                const double *columns, const double *rows, int cylindrical, double tolerance, double *best) {
+    if (!corners_in_range(triangles, m, n)) return RASTER_BAD_INDEX;
     for (Py_ssize_t i = 0; i < k; i++)
         if (owners[i] < 0 || owners[i] >= m) return RASTER_BAD_INDEX;
     for (Py_ssize_t i = 0; i < k; i++) {
@@ -176,33 +212,11 @@ static int cast(const double *corners, Py_ssize_t m, const int64_t *owners, cons
         box_range(boxes + 4 * i, xs, nx, &col, &col_last);
         box_range(boxes + 4 * i + 2, ys, ny, &row, &row_last);
         if (col > col_last || row > row_last) continue;
-        Facet f = facet_of(corners + 9 * owners[i]);
+        double c[9];
+        corners_of(points, triangles + 3 * owners[i], c);
+        Facet f = facet_of(c);
         cast_block(&f, row, row_last, col, col_last, ys, columns, columns + nx, rows, rows + ny, cylindrical,
                    -tolerance, nx, best);
-    }
-    return 0;
-}
-
-/* The whole raster on checked sizes; RASTER_BAD_INDEX for a corner index out of range. */
-static int raster(const double *points, Py_ssize_t n, const int64_t *triangles, Py_ssize_t m, const double *xs,
-                  Py_ssize_t nx, const double *ys, Py_ssize_t ny, double tolerance, double *best) {
-    for (Py_ssize_t i = 0; i < 3 * m; i++)
-        if (triangles[i] < 0 || triangles[i] >= n) return RASTER_BAD_INDEX;
-    for (Py_ssize_t t = 0; t < m; t++) {
-        double c[9];
-        for (int corner = 0; corner < 3; corner++)
-            memcpy(c + 3 * corner, points + 3 * triangles[3 * t + corner], 3 * sizeof(double));
-        int64_t col, col_last, row, row_last;
-        node_range(fmin(fmin(c[0], c[3]), c[6]), fmax(fmax(c[0], c[3]), c[6]), xs, nx, &col, &col_last);
-        node_range(fmin(fmin(c[1], c[4]), c[7]), fmax(fmax(c[1], c[4]), c[7]), ys, ny, &row, &row_last);
-        if (col > col_last || row > row_last) continue; /* no candidate node (most triangles of a fine mesh) */
-        Plane plane = plane_of(c);
-        if (!has_area(&plane)) continue;
-        for (int64_t r = row; r <= row_last; r++)
-            for (int64_t k = col; k <= col_last; k++) {
-                double z;
-                if (height_at(&plane, xs[k], ys[r], -tolerance, &z)) raise_to(&best[r * nx + k], z);
-            }
     }
     return 0;
 }
@@ -265,24 +279,27 @@ static PyObject *heights(PyObject *self, PyObject *args) {
 
 static PyObject *farthest(PyObject *self, PyObject *args) {
     (void)self;
-    Py_buffer corners, owners, boxes, xs, ys, columns, rows, best;
+    Py_buffer points, triangles, owners, boxes, xs, ys, columns, rows, best;
     int cylindrical;
     double tolerance;
-    if (!PyArg_ParseTuple(args, "y*y*y*y*y*y*y*pdw*", &corners, &owners, &boxes, &xs, &ys, &columns, &rows,
-                          &cylindrical, &tolerance, &best))
+    if (!PyArg_ParseTuple(args, "y*y*y*y*y*y*y*y*pdw*", &points, &triangles, &owners, &boxes, &xs, &ys, &columns,
+                          &rows, &cylindrical, &tolerance, &best))
         return NULL;
     const Py_ssize_t size = (Py_ssize_t)sizeof(double); /* and of an int64 */
-    Py_ssize_t m = corners.len / (9 * size), k = owners.len / size, nx = xs.len / size, ny = ys.len / size;
+    Py_ssize_t n = points.len / (3 * size), m = triangles.len / (3 * size), k = owners.len / size;
+    Py_ssize_t nx = xs.len / size, ny = ys.len / size;
     int status = RASTER_BAD_SIZE;
-    if (corners.len == m * 9 * size && owners.len == k * size && k <= PY_SSIZE_T_MAX / 32 &&
+    if (points.len == n * 3 * size && triangles.len == m * 3 * size && owners.len == k * size &&
+        k <= PY_SSIZE_T_MAX / 32 &&
         boxes.len == k * 4 * size && xs.len == nx * size && ys.len == ny * size && columns.len == 2 * xs.len &&
         rows.len == 2 * ys.len && (nx == 0 || ny <= PY_SSIZE_T_MAX / 8 / nx) && best.len == nx * ny * size) {
         Py_BEGIN_ALLOW_THREADS
-        status = cast(corners.buf, m, owners.buf, boxes.buf, k, xs.buf, nx, ys.buf, ny, columns.buf, rows.buf,
-                      cylindrical, tolerance, best.buf);
+        status = cast(points.buf, n, triangles.buf, m, owners.buf, boxes.buf, k, xs.buf, nx, ys.buf, ny, columns.buf,
+                      rows.buf, cylindrical, tolerance, best.buf);
         Py_END_ALLOW_THREADS
     }
-    PyBuffer_Release(&corners);
+    PyBuffer_Release(&points);
+    PyBuffer_Release(&triangles);
     PyBuffer_Release(&owners);
     PyBuffer_Release(&boxes);
     PyBuffer_Release(&xs);
@@ -300,7 +317,7 @@ static PyMethodDef methods[] = {
      "heights(corners, owner, x, y, tolerance, z, hit) -> status: each point's height on its triangle's plane and "
      "whether it lies in the triangle."},
     {"farthest", farthest, METH_VARARGS,
-     "farthest(corners, owners, boxes, xs, ys, columns, rows, cylindrical, tolerance, best) -> status: raise best "
+     "farthest(points, triangles, owners, boxes, xs, ys, columns, rows, cylindrical, tolerance, best) -> status: raise best "
      "to the distances of the hits of the rays of each box's nodes on its triangle."},
     {NULL, NULL, 0, NULL},
 };

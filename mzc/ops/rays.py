@@ -17,7 +17,6 @@ triangle's block there.
 import numpy as np
 
 from mzc.ops.raster import BARYCENTRIC_TOLERANCE, checked
-from mzc.vectors import of_each_row
 
 TURN = 2 * np.pi
 
@@ -30,51 +29,52 @@ def cast(points, triangles, projection, radius, xs, ys):
     """
     from mzc.ops import _raster
 
-    points = np.asarray(points, dtype=np.float64)
-    corners = np.ascontiguousarray(points[np.asarray(triangles, dtype=np.int64).reshape(-1, 3)])
+    points = np.ascontiguousarray(points, dtype=np.float64).reshape(-1, 3)
+    triangles = np.ascontiguousarray(triangles, dtype=np.int64).reshape(-1, 3)
     xs, ys = np.ascontiguousarray(xs, dtype=np.float64), np.ascontiguousarray(ys, dtype=np.float64)
     best = np.full(len(ys) * len(xs), -np.inf)
-    boxes, owners = candidate_boxes(corners, projection, radius, xs[0])
-    checked(_raster.farthest(corners, owners, boxes, xs, ys, *direction_factors(projection, radius, xs, ys),
+    boxes, owners = candidate_boxes(points, triangles, projection, radius, xs[0])
+    checked(_raster.farthest(points, triangles, owners, boxes, xs, ys, *direction_factors(projection, radius, xs, ys),
                              projection == "cylindrical", BARYCENTRIC_TOLERANCE, best))
     best[best == -np.inf] = np.nan
     return best.reshape(len(ys), len(xs))
 
 
-def candidate_boxes(corners, projection, radius, u_start):
+def candidate_boxes(points, triangles, projection, radius, u_start):
     """((k, 2, 2) boxes [[u_low, u_high], [v_low, v_high]], (k,) triangle of each box).
 
     Azimuths are taken in the window [u_start, u_start + 2 pi R0) of the grid; a triangle
     whose corners straddle the window's seam is unwrapped past its end and gets a second
     box one turn lower, so each side of the seam sees it. A triangle around the axis gets
-    every azimuth.
+    every azimuth. Each coordinate is a (3, m) array, a row per corner, so that every step
+    works on whole rows and reduces over three of them.
     """
-    x, z = corners[..., 0], corners[..., 2]
+    x, y, z = np.ascontiguousarray(points.T).take(triangles.T, axis=1)
     turn = TURN * radius
     u = u_start + np.mod(radius * np.arctan2(x, z) - u_start, turn)
     around = around_axis(x, z)
-    straddles = ~around & (of_each_row(np.ptp, u) > 0.5 * turn)
-    u = np.where(straddles[:, None] & (u < u_start + 0.5 * turn), u + turn, u)
-    u_box = np.stack([of_each_row(np.min, u), of_each_row(np.max, u)], axis=1)
-    v_box = v_bounds(corners, projection, radius, around, u_box)
+    straddles = ~around & (u.max(axis=0) - u.min(axis=0) > 0.5 * turn)
+    u = np.where(straddles & (u < u_start + 0.5 * turn), u + turn, u)
+    u_box = np.stack([u.min(axis=0), u.max(axis=0)], axis=1)
+    v_box = v_bounds(x, y, z, projection, radius, around, u_box)
     u_box[around] = [-np.inf, np.inf]
     boxes = np.stack([u_box, v_box], axis=1)
     again = np.flatnonzero(straddles)
-    shifted = boxes[again].copy()
+    shifted = boxes[again]
     shifted[:, 0] -= turn
-    owners = np.concatenate([np.arange(len(corners), dtype=np.int64), again])
+    owners = np.concatenate([np.arange(len(triangles), dtype=np.int64), again])
     return np.concatenate([boxes, shifted]), owners
 
 
 def around_axis(x, z):
-    """True for triangles whose projection onto the xz plane contains the axis (x = z = 0)."""
-    cross = [x[:, i] * z[:, (i + 1) % 3] - z[:, i] * x[:, (i + 1) % 3] for i in range(3)]
-    return (np.all([c >= 0 for c in cross], axis=0) | np.all([c <= 0 for c in cross], axis=0)) \
-        & (np.abs(sum(cross)) > 0)
+    """True for triangles (columns of the corners' x and z, (3, m)) whose projection onto the xz
+    plane contains the axis (x = z = 0)."""
+    cross = x * np.roll(z, -1, axis=0) - z * np.roll(x, -1, axis=0)
+    return ((cross >= 0).all(axis=0) | (cross <= 0).all(axis=0)) & (np.abs(cross.sum(axis=0)) > 0)
 
 
-def v_bounds(corners, projection, radius, around, u_box):
-    """(k, 2) low and high v over each triangle: its heights along a cylindrical axis, or a
+def v_bounds(x, y, z, projection, radius, around, u_box):
+    """(m, 2) low and high v over each triangle: its heights along a cylindrical axis, or a
     bound of its elevations (from its heights and its distances from the axis) for spherical grids.
 
     A triangle's nearest point to the axis may lie inside an edge, nearer than its corners
@@ -82,16 +82,15 @@ def v_bounds(corners, projection, radius, around, u_box):
     nearer than min r cos(A / 2) (the chord of two points r apart at angle A passes r cos(A/2)
     from the axis, and moving a corner outwards moves the chord out).
     """
-    y = corners[..., 1]
-    low, high = of_each_row(np.min, y), of_each_row(np.max, y)
+    low, high = y.min(axis=0), y.max(axis=0)
     if projection == "cylindrical":
         return np.stack([low, high], axis=1)
-    distance = np.hypot(corners[..., 0], corners[..., 2])
+    distance = np.hypot(x, z)
     spread = np.minimum((u_box[:, 1] - u_box[:, 0]) / radius, np.pi)
-    near = np.where(around, 0.0, of_each_row(np.min, distance) * np.cos(spread / 2))
-    far = of_each_row(np.max, distance)
-    top = np.where(high >= 0, np.arctan2(high, near), np.arctan2(high, far))
-    bottom = np.where(low <= 0, np.arctan2(low, near), np.arctan2(low, far))
+    near = np.where(around, 0.0, distance.min(axis=0) * np.cos(spread / 2))
+    far = distance.max(axis=0)
+    top = np.arctan2(high, np.where(high >= 0, near, far))
+    bottom = np.arctan2(low, np.where(low <= 0, near, far))
     return radius * np.stack([bottom, top], axis=1)
 
 
