@@ -40,9 +40,10 @@
  * a triangle has an xy area when |ab.x ac.y - ab.y ac.x| > 1e-12 s^2, s the largest of
  * |ab.x|, |ab.y|, |ac.x|, |ac.y|. A ray from O = (0, v, 0) (v = 0 for spherical grids) along D
  * meets the triangle where its barycentric weights D . ((b - O) x (c - O)) and their cyclic
- * shifts, each divided by D . n (n = ab x ac, a finite quotient), are all >= -tolerance, at the
- * distance t = (n . a - v n.y) / (D . n) > 0; the weights are computed as D . (b x c) - v D . (y x (c - b)),
- * numpy's np.cross and einsum (``cross``, ``dot``). The GIL is released while they run, on one thread.
+ * shifts, each times s = 1 / (D . n) (n = ab x ac; s finite), are all >= -tolerance, at the
+ * distance t = (n . a - v n.y) s > 0 (n . a s for spherical grids); a weight is computed as
+ * D . (b x c) - v D . (y x (c - b)) (D . (b x c) for spherical grids), with numpy's np.cross
+ * and einsum (``cross``, ``dot``). The GIL is released while they run, on one thread.
  */
 #define PY_SSIZE_T_CLEAN
 #include <Python.h>
@@ -110,7 +111,8 @@ static int corners_in_range(const int64_t *triangles, Py_ssize_t m, Py_ssize_t n
 
 /* The corners c[0..8] of a triangle, from its three checked point indices. */
 static void corners_of(const double *points, const int64_t *triangle, double *c) {
-    for (int corner = 0; corner < 3; corner++) memcpy(c + 3 * corner, points + 3 * triangle[corner], 3 * sizeof(double));
+    for (int corner = 0; corner < 3; corner++)
+        memcpy(c + 3 * corner, points + 3 * triangle[corner], 3 * sizeof(double));
 }
 
 /* The whole raster on checked sizes; RASTER_BAD_INDEX for a corner index out of range. */
@@ -142,8 +144,8 @@ static void cross(const double *p, const double *q, double *out) {
     out[2] = p[0] * q[1] - p[1] * q[0];
 }
 
-/* p . q in the order of numpy's einsum("ij,ij->i") on rows of three: its two SIMD lanes hold
- * p0 q0 + p2 q2 and p1 q1, then are summed (a zero's sign aside, which no hit or distance depends on). */
+/* p . q as numpy's einsum("ij,ij->i") sums rows of three (its x86-64 wheels: two SIMD lanes hold p0 q0 + p2 q2
+ * and p1 q1, then are added), unfused on every CPU; a zero's sign aside, which no hit or distance depends on. */
 static double dot(const double *p, const double *q) { return (p[0] * q[0] + p[2] * q[2]) + p[1] * q[1]; }
 
 /* What the ray test needs of a triangle a, b, c: its normal n, n . a, the products b x c, c x a,
@@ -152,6 +154,7 @@ typedef struct {
     double normal[3], offset, products[3][3], shifts[3][3];
 } Facet;
 
+/* The facet of the triangle of corners c[0..8]. */
 static Facet facet_of(const double *c) {
     static const double axis[3] = {0.0, 1.0, 0.0};
     Facet f;
@@ -317,8 +320,8 @@ static PyMethodDef methods[] = {
      "heights(corners, owner, x, y, tolerance, z, hit) -> status: each point's height on its triangle's plane and "
      "whether it lies in the triangle."},
     {"farthest", farthest, METH_VARARGS,
-     "farthest(points, triangles, owners, boxes, xs, ys, columns, rows, cylindrical, tolerance, best) -> status: raise best "
-     "to the distances of the hits of the rays of each box's nodes on its triangle."},
+     "farthest(points, triangles, owners, boxes, xs, ys, columns, rows, cylindrical, tolerance, best) -> status: "
+     "raise best to the distances of the hits of the rays of each box's nodes on its triangle."},
     {NULL, NULL, 0, NULL},
 };
 
