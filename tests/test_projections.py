@@ -9,7 +9,7 @@ from mzc import projections, samples
 from mzc.errors import MzcError
 from mzc.measure.metrics import surface_distance, triangle_areas
 from mzc.meshes import Mesh, read_mesh
-from mzc.ops.rays import cast
+from mzc.ops.rays import candidate_boxes, cast
 from mzc.ops.slicing import slice_surface
 from mzc.ops.triangulation import grid_to_mesh
 from mzc.samples import BLOB_CENTRE, blob, tube
@@ -96,19 +96,86 @@ def test_cast_matches_brute_force_on_random_triangles(seed, projection):
     np.testing.assert_allclose(got, expected, rtol=1e-9, equal_nan=True)
 
 
-def test_many_candidates_are_cast_in_chunks(monkeypatch):
-    """Central grids test their candidate nodes in chunks of bounded size: small chunks give the
-    same values."""
-    import mzc.ops.raster
+def same_arithmetic_rays(points, triangles, projection, radius, xs, ys):
+    """Reference: every node's ray against every triangle, no candidate boxes, in numpy's arithmetic as
+    the caster's: the barycentric weights D . (b x c) - v D . (y x (c - b)) and their cyclic shifts
+    (np.cross, einsum) over D . n, a hit when all are >= -1e-9 and t = (n . a - v n.y) / (D . n) > 0."""
+    rows, cols, owner = (index.ravel() for index in np.meshgrid(np.arange(len(ys)), np.arange(len(xs)),
+                                                                np.arange(len(triangles)), indexing="ij"))
+    a, b, c = (points[triangles[owner, i]] for i in range(3))
+    azimuth, elevation = xs / radius, ys / radius
+    ring, rise = ((np.cos(elevation), np.sin(elevation)) if projection == "spherical"
+                  else (np.ones(len(ys)), np.zeros(len(ys))))
+    direction = np.stack([ring[rows] * np.sin(azimuth)[cols], rise[rows], ring[rows] * np.cos(azimuth)[cols]], axis=1)
+    v = ys[rows] if projection == "cylindrical" else np.zeros(len(rows))
+    axis = np.array([0.0, 1.0, 0.0])
+    normal = np.cross(b - a, c - a)
+    along = lambda vectors: np.einsum("ij,ij->i", direction, vectors)  # noqa: E731
+    weights = [along(np.cross(p, q)) - (v * along(np.cross(axis, q - p)) if projection == "cylindrical" else 0)
+               for p, q in [(b, c), (c, a), (a, b)]]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        scale = 1.0 / along(normal)
+        t = (np.einsum("ij,ij->i", normal, a) - (v * normal[:, 1] if projection == "cylindrical" else 0)) * scale
+        hit = np.isfinite(scale) & (t > 0) & np.all([weight * scale >= -1e-9 for weight in weights], axis=0)
+    best = np.full(len(ys) * len(xs), -np.inf)
+    np.maximum.at(best, rows[hit] * len(xs) + cols[hit], t[hit])
+    return np.where(best == -np.inf, np.nan, best).reshape(len(ys), len(xs))
 
-    rng = np.random.default_rng(11)
-    points = (rng.normal(size=(30, 1, 3)) * [40, 25, 40] + rng.normal(size=(30, 3, 3)) * 12).reshape(-1, 3)
-    triangles, radius = np.arange(90).reshape(30, 3), 40.0
-    xs, ys = -np.pi * radius + 2 * np.pi * radius / 48 * np.arange(48), np.linspace(-60, 60, 25)
-    whole = cast(points, triangles, "cylindrical", radius, xs, ys)
-    monkeypatch.setattr(mzc.ops.raster, "CANDIDATES_PER_CHUNK", 50)
-    np.testing.assert_array_equal(cast(points, triangles, "cylindrical", radius, xs, ys), whole)
-    assert np.isfinite(whole).sum() > 100
+
+def at_azimuths(azimuth, distance, height):
+    """Points at these azimuths (radians from +z towards +x), distances from the axis and heights."""
+    return np.stack([distance * np.sin(azimuth), height, distance * np.cos(azimuth)], axis=-1)
+
+
+@settings(max_examples=25, deadline=None)
+@given(st.integers(0, 2**32 - 1), st.sampled_from(CENTRAL), st.floats(-np.pi, np.pi), st.integers(8, 24))
+def test_the_caster_equals_every_ray_against_every_triangle(seed, projection, start, columns):
+    """The C caster gives the same bits as every node tested against every triangle: random triangles
+    all round the centre, triangles around the axis and across the seam of a window of azimuths that
+    starts anywhere and may not close the turn."""
+    rng = np.random.default_rng(seed)
+    radius = 40.0
+    random = (rng.normal(size=(20, 1, 3)) * [40, 25, 40] + rng.normal(size=(20, 3, 3)) * 12).reshape(-1, 3)
+    turns = rng.uniform(0, 2 * np.pi / 3, 6)[:, None] + [0, 2 * np.pi / 3, 4 * np.pi / 3]
+    around = at_azimuths(turns, rng.uniform(3, 30, (6, 3)), rng.uniform(-30, 30, (6, 1)) + rng.normal(size=(6, 3)) * 5)
+    sides = rng.uniform(0.01, 0.3, (6, 3)) * [1, -1, 1] * np.sign(rng.normal(size=(6, 1)))
+    across = at_azimuths(start + sides, rng.uniform(10, 60, (6, 3)), rng.uniform(-30, 30, (6, 3)))
+    points = np.concatenate([random, around.reshape(-1, 3), across.reshape(-1, 3)])
+    triangles = np.arange(len(points)).reshape(-1, 3)
+    step = 2 * np.pi * radius / 24
+    xs = radius * start + step * np.arange(columns)
+    top = np.pi / 2 * radius if projection == "spherical" else 50.0
+    ys = np.linspace(-top, top, 13)
+    boxes, owners = candidate_boxes(points, triangles, projection, radius, xs[0])
+    assert np.isinf(boxes[:, 0]).any() and len(owners) > len(triangles)   # around the axis, across the seam
+    got = cast(points, triangles, projection, radius, xs, ys)
+    assert np.isfinite(got).any()
+    np.testing.assert_array_equal(got, same_arithmetic_rays(points, triangles, projection, radius, xs, ys))
+
+
+def test_the_caster_refuses_indices_and_buffers_that_do_not_fit():
+    """The kernel checks every buffer's size, corner index and box's triangle before it reads or
+    writes: a bad one is refused and nothing is written."""
+    from mzc.ops import _raster
+    from mzc.ops.raster import checked
+
+    points, triangle = np.array([[0, 0, 5], [5, 0, 5], [0, 5, 5.0]]), np.array([[0, 1, 2]])
+    boxes, nodes = np.array([[[-9, 9], [-9, 9.0]]]), np.arange(-1, 2.0)
+    factors = np.array([np.sin(nodes / 10), np.cos(nodes / 10)])
+    good = [points, triangle, np.array([0]), boxes, nodes, nodes, factors, factors[::-1].copy()]
+    best = np.full(9, -np.inf)
+    assert _raster.farthest(*good, False, 1e-9, best) == 0 and np.isfinite(best).any()
+    best = np.full(9, -np.inf)
+    for bad in ([[0, 3, 2]], [[0, -1, 2]]):
+        with pytest.raises(MzcError, match="out of range"):
+            checked(_raster.farthest(points, np.array(bad), *good[2:], False, 1e-9, best))
+    for owner in (1, -1):
+        with pytest.raises(MzcError, match="out of range"):
+            checked(_raster.farthest(*good[:2], np.array([owner]), *good[3:], True, 1e-9, best))
+    for i, argument in enumerate(good):
+        assert _raster.farthest(*good[:i], argument.ravel()[:-1], *good[i + 1:], False, 1e-9, best) == 1
+    assert _raster.farthest(*good, False, 1e-9, best[:8].copy()) == 1
+    assert (best == -np.inf).all()
 
 
 def test_a_triangle_around_the_pole_covers_the_pole_row_and_the_rows_below_it():

@@ -1,5 +1,6 @@
-/* The planar rasterizer (mzc/ops/raster.py): where vertical lines meet triangles, by the
- * inclusive barycentric test, and the front-most height of each node of a grid.
+/* The rasterizers of mzc/ops/raster.py and mzc/ops/rays.py: where the node lines of a grid meet
+ * triangles, vertical lines (planar grids, by the inclusive barycentric test) and rays (central grids),
+ * and the outermost hit of each node.
  *
  * front_most(points, triangles, xs, ys, tolerance, best) -> status
  *   points     float64 (n, 3); triangles int64 (m, 3), corner indices checked to be in 0..n-1
@@ -12,25 +13,37 @@
  *   corners    float64 (m, 3, 3); owner int64 (k), a triangle for each point (x, y), float64 (k)
  *   z, hit     float64 (k), bool (k): written with the height of the triangle's plane there and
  *              whether the point lies in the triangle
- * ranges(values, width, nodes, out) -> status
- *   values     float64 (k, width): each row's [min, max] is mapped to node indices
- *   nodes      float64 (count): uniform, increasing
- *   out        int64 (2, k): written with each row's first and last node index inside it
- *              (empty: last < first), as ``node_range`` does for front_most; mzc.ops.rays uses it
+ * farthest(points, triangles, owners, boxes, xs, ys, columns, rows, cylindrical, tolerance, best) -> status
+ *   points     float64 (n, 3): in the grid's frame (centre at the origin, axis along y)
+ *   triangles  int64 (m, 3), corner indices checked to be in 0..n-1
+ *   owners     int64 (k): the triangle of each box, checked to be in 0..m-1
+ *   boxes      float64 (k, 2, 2): [[u_low, u_high], [v_low, v_high]], each triangle's candidate nodes
+ *              (a NaN: none), found as front_most finds a triangle's block
+ *   xs, ys     float64 (nx), (ny): uniform, increasing node coordinates u and v
+ *   columns    float64 (2, nx): sine and cosine of each column's azimuth
+ *   rows       float64 (2, ny): each row's cosine and sine of elevation (1 and 0 for cylindrical rays),
+ *              so that a node's ray runs along (ring sin, rise, ring cos)
+ *   cylindrical  nonzero: rays leave the axis at height v (ys), else the centre
+ *   best       float64 (ny * nx): raised to the distance along the ray of every hit
  * Buffers are C-contiguous (y* and w*); their sizes, corner indices and owners are checked
  * before anything is read. Returns 0, or RASTER_BAD_SIZE or RASTER_BAD_INDEX, which raster.py
  * turns into errors.
  *
  * The operations are numpy's, in its order (-ffp-contract=off keeps them unfused), so the
- * results are the same bits as the vectorised form that raster.py had: with a step s of the
- * nodes (1 for a single node), a row's nodes run from ceil((min - nodes[0]) / s - 1e-7) to
- * floor((max - nodes[0]) / s + 1e-7), clipped to the nodes (a node on the box's edge is
+ * results are the same bits as the vectorised forms that raster.py and rays.py had: with a step
+ * s of the nodes (1 for a single node), a box's nodes run from ceil((min - nodes[0]) / s - 1e-7)
+ * to floor((max - nodes[0]) / s + 1e-7), clipped to the nodes (a node on the box's edge is
  * always a candidate); with ab = b - a, ac = c - a and inverse = 1 / (ab.x ac.y - ab.y ac.x),
  *   u = ((x - a.x) ac.y - (y - a.y) ac.x) inverse,  v = ((y - a.y) ab.x - (x - a.x) ab.y) inverse,
  *   a hit when u, v and (1 - u) - v are all >= -tolerance (nodes on shared edges belong to both),
  *   z = (a.z + u ab.z) + v ac.z;
  * a triangle has an xy area when |ab.x ac.y - ab.y ac.x| > 1e-12 s^2, s the largest of
- * |ab.x|, |ab.y|, |ac.x|, |ac.y|. The GIL is released while they run, on one thread.
+ * |ab.x|, |ab.y|, |ac.x|, |ac.y|. A ray from O = (0, v, 0) (v = 0 for spherical grids) along D
+ * meets the triangle where its barycentric weights D . ((b - O) x (c - O)) and their cyclic
+ * shifts, each times s = 1 / (D . n) (n = ab x ac; s finite), are all >= -tolerance, at the
+ * distance t = (n . a - v n.y) s > 0 (n . a s for spherical grids); a weight is computed as
+ * D . (b x c) - v D . (y x (c - b)) (D . (b x c) for spherical grids), with numpy's np.cross
+ * and einsum (``cross``, ``dot``). The GIL is released while they run, on one thread.
  */
 #define PY_SSIZE_T_CLEAN
 #include <Python.h>
@@ -89,15 +102,26 @@ static void raise_to(double *best, double z) {
     if (!isnan(*best) && (z > *best || isnan(z))) *best = z;
 }
 
+/* Whether every corner index of the m triangles is a point, in 0..n-1. */
+static int corners_in_range(const int64_t *triangles, Py_ssize_t m, Py_ssize_t n) {
+    for (Py_ssize_t i = 0; i < 3 * m; i++)
+        if (triangles[i] < 0 || triangles[i] >= n) return 0;
+    return 1;
+}
+
+/* The corners c[0..8] of a triangle, from its three checked point indices. */
+static void corners_of(const double *points, const int64_t *triangle, double *c) {
+    for (int corner = 0; corner < 3; corner++)
+        memcpy(c + 3 * corner, points + 3 * triangle[corner], 3 * sizeof(double));
+}
+
 /* The whole raster on checked sizes; RASTER_BAD_INDEX for a corner index out of range. */
 static int raster(const double *points, Py_ssize_t n, const int64_t *triangles, Py_ssize_t m, const double *xs,
                   Py_ssize_t nx, const double *ys, Py_ssize_t ny, double tolerance, double *best) {
-    for (Py_ssize_t i = 0; i < 3 * m; i++)
-        if (triangles[i] < 0 || triangles[i] >= n) return RASTER_BAD_INDEX;
+    if (!corners_in_range(triangles, m, n)) return RASTER_BAD_INDEX;
     for (Py_ssize_t t = 0; t < m; t++) {
         double c[9];
-        for (int corner = 0; corner < 3; corner++)
-            memcpy(c + 3 * corner, points + 3 * triangles[3 * t + corner], 3 * sizeof(double));
+        corners_of(points, triangles + 3 * t, c);
         int64_t col, col_last, row, row_last;
         node_range(fmin(fmin(c[0], c[3]), c[6]), fmax(fmax(c[0], c[3]), c[6]), xs, nx, &col, &col_last);
         node_range(fmin(fmin(c[1], c[4]), c[7]), fmax(fmax(c[1], c[4]), c[7]), ys, ny, &row, &row_last);
@@ -109,6 +133,93 @@ static int raster(const double *points, Py_ssize_t n, const int64_t *triangles, 
                 double z;
                 if (height_at(&plane, xs[k], ys[r], -tolerance, &z)) raise_to(&best[r * nx + k], z);
             }
+    }
+    return 0;
+}
+
+/* p x q, as np.cross computes it. */
+static void cross(const double *p, const double *q, double *out) {
+    out[0] = p[1] * q[2] - p[2] * q[1];
+    out[1] = p[2] * q[0] - p[0] * q[2];
+    out[2] = p[0] * q[1] - p[1] * q[0];
+}
+
+/* p . q as numpy's einsum("ij,ij->i") sums rows of three (its x86-64 wheels: two SIMD lanes hold p0 q0 + p2 q2
+ * and p1 q1, then are added), unfused on every CPU; a zero's sign aside, which no hit or distance depends on. */
+static double dot(const double *p, const double *q) { return (p[0] * q[0] + p[2] * q[2]) + p[1] * q[1]; }
+
+/* What the ray test needs of a triangle a, b, c: its normal n, n . a, the products b x c, c x a,
+ * a x b and the shifts y x (c - b), y x (a - c), y x (b - a) that move their origin up the axis. */
+typedef struct {
+    double normal[3], offset, products[3][3], shifts[3][3];
+} Facet;
+
+/* The facet of the triangle of corners c[0..8]. */
+static Facet facet_of(const double *c) {
+    static const double axis[3] = {0.0, 1.0, 0.0};
+    Facet f;
+    double ab[3], ac[3], edges[3][3];
+    for (int i = 0; i < 3; i++) {
+        ab[i] = c[3 + i] - c[i];
+        ac[i] = c[6 + i] - c[i];
+        edges[0][i] = c[6 + i] - c[3 + i]; /* c - b */
+        edges[1][i] = c[i] - c[6 + i];     /* a - c */
+        edges[2][i] = c[3 + i] - c[i];     /* b - a */
+    }
+    cross(ab, ac, f.normal);
+    f.offset = dot(f.normal, c);
+    for (int i = 0; i < 3; i++) {
+        cross(c + 3 * ((i + 1) % 3), c + 3 * ((i + 2) % 3), f.products[i]);
+        cross(axis, edges[i], f.shifts[i]);
+    }
+    return f;
+}
+
+/* The node indices inside a box's [low, high], taken in either order as numpy's min and max would. */
+static void box_range(const double *box, const double *nodes, Py_ssize_t count, int64_t *first, int64_t *last) {
+    int reversed = box[1] < box[0]; /* false for a NaN, which node_range turns into no node */
+    node_range(box[reversed], box[!reversed], nodes, count, first, last);
+}
+
+/* Raise best to the distance of every hit of the rays of nodes (rows, cols) in the block on facet f. */
+static void cast_block(const Facet *f, int64_t row, int64_t row_last, int64_t col, int64_t col_last,
+                       const double *ys, const double *sin_u, const double *cos_u, const double *ring,
+                       const double *rise, int cylindrical, double least, Py_ssize_t nx, double *best) {
+    for (int64_t r = row; r <= row_last; r++) {
+        double v = cylindrical ? ys[r] : 0.0;
+        for (int64_t k = col; k <= col_last; k++) {
+            double direction[3] = {ring[r] * sin_u[k], rise[r], ring[r] * cos_u[k]};
+            double scale = 1.0 / dot(direction, f->normal);
+            if (!isfinite(scale)) continue; /* the ray runs along the triangle's plane */
+            int inside = 1;
+            for (int i = 0; i < 3; i++) {
+                double weight = dot(direction, f->products[i]);
+                if (cylindrical) weight -= v * dot(direction, f->shifts[i]);
+                inside &= weight * scale >= least;
+            }
+            double t = (cylindrical ? f->offset - v * f->normal[1] : f->offset) * scale;
+            if (inside && t > 0 && t > best[r * nx + k]) best[r * nx + k] = t;
+        }
+    }
+}
+
+/* Every box's candidate rays on checked sizes; RASTER_BAD_INDEX for a corner index or owner out of range. */
+static int cast(const double *points, Py_ssize_t n, const int64_t *triangles, Py_ssize_t m, const int64_t *owners,
+                const double *boxes, Py_ssize_t k, const double *xs, Py_ssize_t nx, const double *ys, Py_ssize_t ny,
+                const double *columns, const double *rows, int cylindrical, double tolerance, double *best) {
+    if (!corners_in_range(triangles, m, n)) return RASTER_BAD_INDEX;
+    for (Py_ssize_t i = 0; i < k; i++)
+        if (owners[i] < 0 || owners[i] >= m) return RASTER_BAD_INDEX;
+    for (Py_ssize_t i = 0; i < k; i++) {
+        int64_t col, col_last, row, row_last;
+        box_range(boxes + 4 * i, xs, nx, &col, &col_last);
+        box_range(boxes + 4 * i + 2, ys, ny, &row, &row_last);
+        if (col > col_last || row > row_last) continue;
+        double c[9];
+        corners_of(points, triangles + 3 * owners[i], c);
+        Facet f = facet_of(c);
+        cast_block(&f, row, row_last, col, col_last, ys, columns, columns + nx, rows, rows + ny, cylindrical,
+                   -tolerance, nx, best);
     }
     return 0;
 }
@@ -169,34 +280,36 @@ static PyObject *heights(PyObject *self, PyObject *args) {
     return PyLong_FromLong(status);
 }
 
-static PyObject *ranges(PyObject *self, PyObject *args) {
+static PyObject *farthest(PyObject *self, PyObject *args) {
     (void)self;
-    Py_buffer values, nodes, out;
-    Py_ssize_t width;
-    if (!PyArg_ParseTuple(args, "y*ny*w*", &values, &width, &nodes, &out)) return NULL;
-    Py_ssize_t k = width > 0 ? values.len / (width * (Py_ssize_t)sizeof(double)) : 0;
-    Py_ssize_t count = nodes.len / (Py_ssize_t)sizeof(double);
+    Py_buffer points, triangles, owners, boxes, xs, ys, columns, rows, best;
+    int cylindrical;
+    double tolerance;
+    if (!PyArg_ParseTuple(args, "y*y*y*y*y*y*y*y*pdw*", &points, &triangles, &owners, &boxes, &xs, &ys, &columns,
+                          &rows, &cylindrical, &tolerance, &best))
+        return NULL;
+    const Py_ssize_t size = (Py_ssize_t)sizeof(double); /* and of an int64 */
+    Py_ssize_t n = points.len / (3 * size), m = triangles.len / (3 * size), k = owners.len / size;
+    Py_ssize_t nx = xs.len / size, ny = ys.len / size;
     int status = RASTER_BAD_SIZE;
-    if (width > 0 && width <= PY_SSIZE_T_MAX / 8 && values.len == k * width * (Py_ssize_t)sizeof(double) &&
-        nodes.len == count * (Py_ssize_t)sizeof(double) && out.len == 2 * k * (Py_ssize_t)sizeof(int64_t)) {
-        const double *v = values.buf, *x = nodes.buf;
-        int64_t *range = out.buf;
+    if (points.len == n * 3 * size && triangles.len == m * 3 * size && owners.len == k * size &&
+        k <= PY_SSIZE_T_MAX / 32 &&
+        boxes.len == k * 4 * size && xs.len == nx * size && ys.len == ny * size && columns.len == 2 * xs.len &&
+        rows.len == 2 * ys.len && (nx == 0 || ny <= PY_SSIZE_T_MAX / 8 / nx) && best.len == nx * ny * size) {
         Py_BEGIN_ALLOW_THREADS
-        for (Py_ssize_t i = 0; i < k; i++) {
-            const double *row = v + i * width;
-            double low = row[0], high = row[0];
-            for (Py_ssize_t j = 1; j < width; j++) { /* numpy's min and max: a NaN wins */
-                low = (row[j] < low || isnan(row[j])) && !isnan(low) ? row[j] : low;
-                high = (row[j] > high || isnan(row[j])) && !isnan(high) ? row[j] : high;
-            }
-            node_range(low, high, x, count, &range[i], &range[k + i]);
-        }
-        status = 0;
+        status = cast(points.buf, n, triangles.buf, m, owners.buf, boxes.buf, k, xs.buf, nx, ys.buf, ny, columns.buf,
+                      rows.buf, cylindrical, tolerance, best.buf);
         Py_END_ALLOW_THREADS
     }
-    PyBuffer_Release(&values);
-    PyBuffer_Release(&nodes);
-    PyBuffer_Release(&out);
+    PyBuffer_Release(&points);
+    PyBuffer_Release(&triangles);
+    PyBuffer_Release(&owners);
+    PyBuffer_Release(&boxes);
+    PyBuffer_Release(&xs);
+    PyBuffer_Release(&ys);
+    PyBuffer_Release(&columns);
+    PyBuffer_Release(&rows);
+    PyBuffer_Release(&best);
     return PyLong_FromLong(status);
 }
 
@@ -206,13 +319,14 @@ static PyMethodDef methods[] = {
     {"heights", heights, METH_VARARGS,
      "heights(corners, owner, x, y, tolerance, z, hit) -> status: each point's height on its triangle's plane and "
      "whether it lies in the triangle."},
-    {"ranges", ranges, METH_VARARGS,
-     "ranges(values, width, nodes, out) -> status: each row's first and last node index within its [min, max]."},
+    {"farthest", farthest, METH_VARARGS,
+     "farthest(points, triangles, owners, boxes, xs, ys, columns, rows, cylindrical, tolerance, best) -> status: "
+     "raise best to the distances of the hits of the rays of each box's nodes on its triangle."},
     {NULL, NULL, 0, NULL},
 };
 
 static struct PyModuleDef module = {PyModuleDef_HEAD_INIT, "_raster",
-                                    "The planar rasterizer: vertical lines against triangles.",
+                                    "The rasterizers: vertical lines and rays against triangles.",
                                     -1, methods, NULL, NULL, NULL, NULL};
 
 PyMODINIT_FUNC PyInit__raster(void) { return PyModule_Create(&module); }

@@ -4,8 +4,8 @@ Node (r, c) of a planar grid stands for the vertical line where a "horizontal" p
 (constant y, one grid row) meets a "vertical" plane (constant x, one column); its height
 is the exact front-most intersection of that line with the surface, not the nearest
 vertex the thesis takes, so a piecewise-linear surface is reproduced exactly at the
-nodes. It is a small C kernel (``_raster.c``); its node ranges, and the blocks of candidate
-nodes per triangle in chunks of bounded size, serve the rays of central grids (``mzc.ops.rays``).
+nodes. It is a small C kernel (``_raster.c``), which also casts the rays of central grids
+(``mzc.ops.rays``) and finds their candidate nodes as it finds a triangle's here.
 """
 
 import numpy as np
@@ -13,7 +13,6 @@ import numpy as np
 from mzc.errors import MzcError
 
 BARYCENTRIC_TOLERANCE = 1e-9  # nodes on shared edges belong to both triangles
-CANDIDATES_PER_CHUNK = 1 << 15   # (triangle, node) pairs tested at a time: a few MB of temporaries
 
 
 def rasterize(points, triangles, xs, ys):
@@ -39,44 +38,6 @@ def rasterize(points, triangles, xs, ys):
 def cross2(u, v):
     """z component of the cross product of rows of 2D vectors."""
     return u[:, 0] * v[:, 1] - u[:, 1] * v[:, 0]
-
-
-def index_range(coordinate, nodes):
-    """(2, m) first and last node index inside each row's [min, max] of ``coordinate`` (m, k):
-    the node ranges of the planar rasterizer (``_raster.c``), with the slack that keeps a
-    node exactly on the box's edge a candidate; none (last < first) for a NaN."""
-    from mzc.ops import _raster
-
-    values = np.ascontiguousarray(coordinate, dtype=np.float64)
-    out = np.empty((2, len(values)), dtype=np.int64)
-    checked(_raster.ranges(values, values.shape[1], np.ascontiguousarray(nodes, dtype=np.float64), out))
-    return out
-
-
-def candidate_chunks(col_range, row_range):
-    """Slices of triangles whose candidate (triangle, node) pairs fit in one chunk each."""
-    counts = block_sizes(col_range) * block_sizes(row_range)
-    ends = np.cumsum(counts)
-    start = 0
-    while start < len(counts):
-        before = ends[start - 1] if start else 0
-        stop = max(int(np.searchsorted(ends, before + CANDIDATES_PER_CHUNK, side="right")), start + 1)
-        yield slice(start, stop)
-        start = stop
-
-
-def block_sizes(index_range_):
-    """Number of node indices in each (first, last) range; 0 when empty."""
-    return np.maximum(index_range_[1] - index_range_[0] + 1, 0)
-
-
-def candidate_nodes(col_range, row_range):
-    """(triangle, row, column) of every node in the triangles' blocks of candidate nodes."""
-    width, height = block_sizes(col_range), block_sizes(row_range)
-    counts = width * height
-    owner = np.repeat(np.arange(len(counts)), counts)
-    down, across = np.divmod(np.arange(len(owner)) - np.repeat(np.cumsum(counts) - counts, counts), width[owner])
-    return owner, row_range[0, owner] + down, col_range[0, owner] + across
 
 
 def heights_on_triangles(corners, owner, x, y):
