@@ -9,10 +9,13 @@ its axis by a cylindrical grid). The terrains come as grids, the generated surfa
 that go all the way round as meshes.
 """
 
+import math
+
 import numpy as np
 
 from mzc.grid import ZGrid
 from mzc.meshes import Mesh
+from mzc.vectors import lengths
 
 BLOB_CENTRE = np.array([5.0, -3.0, 2.0])
 
@@ -26,7 +29,7 @@ def jacksboro():
     data = cbook.get_sample_data("jacksboro_fault_dem.npz")
     latitude = (float(data["ymin"]) + float(data["ymax"])) / 2
     d1 = float(data["dy"]) * METRES_PER_DEGREE
-    d2 = float(data["dx"]) * METRES_PER_DEGREE * np.cos(np.radians(latitude))
+    d2 = float(data["dx"]) * METRES_PER_DEGREE * math.cos(math.radians(latitude))
     z = np.flipud(data["elevation"].astype(float))  # the file's first row is the northern one
     return ZGrid(z, d1, d2, units="m")
 
@@ -38,15 +41,23 @@ def topobathy():
     data = cbook.get_sample_data("topobathy.npz")
     latitude, longitude = data["latitude"].astype(float), data["longitude"].astype(float)
     d1 = np.diff(latitude).mean() * METRES_PER_DEGREE
-    d2 = np.diff(longitude).mean() * METRES_PER_DEGREE * np.cos(np.radians(latitude.mean()))
+    d2 = np.diff(longitude).mean() * METRES_PER_DEGREE * math.cos(math.radians(latitude.mean()))
     return ZGrid(data["topo"].astype(float), d1, d2, units="m")
+
+
+def libm(function, *arrays):
+    """``function`` of ``math`` (the C library's) on each element of ``arrays``. The samples are
+    files whose bytes should not depend on the machine: numpy's exp, sin and arctan2 take SIMD
+    paths that differ in the last bit from one CPU to another (AVX-512 ones from AVX2 ones), the
+    C library's do not. Used on the few ten thousand values of a sample, never in a hot path."""
+    return np.vectorize(function, otypes=[float])(*arrays)
 
 
 def bump():
     """A generated 120 x 160 mm patch: two Gaussian bumps on a tilted plane, with a round hole."""
     y, x = np.mgrid[0:120:0.5, 0:160:0.5]
-    z = (30 * np.exp(-((x - 60) ** 2 + (y - 60) ** 2) / 800) + 12 * np.exp(-((x - 115) ** 2 + (y - 50) ** 2) / 200)
-         + 0.05 * x - 0.02 * y)
+    z = (30 * libm(math.exp, -((x - 60) ** 2 + (y - 60) ** 2) / 800)
+         + 12 * libm(math.exp, -((x - 115) ** 2 + (y - 50) ** 2) / 200) + 0.05 * x - 0.02 * y)
     z[(x - 120) ** 2 + (y - 95) ** 2 < 10**2] = np.nan
     return ZGrid(z, 0.5, 0.5, units="mm")
 
@@ -59,12 +70,12 @@ def icosphere(subdivisions):
     faces = np.array([[0, 11, 5], [0, 5, 1], [0, 1, 7], [0, 7, 10], [0, 10, 11], [1, 5, 9], [5, 11, 4],
                       [11, 10, 2], [10, 7, 6], [7, 1, 8], [3, 9, 4], [3, 4, 2], [3, 2, 6], [3, 6, 8],
                       [3, 8, 9], [4, 9, 5], [2, 4, 11], [6, 2, 10], [8, 6, 7], [9, 8, 1]])
-    points /= np.linalg.norm(points, axis=1, keepdims=True)
+    points /= lengths(points)[:, None]
     for _ in range(subdivisions):
         edges = np.sort(np.concatenate([faces[:, [0, 1]], faces[:, [1, 2]], faces[:, [2, 0]]]), axis=1)
         unique, inverse = np.unique(edges, axis=0, return_inverse=True)
         middles = points[unique[:, 0]] + points[unique[:, 1]]
-        middles /= np.linalg.norm(middles, axis=1, keepdims=True)
+        middles /= lengths(middles)[:, None]
         ab, bc, ca = (len(points) + inverse.reshape(3, -1)).reshape(3, -1)
         points = np.vstack([points, middles])
         a, b, c = faces.T
@@ -75,7 +86,7 @@ def icosphere(subdivisions):
 def blob_radius(directions):
     """The blob's radius along unit ``directions``: 50 mm with three lobes and a bulge upwards."""
     x, y, z = directions.T
-    return 50 * (1 + 0.15 * np.sin(3 * np.arctan2(x, z)) * (1 - y ** 2) + 0.1 * y ** 3)
+    return 50 * (1 + 0.15 * libm(math.sin, 3 * libm(math.atan2, x, z)) * (1 - y ** 2) + 0.1 * y ** 3)
 
 
 def blob(subdivisions=5):
@@ -86,7 +97,7 @@ def blob(subdivisions=5):
 
 def tube_radius(azimuth, height):
     """The tube's distance from its axis (y): 30 mm, four flutes of 3 mm, widening along y."""
-    return 30 + 3 * np.sin(4 * azimuth) + 0.05 * height
+    return 30 + 3 * libm(math.sin, 4 * azimuth) + 0.05 * height
 
 
 def tube(around=240, along=200):
@@ -95,7 +106,8 @@ def tube(around=240, along=200):
     radius = tube_radius(azimuth, height)
     from mzc.ops.triangulation import grid_triangles
 
-    points = np.stack([radius * np.sin(azimuth), height, radius * np.cos(azimuth)], axis=-1).reshape(-1, 3)
+    points = np.stack([radius * libm(math.sin, azimuth), height, radius * libm(math.cos, azimuth)],
+                      axis=-1).reshape(-1, 3)
     return Mesh(points, grid_triangles(np.ones(azimuth.shape, dtype=bool), periodic=True))
 
 
