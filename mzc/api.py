@@ -68,18 +68,27 @@ def read_item(path: PathLike | None) -> ZGrid | Mesh:
     mzc file or a raster only: a mesh on stdin could not be told from a mistake, so meshes are
     given as file names."""
     from mzc.formats import is_mzc, read_any
-    from mzc.meshes import mesh_from_bytes
-    from mzc.rasters import read_raster, sniff
+    from mzc.rasters import sniff
     from mzc.streams import display_name, is_stdio, read_input
 
     source = display_name(path)
     data = read_input(path)
     if is_mzc(data):
         return read_any(data, source)
-    if sniff(data):
-        return read_raster(data, source, None if is_stdio(path) else path)
-    if is_stdio(path):
+    if is_stdio(path) and not sniff(data):
         raise MzcError("stdin must carry an mzc file or a raster; give meshes as file names", source=source)
+    return surface_from_bytes(data, source, path)
+
+
+def surface_from_bytes(data: bytes, source: str, path: PathLike | None = None) -> ZGrid | Mesh:
+    """The surface a file to slice holds: a raster (GeoTIFF, ESRI ASCII grid, with the CRS of
+    the ``.prj`` beside ``path``) as its own ZGrid, anything else as a mesh or point cloud."""
+    from mzc.rasters import read_raster, sniff
+
+    if sniff(data):
+        return read_raster(data, source, path)
+    from mzc.meshes import mesh_from_bytes
+
     return mesh_from_bytes(data, source)
 
 
@@ -227,14 +236,13 @@ def write(path: PathLike, item: ZGrid | Mesh | bytes, file_format: str | None = 
 def batch_encode(sources: Any, dest: PathLike, codec: str = "dwt2d", *, slice_options: dict[str, Any] | None = None,
                  verify: bool = False, scheduler: str | None = None, workers: int | None = None,
                  chunk_size: int | None = None, listener: Any = None, **codec_options: Any) -> Any:
-    """Slice and encode every mesh of ``sources`` (paths, folders, globs, ``@list`` files) into the
-    folder ``dest`` on Dask (``mzc batch encode``): ``slice_options`` are :func:`slice`'s,
+    """Slice and encode every mesh, cloud and raster of ``sources`` (paths, folders, globs, ``@list``
+    files) into the folder ``dest`` on Dask (``mzc batch encode``): ``slice_options`` are :func:`slice`'s,
     ``codec_options`` :func:`encode`'s. Returns the ``mzc.batch.Summary`` (its ``rows`` are the
     manifest's, ``dest``/manifest.csv); a bad file is a failed row, never an exception."""
     import inspect
 
     from mzc.codecs import get_codec
-    from mzc.meshes import registry
     from mzc.ops.slicing import slice_surface
 
     chosen = get_codec(codec)
@@ -246,9 +254,17 @@ def batch_encode(sources: Any, dest: PathLike, codec: str = "dwt2d", *, slice_op
     # the options that differ from slice's defaults: the same settings however they were spelled
     slicing = {k: v for k, v in (slice_options or {}).items() if v not in (None, ()) and v != defaults[k]}
     settings = {"codec": chosen.name, "codec_options": chosen.checked(codec_options), "slice_options": slicing}
-    extensions = [e for name in registry.FORMATS for e in registry.format_named(name).EXTENSIONS]
-    return run_batch_job("encode", sources, dest, settings, extensions, chosen.extension, verify=verify,
+    return run_batch_job("encode", sources, dest, settings, sliceable_extensions(), chosen.extension, verify=verify,
                          scheduler=scheduler, workers=workers, chunk_size=chunk_size, listener=listener)
+
+
+def sliceable_extensions() -> list[str]:
+    """The extensions of the files ``mzc batch encode`` takes from a folder: meshes, point
+    clouds and rasters."""
+    from mzc import rasters
+    from mzc.meshes import registry
+
+    return [*(e for name in registry.FORMATS for e in registry.format_named(name).EXTENSIONS), *rasters.EXTENSIONS]
 
 
 def batch_decode(sources: Any, dest: PathLike, *, densify: int = 0, method: str = "biharmonic",

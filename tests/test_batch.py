@@ -17,6 +17,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 import mzc
+from mzc.api import sliceable_extensions
 from mzc.batch import Job, items, manifest, work
 from mzc.errors import MzcError
 from mzc.meshes import mesh_to_bytes, read_mesh
@@ -164,6 +165,31 @@ def test_an_item_gives_the_bytes_of_slice_then_encode_and_the_errors_at_the_node
     assert row["node_max_error"] == error.max() and row["valid_nodes"] == grid.valid.sum()
     assert (row["rows"], row["cols"]) == grid.shape
     assert set(row["timings"].split()[::2]) == {"read", "slice", "encode", "write"}
+
+
+PUBLIC = Path(__file__).resolve().parent / "data" / "public"
+
+
+@pytest.mark.parametrize("name", ["west_bijou_escarpment_snippet.asc", "srtm_blurred_res.tif"])
+def test_a_raster_is_encoded_as_its_own_grid_with_its_georeferencing(tmp_path, name):
+    if name.endswith(".tif"):
+        pytest.importorskip("rasterio")
+    folder = tmp_path / "in"
+    folder.mkdir()
+    for path in PUBLIC.glob(Path(name).stem + ".*"):   # the raster, and an ESRI grid's .prj
+        (folder / path.name).symlink_to(path)
+    source = folder / name
+    taken = items.collect([str(folder)], sliceable_extensions(), ".mzw2", str(tmp_path / "out"))
+    assert [item.source for item in taken] == [str(source)]   # a folder's raster is the job's file
+    job = Job("encode", str(tmp_path), {**ENCODE, "codec_options": {"max_error": 0.01, "wavelet": "bior4.4"}},
+              verify=True)
+    row = work.run_item(job, items.Item(str(source), "dem.mzw2"))
+    data = (tmp_path / "dem.mzw2").read_bytes()
+    raster = mzc.slice(source)
+    assert row["status"] == "ok" and data == mzc.encode(raster, "dwt2d", max_error=0.01)
+    decoded = mzc.decode(data)
+    assert (decoded.raster, decoded.crs, row["valid_nodes"]) == (raster.raster, raster.crs, raster.valid.sum())
+    assert 0 < row["surface_hausdorff"] <= row["node_max_error"] * (1 + 1e-9) <= 0.01
 
 
 def test_a_rerun_keeps_an_item_only_while_its_input_settings_and_output_hold(tmp_path):

@@ -3,10 +3,10 @@
 ``run_chunk`` is the task a worker gets: many items, one row each. An item that fails
 (a bad file, a grid too large, a file mzc cannot slice) becomes a row with its one-line
 error; the chunk goes on. The work is that of the filters, called in-process: ``encode``
-reads a mesh, slices it (the options of ``mzc slice``) and encodes it (those of ``mzc
-encode``), so its output is byte for byte that of ``mzc slice | mzc encode``; ``decode``
-decodes, optionally densifies and triangulates (``mzc decode | mzc densify | mzc
-triangulate``).
+reads a mesh, cloud or raster, slices it (the options of ``mzc slice``) and encodes it
+(those of ``mzc encode``), so its output is byte for byte that of ``mzc slice | mzc
+encode``; ``decode`` decodes, optionally densifies and triangulates (``mzc decode | mzc
+densify | mzc triangulate``).
 """
 
 from __future__ import annotations
@@ -120,15 +120,15 @@ def encode_item(job, item, data, row, timings):
     errors at the grid's nodes (and with ``verify`` the whole-surface distance) in ``row``."""
     import numpy as np
 
+    from mzc.api import slice as slice_surface
+    from mzc.api import surface_from_bytes
     from mzc.codecs import get_codec
-    from mzc.meshes import mesh_from_bytes
-    from mzc.ops.slicing import slice_surface
 
     settings, source = job.settings, item.source
     with timings.stage("read"):
-        mesh = mesh_from_bytes(data, source)
+        surface = surface_from_bytes(data, source, source)
     with timings.stage("slice"), about(source, "slicing it"):
-        grid = slice_surface(mesh, **settings["slice_options"])
+        grid = slice_surface(surface, **settings["slice_options"])
     codec = get_codec(settings["codec"])
     with timings.stage("encode"), about(source, f"encoding it with {codec.name}"):
         output, decoded = codec.encode_with_decoded(grid, **settings["codec_options"])
@@ -139,19 +139,21 @@ def encode_item(job, item, data, row, timings):
                node_max_error=float(errors.max()) if errors.size else 0.0)
     if job.verify:
         with timings.stage("verify"), about(source, "measuring the decoded surface"):
-            row.update(surface_distances(mesh, grid, decoded))
+            row.update(surface_distances(surface, grid, decoded))
     return output
 
 
-def surface_distances(mesh, grid, decoded):
-    """The whole-surface RMS and Hausdorff distances between ``mesh`` and the mesh of ``grid``
-    with the ``decoded`` heights (``mzc diff --surface``)."""
+def surface_distances(surface, grid, decoded):
+    """The whole-surface RMS and Hausdorff distances between ``surface`` (a mesh, or a raster's
+    grid) and the mesh of ``grid`` with the ``decoded`` heights (``mzc diff --surface``)."""
     import dataclasses
 
+    from mzc.api import as_mesh
     from mzc.measure import compare_surfaces
     from mzc.ops.triangulation import grid_to_mesh
 
-    report = compare_surfaces(mesh, grid_to_mesh(dataclasses.replace(grid, z=decoded)), surface=True).report
+    decoded_mesh = grid_to_mesh(dataclasses.replace(grid, z=decoded))
+    report = compare_surfaces(as_mesh(surface), decoded_mesh, surface=True).report
     return {"surface_rms": report["surface_rms"], "surface_hausdorff": report["surface_hausdorff"]}
 
 

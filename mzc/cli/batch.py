@@ -38,7 +38,8 @@ def build_command():
 
 
 def build_encode():
-    """``mzc batch encode``: slice and encode every mesh, with the options of slice and encode."""
+    """``mzc batch encode``: slice and encode every mesh, cloud and raster, with the options of
+    slice and encode."""
     from mzc.cli.encode import chosen_codec, codec_flag, codec_options, tuning_options
     from mzc.cli.slice import SLICE_NAMES, SLICE_OPTIONS, check_slice_options
     from mzc.codecs import codec_names, get_codec
@@ -58,15 +59,16 @@ def build_encode():
 
     params = [*[codec_flag(c) for c in codecs], *tuning_options(codecs)]
     command = click.Command("encode", callback=run, params=params, help=ENCODE_HELP)
-    verify = click.option("--verify", is_flag=True, help="Measure each decoded surface against its mesh.")
+    verify = click.option("--verify", is_flag=True, help="Measure each decoded surface against its input's.")
     return with_options([*batch_options, *SLICE_OPTIONS, verify], command)
 
 
-ENCODE_HELP = f"""Slice and encode every mesh of SOURCES into DEST.
+ENCODE_HELP = f"""Slice and encode every mesh, point cloud and raster of SOURCES into DEST.
 
-Each mesh is sliced with the options of 'mzc slice' and encoded with those of 'mzc encode',
-in-process: the output is byte for byte that of 'mzc slice | mzc encode'. --verify also
-measures each decoded surface against its mesh (RMS and Hausdorff, as 'mzc diff --surface').
+Each is sliced with the options of 'mzc slice' (a raster is its own grid) and encoded with
+those of 'mzc encode', in-process: the output is byte for byte that of 'mzc slice | mzc
+encode'. --verify also measures each decoded surface against the input's (RMS and
+Hausdorff, as 'mzc diff --surface').
 
 {SOURCES_HELP}
 
