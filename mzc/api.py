@@ -68,7 +68,7 @@ def read_item(path: PathLike | None) -> ZGrid | Mesh:
     mzc file or a raster only: a mesh on stdin could not be told from a mistake, so meshes are
     given as file names."""
     from mzc.formats import is_mzc, read_any
-    from mzc.rasters import sniff
+    from mzc.rasters import raster_or_mesh, sniff
     from mzc.streams import display_name, is_stdio, read_input
 
     source = display_name(path)
@@ -77,19 +77,7 @@ def read_item(path: PathLike | None) -> ZGrid | Mesh:
         return read_any(data, source)
     if is_stdio(path) and not sniff(data):
         raise MzcError("stdin must carry an mzc file or a raster; give meshes as file names", source=source)
-    return surface_from_bytes(data, source, path)
-
-
-def surface_from_bytes(data: bytes, source: str, path: PathLike | None = None) -> ZGrid | Mesh:
-    """The surface a file to slice holds: a raster (GeoTIFF, ESRI ASCII grid, with the CRS of
-    the ``.prj`` beside ``path``) as its own ZGrid, anything else as a mesh or point cloud."""
-    from mzc.rasters import read_raster, sniff
-
-    if sniff(data):
-        return read_raster(data, source, path)
-    from mzc.meshes import mesh_from_bytes
-
-    return mesh_from_bytes(data, source)
+    return raster_or_mesh(data, source, path)
 
 
 def as_grid(grid: ZGrid | np.ndarray) -> ZGrid:
@@ -120,22 +108,13 @@ def slice(surface: Any, d1: float | None = None, d2: float | None = None, *, row
     layout) is its own z-grid, node for node: it is returned as it is (with ``units`` when
     given), and an option that would cut it otherwise is refused (resample the raster first)."""
     from mzc.grid import ZGrid
+    from mzc.ops.slicing import slice_surface
 
     if isinstance(surface, (str, os.PathLike)):
         surface = read_item(os.fspath(surface))
-    if isinstance(surface, ZGrid) and surface.raster is not None:
-        given = {"d1": d1, "d2": d2, "rows": rows, "cols": cols, "center": center, "axis": axis,
-                 "thesis_grid": thesis_grid or None, "align": None if align == "none" else align,
-                 "projection": None if projection in ("auto", "planar") else projection,
-                 "view": None if view in ("auto", "+z") else view}
-        refused = next((name for name, value in given.items() if value is not None), None)
-        if refused:
-            raise MzcError("a raster is sliced as its own grid, node for node, so this option does not apply: "
-                           "resample the raster first (gdalwarp -tr, -t_srs)", field=refused)
-        return surface if units is None else surface.with_z(surface.z, units=units)
-    from mzc.ops.slicing import slice_surface
-
-    return slice_surface(as_mesh(surface), d1=d1, d2=d2, rows=rows, cols=cols, align=align, units=units,
+    if not (isinstance(surface, ZGrid) and surface.raster is not None):
+        surface = as_mesh(surface)
+    return slice_surface(surface, d1=d1, d2=d2, rows=rows, cols=cols, align=align, units=units,
                          projection=projection, center=center, axis=axis, view=view, thesis_grid=thesis_grid,
                          classes=None if classes is None else tuple(classes), cloud=cloud)
 
@@ -246,7 +225,7 @@ def batch_encode(sources: Any, dest: PathLike, codec: str = "dwt2d", *, slice_op
     from mzc.ops.slicing import slice_surface
 
     chosen = get_codec(codec)
-    defaults = {name: p.default for name, p in inspect.signature(slice_surface).parameters.items() if name != "mesh"}
+    defaults = {name: p.default for name, p in inspect.signature(slice_surface).parameters.items() if name != "surface"}
     unknown = sorted(set(slice_options or {}) - set(defaults))
     if unknown:
         raise MzcError(f"slice takes no option {unknown[0]!r} (it takes: {', '.join(sorted(defaults))})",

@@ -190,6 +190,9 @@ def test_a_raster_is_encoded_as_its_own_grid_with_its_georeferencing(tmp_path, n
     decoded = mzc.decode(data)
     assert (decoded.raster, decoded.crs, row["valid_nodes"]) == (raster.raster, raster.crs, raster.valid.sum())
     assert 0 < row["surface_hausdorff"] <= row["node_max_error"] * (1 + 1e-9) <= 0.01
+    cut = work.run_item(Job("encode", str(tmp_path), {**ENCODE, "slice_options": {"d1": 2.0}}),
+                        items.Item(str(source), "cut.mzw2"))
+    assert cut["status"] == "failed" and "resample the raster first" in cut["error"] and "d1" in cut["error"]
 
 
 def test_a_rerun_keeps_an_item_only_while_its_input_settings_and_output_hold(tmp_path):

@@ -120,13 +120,13 @@ def encode_item(job, item, data, row, timings):
     errors at the grid's nodes (and with ``verify`` the whole-surface distance) in ``row``."""
     import numpy as np
 
-    from mzc.api import slice as slice_surface
-    from mzc.api import surface_from_bytes
     from mzc.codecs import get_codec
+    from mzc.ops.slicing import slice_surface
+    from mzc.rasters import raster_or_mesh
 
     settings, source = job.settings, item.source
     with timings.stage("read"):
-        surface = surface_from_bytes(data, source, source)
+        surface = raster_or_mesh(data, source, source)
     with timings.stage("slice"), about(source, "slicing it"):
         grid = slice_surface(surface, **settings["slice_options"])
     codec = get_codec(settings["codec"])
@@ -148,12 +148,12 @@ def surface_distances(surface, grid, decoded):
     grid) and the mesh of ``grid`` with the ``decoded`` heights (``mzc diff --surface``)."""
     import dataclasses
 
-    from mzc.api import as_mesh
+    from mzc.grid import ZGrid
     from mzc.measure import compare_surfaces
     from mzc.ops.triangulation import grid_to_mesh
 
-    decoded_mesh = grid_to_mesh(dataclasses.replace(grid, z=decoded))
-    report = compare_surfaces(as_mesh(surface), decoded_mesh, surface=True).report
+    original = grid_to_mesh(surface) if isinstance(surface, ZGrid) else surface
+    report = compare_surfaces(original, grid_to_mesh(dataclasses.replace(grid, z=decoded)), surface=True).report
     return {"surface_rms": report["surface_rms"], "surface_hausdorff": report["surface_hausdorff"]}
 
 

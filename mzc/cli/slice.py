@@ -94,15 +94,15 @@ def command(input, output, d1, d2, rows, cols, thesis_grid, align, projection, v
     no-data cells, georeferencing and CRS; the options that would cut it otherwise are
     refused."""
     from mzc.api import slice as slice_surface
-    from mzc.api import surface_from_bytes
     from mzc.errors import about
+    from mzc.rasters import raster_or_mesh
     from mzc.streams import check_not_input, display_name, read_input
 
     check_slice_options(d1, d2, rows, cols)
     body = zgrid_body(plain, float32, precision)
     check_not_input(output, input)
     data, source = read_input(input), display_name(input)
-    surface = surface_from_bytes(data, source, input)
+    surface = raster_or_mesh(data, source, input)
     with about(source, "slicing it"):
         grid = slice_surface(surface, d1=d1, d2=d2, rows=rows, cols=cols, align=align, units=units,
                              projection=projection, center=center, axis=axis, view=view,

@@ -93,10 +93,11 @@ def triangulate_point_cloud(points_xy, long_edge_factor=LONG_EDGE_FACTOR):
 # --------------------------------------------------------------------------- slicing
 
 
-def slice_surface(mesh, d1=None, d2=None, rows=None, cols=None, align="none", units=None,
+def slice_surface(surface, d1=None, d2=None, rows=None, cols=None, align="none", units=None,
                   projection="auto", center=None, axis=None, view="auto", thesis_grid=False, classes=None,
                   cloud="auto"):
-    """Cut ``mesh`` (a Mesh; no triangles = point cloud) into a ZGrid.
+    """Cut ``surface`` (a Mesh; no triangles = point cloud) into a ZGrid; a raster's grid (a
+    ZGrid with a ``raster`` layout) is its own grid (``raster_as_sliced``).
 
     ``projection`` names the cutting surfaces (``mzc.projections``); ``auto`` picks the
     one that sees the surface best, ``view`` the direction a planar grid looks along (auto
@@ -113,8 +114,12 @@ def slice_surface(mesh, d1=None, d2=None, rows=None, cols=None, align="none", un
     from mzc.limits import check_magnitude
     from mzc.ops.views import SEEN_WARNING, choose_view
 
-    if classes is not None:
-        mesh = mesh.with_classes(classes)
+    if isinstance(surface, ZGrid):
+        return raster_as_sliced(surface, units, d1=d1, d2=d2, rows=rows, cols=cols, center=center, axis=axis,
+                                thesis_grid=thesis_grid or None, align=None if align == "none" else align,
+                                projection=None if projection in ("auto", "planar") else projection,
+                                view=None if view in ("auto", "+z") else view)
+    mesh = surface if classes is None else surface.with_classes(classes)
     check_magnitude(mesh.points, "coordinates")
     chosen = choose_view(mesh, frame_for(mesh, align), projection, center, axis, view)
     grid = slice_in_frame(mesh, chosen.rotation, chosen.shift, d1=d1, d2=d2, rows=rows, cols=cols, units=units,
@@ -134,6 +139,16 @@ def slice_surface(mesh, d1=None, d2=None, rows=None, cols=None, align="none", un
             f"60 degrees of its node lines; the rest comes back coarse or not at all (try --projection auto, "
             f"--view or --align pca)"), stacklevel=2)
     return grid
+
+
+def raster_as_sliced(grid, units, **given):
+    """A raster's ``grid`` as slice gives it: itself, node for node (with ``units`` when given),
+    once no cutting option is ``given`` (not None): one would need the raster resampled."""
+    refused = next((name for name, value in given.items() if value is not None), None)
+    if refused:
+        raise MzcError("a raster is sliced as its own grid, node for node, so this option does not apply: "
+                       "resample the raster first (gdalwarp -tr, -t_srs)", field=refused)
+    return grid if units is None else grid.with_z(grid.z, units=units)
 
 
 def is_wkt(crs):

@@ -62,6 +62,16 @@ def read_raster(data, source, path=None):
     return asc.read(data, source, sidecar_crs(path))
 
 
+def raster_or_mesh(data, source, path=None):
+    """The surface a file to slice holds: a raster as its own ZGrid (``read_raster``), anything
+    else as a mesh or point cloud (``mzc.meshes``)."""
+    if sniff(data):
+        return read_raster(data, source, path)
+    from mzc.meshes import mesh_from_bytes
+
+    return mesh_from_bytes(data, source)
+
+
 def sidecar_crs(path):
     """The one-line WKT of the ``.prj`` file beside ``path``, or None."""
     if path is None or path == "-":
