@@ -251,14 +251,15 @@ def batch_decode(sources: Any, dest: PathLike, *, densify: int = 0, method: str 
                  workers: int | None = None, chunk_size: int | None = None, listener: Any = None) -> Any:
     """Decode every mzc file of ``sources`` into a mesh in the folder ``dest`` on Dask (``mzc batch
     decode``): decoded, densified with ``densify`` rows between planes, triangulated into
-    ``file_format``. Returns the ``mzc.batch.Summary``."""
+    ``file_format``, or written as a raster when it is tif or asc. Returns the ``mzc.batch.Summary``."""
+    from mzc import rasters
     from mzc.codecs import codec_names, get_codec
     from mzc.limits import MAX_INSERTED
     from mzc.meshes import registry
 
-    if file_format not in registry.writable():
-        raise MzcError(f"cannot write mesh format {file_format!r} (known: {', '.join(registry.writable())})",
-                       field="file_format")
+    known = (*registry.writable(), *rasters.FORMATS)
+    if file_format not in known:
+        raise MzcError(f"cannot write format {file_format!r} (known: {', '.join(known)})", field="file_format")
     if not 0 <= int(densify) <= MAX_INSERTED:
         raise MzcError(f"{densify} is not in 0..{MAX_INSERTED}", field="densify")
     settings = {"densify": int(densify), "method": method, "format": file_format, "jump_angle": jump_angle}

@@ -195,6 +195,31 @@ def test_a_raster_is_encoded_as_its_own_grid_with_its_georeferencing(tmp_path, n
     assert cut["status"] == "failed" and "resample the raster first" in cut["error"] and "d1" in cut["error"]
 
 
+@pytest.mark.parametrize("file_format", ["tif", "asc"])
+def test_a_raster_decodes_to_the_files_mzc_decode_writes(tmp_path, file_format):
+    if file_format == "tif":
+        pytest.importorskip("rasterio")
+    archive = tmp_path / "archive"
+    archive.mkdir()
+    (archive / "west.mzw2").write_bytes(mzc.encode(mzc.slice(PUBLIC / "west_bijou_escarpment_snippet.asc"),
+                                                   max_error=0.01))
+    (archive / "blob.mzw2").write_bytes(mzc.encode(mzc.slice(mzc.sample("blob")), max_error=0.1))   # spherical
+    job = Job("decode", str(tmp_path / "out"), {"densify": 1, "method": "biharmonic", "format": file_format,
+                                                "jump_angle": None})
+    west = work.run_item(job, items.Item(str(archive / "west.mzw2"), f"west.{file_format}"))
+    blob = work.run_item(job, items.Item(str(archive / "blob.mzw2"), f"blob.{file_format}"))
+    want = tmp_path / "want"
+    want.mkdir()
+    mzc.write(want / f"west.{file_format}", mzc.densify(mzc.read(archive / "west.mzw2"), 1))
+    made = sorted(path.name for path in want.iterdir())
+    assert made == (["west.asc", "west.prj"] if file_format == "asc" else ["west.tif"])
+    for name in made:
+        assert (tmp_path / "out" / name).read_bytes() == (want / name).read_bytes()
+    assert west["status"] == "ok" and west["output_bytes"] == (want / f"west.{file_format}").stat().st_size
+    assert blob["status"] == "failed" and "a raster holds planar grids" in blob["error"]
+    assert sorted(path.name for path in (tmp_path / "out").iterdir()) == made
+
+
 def test_a_rerun_keeps_an_item_only_while_its_input_settings_and_output_hold(tmp_path):
     source = tmp_path / "bump.obj"
     source.write_bytes(mesh_to_bytes(mzc.sample("bump"), "obj"))

@@ -21,7 +21,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from mzc.errors import MzcError, MzcWarning, about
-from mzc.streams import read_input, write_output
+from mzc.streams import read_input, write_outputs
 
 ACTIONS = ("encode", "decode")
 
@@ -87,10 +87,10 @@ def run_item(job, item, previous=None):
             row.update(input_bytes=len(data), input_sha256=hashlib.sha256(data).hexdigest())
             if still_done(job, row, previous):
                 return {**previous, "skipped": True}
-            output = (encode_item if job.action == "encode" else decode_item)(job, item, data, row, timings)
+            files = (encode_item if job.action == "encode" else decode_item)(job, item, data, row, timings)
             with timings.stage("write"):
-                write_item(job, item, output)
-            row.update(output_bytes=len(output), status="ok")
+                write_files(job, files)
+            row.update(output_bytes=len(files[0][1]), status="ok")
         except MzcError as error:
             row.update(status="failed", error=str(error))
         except MemoryError:
@@ -116,8 +116,9 @@ def still_done(job, row, previous):
 
 
 def encode_item(job, item, data, row, timings):
-    """A mesh's bytes sliced and encoded: the compressed file, with the grid and the codec's
-    errors at the grid's nodes (and with ``verify`` the whole-surface distance) in ``row``."""
+    """A mesh's bytes sliced and encoded: [(the item's output, the compressed file)], with the
+    grid and the codec's errors at the grid's nodes (and with ``verify`` the whole-surface
+    distance) in ``row``."""
     import numpy as np
 
     from mzc.codecs import get_codec
@@ -140,7 +141,7 @@ def encode_item(job, item, data, row, timings):
     if job.verify:
         with timings.stage("verify"), about(source, "measuring the decoded surface"):
             row.update(surface_distances(surface, grid, decoded))
-    return output
+    return [(item.output, output)]
 
 
 def surface_distances(surface, grid, decoded):
@@ -158,10 +159,10 @@ def surface_distances(surface, grid, decoded):
 
 
 def decode_item(job, item, data, row, timings):
-    """An mzc file's bytes decoded, densified when asked and triangulated: the mesh file's bytes."""
+    """An mzc file's bytes decoded, densified when asked and triangulated: [(the item's output,
+    the mesh file)]; or, for a raster format, the raster's files (``mzc.rasters.raster_files``)."""
+    from mzc import rasters
     from mzc.formats import read_any
-    from mzc.meshes import mesh_to_bytes
-    from mzc.ops.triangulation import grid_to_mesh
 
     settings, source = job.settings, item.source
     with timings.stage("decode"), about(source, "decoding it"):
@@ -173,16 +174,23 @@ def decode_item(job, item, data, row, timings):
         with timings.stage("densify"), about(source, f"densifying it ({settings['method']}, "
                                                      f"n = {settings['densify']})"):
             grid = densify_grid(grid, settings["densify"], settings["method"], jump_angle=settings["jump_angle"])
+    if settings["format"] in rasters.FORMATS:
+        with timings.stage("raster"), about(source, f"writing it as {settings['format']}"):
+            return rasters.raster_files(item.output, grid, settings["format"])
+    from mzc.meshes import mesh_to_bytes
+    from mzc.ops.triangulation import grid_to_mesh
+
     with timings.stage("triangulate"), about(source, "triangulating it"):
-        return mesh_to_bytes(grid_to_mesh(grid, settings["jump_angle"]), settings["format"])
+        return [(item.output, mesh_to_bytes(grid_to_mesh(grid, settings["jump_angle"]), settings["format"]))]
 
 
-def write_item(job, item, output):
-    """Write an item's output under the destination (atomically, folders made as needed)."""
-
-    path = os.path.join(job.dest, item.output)
-    try:
-        os.makedirs(os.path.dirname(path), exist_ok=True)
-    except OSError as error:
-        raise MzcError(f"cannot make the folder: {error.strerror or error}", source=os.path.dirname(path)) from None
-    write_output(path, output)
+def write_files(job, files):
+    """Write an item's [(name, bytes)] under the destination, atomically (none of them on a
+    failure), folders made as needed."""
+    paths = [os.path.join(job.dest, name) for name, _data in files]
+    for folder in dict.fromkeys(os.path.dirname(path) for path in paths):
+        try:
+            os.makedirs(folder, exist_ok=True)
+        except OSError as error:
+            raise MzcError(f"cannot make the folder: {error.strerror or error}", source=folder) from None
+    write_outputs(*[(path, data) for path, (_name, data) in zip(paths, files)])

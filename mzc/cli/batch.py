@@ -2,6 +2,7 @@
 
 import click
 
+from mzc.cli.decode import RASTER_FORMATS
 from mzc.cli.densify import DEFAULT_METHOD, METHODS
 from mzc.cli.options import jump_angle_option, with_options
 from mzc.cli.triangulate import FORMATS
@@ -77,21 +78,24 @@ Hausdorff, as 'mzc diff --surface').
   mzc batch encode @todo.txt -o archive/ --dwt2d --max-error 0.1 --scheduler tcp://head:8786"""
 
 
-@click.command("decode", help=f"""Decode every mzc file of SOURCES into a mesh in DEST.
+@click.command("decode", help=f"""Decode every mzc file of SOURCES into a mesh or raster in DEST.
 
 Each file is decoded, densified with -n/--densify N rows between planes when asked (as 'mzc
-densify'), and triangulated (as 'mzc triangulate') into --format.
+densify'), and triangulated (as 'mzc triangulate') into --format; with --format tif or asc,
+written as a GeoTIFF or an ESRI ASCII grid (its CRS in a .prj beside it) instead, as 'mzc
+decode --format' writes the grids of rasters.
 
 {SOURCES_HELP}
 
 \b
-  mzc batch decode archive/ -o meshes/ --densify 3 --format ply""")
+  mzc batch decode archive/ -o meshes/ --densify 3 --format ply
+  mzc batch decode dems.mzw2/ -o dems/ --format tif""")
 @click.option("-n", "--densify", type=click.IntRange(0, MAX_INSERTED), default=0, show_default=True, metavar="N",
               help="Rows to insert between each pair of rows (mzc densify -n).")
 @click.option("--method", type=click.Choice(METHODS), default=DEFAULT_METHOD,
               show_default=True, help="How densify fills the inserted rows.")
-@click.option("--format", "file_format", type=click.Choice(FORMATS), default="ply", show_default=True,
-              help="Mesh format of the outputs.")
+@click.option("--format", "file_format", type=click.Choice([*FORMATS, *RASTER_FORMATS]), default="ply",
+              show_default=True, help="Mesh format of the outputs, or tif or asc: rasters.")
 @jump_angle_option
 def decode(densify, method, file_format, jump_angle, sources, dest, scheduler, workers, chunk_size):
     from mzc.api import batch_decode

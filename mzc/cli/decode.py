@@ -6,7 +6,8 @@ import click
 from mzc.cli.options import input_argument, output_option, read_grid, write_grid, zgrid_body, zgrid_output_options
 
 LEGACY_KINDS = ("poly", "dft", "dct", "dwt")
-FORMATS = ("zg", "tif", "asc")
+RASTER_FORMATS = ("tif", "asc")   # mzc.rasters.FORMATS, spelled here so that --help imports no numpy
+FORMATS = ("zg", *RASTER_FORMATS)
 
 
 @click.command(help="""Decompress an mzc file into a z-grid.

@@ -219,21 +219,28 @@ def holds(sample, values):
 
 
 def write_raster(path, grid, file_format, float32=False):
-    """Write ``grid`` as a ``tif`` or ``asc`` raster to ``path`` (or stdout), atomically; an ESRI
-    grid with a CRS gets its ``.prj`` beside it (not on stdout)."""
-    from mzc.streams import is_stdio, write_outputs
+    """Write ``grid`` as a ``tif`` or ``asc`` raster to ``path`` (or stdout), atomically with its
+    ``.prj`` when it has one (``raster_files``)."""
+    from mzc.streams import write_outputs
+
+    write_outputs(*raster_files(path, grid, file_format, float32))
+
+
+def raster_files(path, grid, file_format, float32=False):
+    """[(path, bytes)] of ``grid`` as a ``tif`` or ``asc`` raster at ``path``: the raster, then an
+    ESRI grid's ``.prj`` beside it when the grid has a CRS (not on stdout; a GeoTIFF holds its own)."""
+    from mzc.streams import is_stdio
 
     check_writable(grid)
     if file_format == "tif":
         from mzc.rasters import geotiff
 
-        write_outputs((path, geotiff.write(grid, float32)))
-        return
+        return [(path, geotiff.write(grid, float32))]
     from mzc.rasters import asc
 
     if float32:
         raise MzcError("an ESRI ASCII grid is text: float32 is for GeoTIFF samples", field="float32")
-    outputs = [(path, asc.write(grid))]
+    files = [(path, asc.write(grid))]
     if grid.crs is not None and not is_stdio(path):
-        outputs.append((os.path.splitext(os.fspath(path))[0] + ".prj", (grid.crs + "\n").encode("utf-8")))
-    write_outputs(*outputs)
+        files.append((os.path.splitext(os.fspath(path))[0] + ".prj", (grid.crs + "\n").encode("utf-8")))
+    return files
