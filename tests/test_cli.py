@@ -23,6 +23,15 @@ def test_help_lists_every_command_without_importing_numerics():
     assert not imported & {"numpy", "scipy", "meshio", "matplotlib", "pywt"}
 
 
+def test_the_formats_the_options_offer_are_the_ones_mzc_writes():
+    from mzc import rasters
+    from mzc.cli.decode import RASTER_FORMATS
+    from mzc.cli.triangulate import FORMATS
+    from mzc.meshes import registry
+
+    assert (RASTER_FORMATS, FORMATS) == (rasters.FORMATS, registry.writable())
+
+
 def test_version(mzc):
     assert mzc("--version", check=True).stdout.decode().startswith("mzc, version ")
 
