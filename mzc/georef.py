@@ -4,7 +4,8 @@ A grid read from a raster keeps the raster's CRS as one line of WKT (spec/zgrid.
 Most of mzc needs one thing from it: whether x and y are lengths in the unit of the heights
 (a projected CRS: metres east and north) or angles (a geographic CRS: longitude and latitude
 in degrees, the heights in metres). That is read from the WKT's own keywords, so no CRS
-library is loaded to encode, densify or triangulate a grid.
+library is loaded to encode, densify or triangulate a grid (only a cloud's EPSG code is
+spelled out as WKT by one, ``grid_crs``).
 
 A geographic grid is never measured as if degrees were metres. The operations that need
 lengths either refuse it (``check_lengths``: the rate control of ``--rmse`` and ``--size``,
@@ -53,6 +54,34 @@ def crs_kind(wkt):
         return "geographic" if keyword != "GEOCCS" and re.search(r"\bCS\s*\[\s*ellipsoidal", rest, re.I) \
             else "geocentric"
     return kind
+
+
+def grid_crs(crs):
+    """The ``crs`` line of a planar grid sliced from a cloud with ``crs`` (``Mesh.crs``): WKT as it
+    is; an ``EPSG:code`` (a LAS file's GeoTIFF keys) spelled out as WKT from GDAL's database
+    through rasterio (the ``geo`` extra), or None with a warning that the CRS is not kept when
+    rasterio is missing or does not know the code; None for no CRS."""
+    if crs is None or crs_kind(crs) != "unknown":
+        return crs
+    if not re.fullmatch(r"EPSG:[0-9]+", crs):
+        return None
+    import warnings
+
+    from mzc.errors import MzcWarning
+
+    try:
+        from rasterio.crs import CRS
+        from rasterio.errors import CRSError
+    except ImportError:
+        warnings.warn(MzcWarning(f"the cloud's CRS ({crs}) is not kept in the grid: spelling it out as WKT needs "
+                                 "rasterio (pip install 'mzc[geo]')"), stacklevel=2)
+        return None
+    try:
+        return CRS.from_epsg(int(crs[5:])).to_wkt()
+    except CRSError:
+        warnings.warn(MzcWarning(f"the cloud's CRS ({crs}) is not kept in the grid: GDAL does not know the code"),
+                      stacklevel=2)
+        return None
 
 
 def is_geographic(grid):

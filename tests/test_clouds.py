@@ -12,7 +12,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from mzc.api import read as mzc_read
-from mzc.errors import MzcError
+from mzc.errors import MzcError, MzcWarning
 from mzc.meshes import Mesh, mesh_from_bytes, read_mesh
 from mzc.meshes.pcd import LZF_MAX_EXPANSION
 from mzc.ops import binning
@@ -318,7 +318,21 @@ def test_a_planar_grid_keeps_the_clouds_wkt_crs_through_its_file(tmp_path):
     grid = mzc.slice(mesh, projection="planar")
     mzc.write(tmp_path / "g.zg", grid)
     assert grid.crs == mesh.crs and mzc.read(tmp_path / "g.zg").crs == mesh.crs
-    assert mzc.slice(read_mesh(PUBLIC / "autzen_geo_proj.las")).crs is None   # EPSG:2994 is no WKT
+
+
+def test_a_clouds_epsg_code_is_spelled_out_as_wkt_in_the_grid(tmp_path, monkeypatch):
+    import mzc
+
+    rasterio = pytest.importorskip("rasterio")
+    mesh = read_mesh(PUBLIC / "autzen_geo_proj.las")   # EPSG:2994 in its GeoTIFF keys
+    grid = mzc.slice(mesh, projection="planar")
+    assert grid.crs.startswith('PROJCS["NAD83(HARN) / Oregon GIC Lambert (ft)"')
+    mzc.write(tmp_path / "g.tif", grid)
+    with rasterio.open(tmp_path / "g.tif") as dataset:
+        assert dataset.crs.to_epsg() == 2994
+    monkeypatch.setitem(sys.modules, "rasterio.crs", None)   # as without the geo extra
+    with pytest.warns(MzcWarning, match=r"CRS \(EPSG:2994\) is not kept in the grid: .*mzc\[geo\]"):
+        assert mzc.slice(mesh, projection="planar").crs is None
 
 
 GEOGRAPHIC_WKT = ('GEOGCS["WGS 84",DATUM["WGS_1984",SPHEROID["WGS 84",6378137,298.257223563]],'

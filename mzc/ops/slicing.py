@@ -11,6 +11,7 @@ Its value is the exact outermost intersection of that line with the surface
 import numpy as np
 
 from mzc.errors import MzcError
+from mzc.georef import grid_crs
 from mzc.grid import ZGrid
 from mzc.limits import MAX_DIMENSION, check_grid_size, length_problem
 from mzc.ops.raster import rasterize
@@ -108,7 +109,7 @@ def slice_surface(surface, d1=None, d2=None, rows=None, cols=None, align="none",
     (across u), else from the data (``spacings``); ``thesis_grid``: 72 rows, as the
     thesis's ~70 planes, and d2 = d1/10. ``classes`` (ASPRS codes) keeps only the points of
     those classes of a LAS/LAZ cloud (``Mesh.with_classes``); ``cloud`` says how a cloud
-    becomes a surface (``slice_in_frame``). A planar grid keeps the cloud's CRS when it is WKT.
+    becomes a surface (``slice_in_frame``). A planar grid keeps the cloud's CRS (``grid_crs``).
     Warns (MzcWarning) when the grid's lines meet less than SEEN_WARNING of the area well.
     """
     from mzc.limits import check_magnitude
@@ -127,8 +128,9 @@ def slice_surface(surface, d1=None, d2=None, rows=None, cols=None, align="none",
                           thesis_grid=thesis_grid, cloud=cloud)
     if np.isnan(grid.z).all():
         raise MzcError("no grid node meets the surface (seen edge-on? try --view or --align pca)")
-    if grid.projection == "planar" and is_wkt(getattr(mesh, "crs", None)):
-        grid = grid.with_z(grid.z, crs=mesh.crs)   # the transform maps the grid to the cloud's frame, the CRS's
+    crs = grid_crs(getattr(mesh, "crs", None)) if grid.projection == "planar" else None
+    if crs is not None:
+        grid = grid.with_z(grid.z, crs=crs)   # the transform maps the grid to the cloud's frame, the CRS's
     if chosen.seen is not None and chosen.seen < SEEN_WARNING:
         import warnings
 
@@ -149,14 +151,6 @@ def raster_as_sliced(grid, units, **given):
         raise MzcError("a raster is sliced as its own grid, node for node, so this option does not apply: "
                        "resample the raster first (gdalwarp -tr, -t_srs)", field=refused)
     return grid if units is None else grid.with_z(grid.z, units=units)
-
-
-def is_wkt(crs):
-    """True for a CRS given as WKT (a LAS file's WKT record), which a grid's ``crs`` line holds;
-    not for an ``EPSG:code`` (GeoTIFF keys), which would need a CRS library to spell out."""
-    from mzc.georef import crs_kind
-
-    return crs is not None and crs_kind(crs) != "unknown"
 
 
 def slice_in_frame(mesh, rotation, shift, d1=None, d2=None, rows=None, cols=None, units=None,
