@@ -25,7 +25,7 @@ def test_help_lists_every_command_without_importing_numerics():
 
 def test_the_formats_the_options_offer_are_the_ones_mzc_writes():
     from mzc import rasters
-    from mzc.cli.decode import RASTER_FORMATS
+    from mzc.cli.options import RASTER_FORMATS
     from mzc.cli.triangulate import FORMATS
     from mzc.meshes import registry
 

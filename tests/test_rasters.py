@@ -418,6 +418,32 @@ def test_a_raster_needs_a_planar_grid_in_its_own_frame(tmp_path):
         mzc.write(tmp_path / "x.asc", turned)
 
 
+def test_slice_and_densify_write_rasters_as_mzc_write_does(tmp_path):
+    from conftest import run_mzc
+
+    pytest.importorskip("laspy")
+    survey, dem = PUBLIC / "autzen_geo_proj.las", tmp_path / "dem.tif"
+    assert run_mzc("slice", survey, "-o", dem).returncode == 0   # a LAS survey gridded to a GeoTIFF DEM
+    mzc.write(tmp_path / "want.tif", mzc.slice(survey))
+    assert_same_raster(dem, tmp_path / "want.tif")
+    assert original(dem)[3] == CRS.from_epsg(2994)
+    sliced = run_mzc("slice", PUBLIC / "west_bijou_escarpment_snippet.asc", check=True).stdout
+    assert run_mzc("densify", "-n", "1", "--format", "asc", "-o", tmp_path / "fine.asc", input=sliced).returncode == 0
+    mzc.write(tmp_path / "want.asc", mzc.densify(mzc.read(PUBLIC / "west_bijou_escarpment_snippet.asc"), 1))
+    for name in ("fine.asc", "fine.prj"):
+        assert (tmp_path / name).read_bytes() == (tmp_path / name.replace("fine", "want")).read_bytes()
+    central = run_mzc("slice", mzc_sample_path(tmp_path), "-o", tmp_path / "blob.tif")
+    assert central.returncode == 1 and b"a raster holds planar grids" in central.stderr
+    assert not (tmp_path / "blob.tif").exists()
+
+
+def mzc_sample_path(folder):
+    """The blob sample (a closed surface, sliced spherical) as a file."""
+    path = folder / "blob.ply"
+    mzc.write(path, mzc.sample("blob"))
+    return path
+
+
 def test_decode_refuses_text_options_with_a_raster_output(mzc):
     result = mzc("decode", "--format", "asc", "--plain", input=zgrid.write(mzc_grid()))
     assert result.returncode == 2 and b"--format asc writes a raster" in result.stderr

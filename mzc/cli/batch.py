@@ -2,9 +2,8 @@
 
 import click
 
-from mzc.cli.decode import RASTER_FORMATS
 from mzc.cli.densify import DEFAULT_METHOD, METHODS
-from mzc.cli.options import jump_angle_option, with_options
+from mzc.cli.options import RASTER_FORMATS, jump_angle_option, with_options
 from mzc.cli.triangulate import FORMATS
 from mzc.limits import MAX_INSERTED
 

@@ -48,9 +48,46 @@ def with_options(options, command):
     return command
 
 
-def zgrid_output_options(command):
-    """``command`` with --plain, --float32 and --precision, how it writes its z-grid's body."""
-    return plain_option(float32_option(precision_option(command)))
+RASTER_FORMATS = ("tif", "asc")   # mzc.rasters.FORMATS, spelled here so that --help imports no numpy
+format_option = click.option("--format", "file_format", type=click.Choice(("zg", *RASTER_FORMATS)),
+                             help="Output format: zg (z-grid), tif (GeoTIFF) or asc (ESRI ASCII grid) "
+                                  "[default: from the -o extension, else zg].")
+RASTER_OUTPUT_HELP = """--format tif or asc (or an -o name ending in .tif, .tiff or .asc) writes a planar grid
+as a GeoTIFF or an ESRI ASCII grid instead (an ESRI grid's CRS in a .prj beside it), with
+the georeferencing and no-data value of the raster it was read from, if any; the GeoTIFF's
+samples keep the raster's type when it holds every value exactly, else float64 (--float32
+for float32)."""
+
+
+def grid_output_options(command):
+    """``command`` with --format, --plain, --float32 and --precision: how it writes its grid."""
+    return format_option(plain_option(float32_option(precision_option(command))))
+
+
+def grid_writer(output, file_format, plain, float32, precision):
+    """The function that writes a command's grid to ``output`` as its options say, the options
+    checked now, before any work: a raster (--format tif|asc, or an -o name that ends so) or a
+    z-grid with the body the body options give (``zgrid_body``)."""
+    from functools import partial
+
+    from mzc.rasters import format_for
+
+    raster = format_for(output) if file_format is None else None if file_format == "zg" else file_format
+    if not raster:
+        return partial(write_grid, path=output, body=zgrid_body(plain, float32, precision))
+    if plain or precision is not None:
+        raise click.UsageError(f"--plain and --precision shape a z-grid's body; --format {raster} writes a raster")
+    return partial(write_raster_output, output=output, raster=raster, float32=float32)
+
+
+def write_raster_output(grid, output, raster, float32):
+    """Write ``grid`` as a ``raster``; a GeoTIFF is binary, so not on a terminal."""
+    from mzc.rasters import write_raster
+    from mzc.streams import is_terminal
+
+    if raster == "tif" and is_terminal(output):
+        raise MzcError("a GeoTIFF is not written to a terminal: redirect it or give -o FILE", field="format")
+    write_raster(output, grid, raster, float32=float32)
 
 
 def zgrid_body(plain, float32, precision=None):

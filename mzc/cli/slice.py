@@ -2,7 +2,14 @@
 
 import click
 
-from mzc.cli.options import input_argument, output_option, with_options, write_grid, zgrid_body, zgrid_output_options
+from mzc.cli.options import (
+    RASTER_OUTPUT_HELP,
+    grid_output_options,
+    grid_writer,
+    input_argument,
+    output_option,
+    with_options,
+)
 
 
 def one_word(value):
@@ -79,27 +86,28 @@ def check_slice_options(d1, d2, rows, cols):
         raise click.UsageError("--d2 and --cols both set the columns: give one")
 
 
-@click.command("slice")
+@click.command("slice", help=f"""Cut a mesh (OBJ, PLY, VTK, STL, OFF) or point cloud (LAS/LAZ, PCD, x y z text,
+vertex-only PLY) into a z-grid: each node holds the outermost hit of its line with the
+surface (the front-most height of planar grids, the farthest distance along a central ray).
+
+A raster (GeoTIFF, ESRI ASCII grid) is its own z-grid: read node for node with its
+no-data cells, georeferencing and CRS; the options that would cut it otherwise are
+refused.
+
+{RASTER_OUTPUT_HELP}""")
 @input_argument
 @output_option
 @slice_options
-@zgrid_output_options
+@grid_output_options
 def command(input, output, d1, d2, rows, cols, thesis_grid, align, projection, view, center, axis, units,
-            classes, cloud, plain, float32, precision):
-    """Cut a mesh (OBJ, PLY, VTK, STL, OFF) or point cloud (LAS/LAZ, PCD, x y z text,
-    vertex-only PLY) into a z-grid: each node holds the outermost hit of its line with the
-    surface (the front-most height of planar grids, the farthest distance along a central ray).
-
-    A raster (GeoTIFF, ESRI ASCII grid) is its own z-grid: read node for node with its
-    no-data cells, georeferencing and CRS; the options that would cut it otherwise are
-    refused."""
+            classes, cloud, file_format, plain, float32, precision):
     from mzc.api import slice as slice_surface
     from mzc.errors import about
     from mzc.rasters import raster_or_mesh
     from mzc.streams import check_not_input, display_name, read_input
 
     check_slice_options(d1, d2, rows, cols)
-    body = zgrid_body(plain, float32, precision)
+    write = grid_writer(output, file_format, plain, float32, precision)
     check_not_input(output, input)
     data, source = read_input(input), display_name(input)
     surface = raster_or_mesh(data, source, input)
@@ -107,4 +115,4 @@ def command(input, output, d1, d2, rows, cols, thesis_grid, align, projection, v
         grid = slice_surface(surface, d1=d1, d2=d2, rows=rows, cols=cols, align=align, units=units,
                              projection=projection, center=center, axis=axis, view=view,
                              thesis_grid=thesis_grid, classes=classes, cloud=cloud)
-    write_grid(grid, output, body)
+    write(grid)
