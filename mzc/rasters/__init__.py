@@ -174,8 +174,8 @@ def nodata_token(value):
 def check_writable(grid):
     """Refuse a grid that no raster holds: a raster is a planar grid in its CRS's own frame."""
     if grid.projection != "planar":
-        raise MzcError(f"a raster holds planar grids; this one is {grid.projection}: triangulate it instead",
-                       field="projection")
+        raise MzcError(f"a raster holds planar grids; this one is {grid.projection}: triangulate it, or slice "
+                       "with --projection planar", field="projection")
     if not np.array_equal(grid.transform, IDENTITY_TRANSFORM):
         raise MzcError("the grid's frame is turned or shifted from its input's (a transform): a raster holds "
                        "grids in the input's own frame (slice the surface with --align none)", field="transform")
