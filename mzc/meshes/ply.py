@@ -104,7 +104,8 @@ def truncated(element, held, source, line=None):
 
 
 def parse_ply_header(data, source):
-    """Parse the PLY header into elements; return them, the body format, body bytes and line.
+    """Parse the PLY header into elements; return them, the body format, a view of the body's
+    bytes and its first line.
 
     The line end of the ``ply`` line (``\\n``, ``\\r\\n`` or ``\\r``) is the header's: a
     binary body may start with either byte, so ``end_header`` must end the same way.
@@ -135,7 +136,7 @@ def parse_ply_header(data, source):
     empty = next((element for element in elements if element.count and not element.properties), None)
     if empty is not None:
         raise MzcError(f"element {empty.name} declares {empty.count} records but no properties", source=source)
-    return elements, body_format, data[match.end():], len(header_lines) + 2
+    return elements, body_format, memoryview(data)[match.end():], len(header_lines) + 2   # no copy of the body
 
 
 def ply_property(words, element, source, line):
@@ -157,7 +158,7 @@ def ply_property(words, element, source, line):
 def read_ply_ascii(elements, body, first_line, source):
     """{element: {property: values}} of an ascii PLY body: one record per line, blank lines
     skipped, every record holding exactly its properties and the body nothing more."""
-    numbered = enumerate(decode_text(body, source).splitlines(), first_line)
+    numbered = enumerate(decode_text(bytes(body), source).splitlines(), first_line)
     rows = [(number, words) for number, words in ((number, line.split()) for number, line in numbered) if words]
     end_line = rows[-1][0] + 1 if rows else first_line
     tables, start = {}, 0
