@@ -64,6 +64,11 @@ def display_name(path):
     return STDIN_NAME if is_stdio(path) else str(path)
 
 
+def output_name(path):
+    """The name used for the output ``path`` in error messages."""
+    return STDOUT_NAME if is_stdio(path) else str(path)
+
+
 def read_input(path):
     """Return the bytes of ``path``, or of stdin when ``path`` is ``-`` or None."""
     if is_stdio(path):

@@ -433,7 +433,7 @@ def test_slice_and_densify_write_rasters_as_mzc_write_does(tmp_path):
     for name in ("fine.asc", "fine.prj"):
         assert (tmp_path / name).read_bytes() == (tmp_path / name.replace("fine", "want")).read_bytes()
     central = run_mzc("slice", mzc_sample_path(tmp_path), "-o", tmp_path / "blob.tif")
-    assert central.returncode == 1 and b"a raster holds planar grids" in central.stderr
+    assert central.returncode == 1 and b"blob.tif: projection: a raster holds planar grids" in central.stderr
     assert not (tmp_path / "blob.tif").exists()
 
 

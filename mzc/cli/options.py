@@ -81,13 +81,15 @@ def grid_writer(output, file_format, plain, float32, precision):
 
 
 def write_raster_output(grid, output, raster, float32):
-    """Write ``grid`` as a ``raster``; a GeoTIFF is binary, so not on a terminal."""
+    """Write ``grid`` as a ``raster``, a refusal naming the output; a GeoTIFF is binary, so not
+    on a terminal."""
     from mzc.rasters import write_raster
-    from mzc.streams import is_terminal
+    from mzc.streams import is_terminal, output_name
 
     if raster == "tif" and is_terminal(output):
         raise MzcError("a GeoTIFF is not written to a terminal: redirect it or give -o FILE", field="format")
-    write_raster(output, grid, raster, float32=float32)
+    with about(output_name(output), f"writing it as {raster}"):
+        write_raster(output, grid, raster, float32=float32)
 
 
 def zgrid_body(plain, float32, precision=None):
