@@ -435,6 +435,17 @@ def test_a_dense_cloud_is_binned_automatically_and_agrees_with_delaunay():
     assert np.sqrt(np.mean(difference ** 2)) < 0.01 * np.ptp(cloud.points[:, 2])
 
 
+def test_a_cloud_dense_enough_for_the_narrowest_window_is_binned_with_it():
+    from mzc.ops.slicing import cloud_window
+
+    cloud = terrain_cloud(BIN_POINTS + 20000)   # 120,000 points over 100 x 100: 12 a node at d = 1
+    low, shape = cloud[:, :2].min(axis=0), (101, 101)
+    assert binning.window_radius(12.0) == 0
+    assert cloud_window(cloud, low, 1.0, 1.0, shape, "auto") == 0
+    assert cloud_window(cloud, low, 1.0, 1.0, shape, "bin") == 0
+    assert cloud_window(cloud, low, 0.05, 0.05, (2001, 2001), "bin") == binning.MAX_RADIUS   # sparse: the widest
+
+
 def test_auto_keeps_delaunay_for_small_and_for_sparse_clouds(monkeypatch):
     calls = []
     monkeypatch.setattr(binning, "binned_values", lambda *a, **k: calls.append(1))

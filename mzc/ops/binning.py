@@ -83,7 +83,9 @@ def binned_values(nodes, low, d1, d2, shape, radius=None):
     surround it. ``radius`` r defaults to ``window_radius`` of the cloud's density."""
     row, col, du, dv, value = node_bins(nodes, low, d1, d2, shape)
     if radius is None:
-        radius = window_radius(density(row, col, shape)) or MAX_RADIUS
+        radius = window_radius(density(row, col, shape))
+    if radius is None:   # even the widest window is sparse (0 is a radius: a dense cloud)
+        radius = MAX_RADIUS
     flat = row * shape[1] + col
     front = np.full(shape[0] * shape[1], -np.inf)
     np.maximum.at(front, flat, value)

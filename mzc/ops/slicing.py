@@ -128,7 +128,7 @@ def slice_surface(surface, d1=None, d2=None, rows=None, cols=None, align="none",
                           thesis_grid=thesis_grid, cloud=cloud)
     if np.isnan(grid.z).all():
         raise MzcError("no grid node meets the surface (seen edge-on? try --view or --align pca)")
-    crs = grid_crs(getattr(mesh, "crs", None)) if grid.projection == "planar" else None
+    crs = grid_crs(mesh.crs) if grid.projection == "planar" else None
     if crs is not None:
         grid = grid.with_z(grid.z, crs=crs)   # the transform maps the grid to the cloud's frame, the CRS's
     if chosen.seen is not None and chosen.seen < SEEN_WARNING:
@@ -218,7 +218,7 @@ def cloud_window(nodes, low, d1, d2, shape, cloud):
 
     row, col, *_ = node_bins(nodes, low, d1, d2, shape)
     radius = window_radius(density(row, col, shape))
-    return radius or (MAX_RADIUS if cloud == "bin" else None)
+    return MAX_RADIUS if radius is None and cloud == "bin" else radius   # 0 is a radius: a dense cloud
 
 
 def spacings(d1, d2, lattice, local, triangles, thesis_grid, binned_uv=None):
