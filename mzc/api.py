@@ -23,7 +23,6 @@ if TYPE_CHECKING:
 
 PathLike = str | os.PathLike
 BYTES_SOURCE = "<bytes>"
-RASTERS = ("tif", "tiff", "asc")   # a ZGrid written to a name with this extension is written as a raster
 
 
 def as_mesh(surface: Any) -> Mesh:
@@ -195,21 +194,24 @@ def write(path: PathLike, item: ZGrid | Mesh | bytes, file_format: str | None = 
     path = os.fspath(path)
     if isinstance(item, (bytes, bytearray)):
         write_output(path, bytes(item))
-    elif isinstance(item, ZGrid) and (file_format or os.path.splitext(path)[1].lower().lstrip(".")) in RASTERS:
-        from mzc.rasters import format_for, write_raster
-
-        write_raster(path, item, format_for(path, file_format), float32=float32)
-    elif isinstance(item, ZGrid):
-        from mzc.formats import zgrid
-
-        if plain and float32:
-            raise MzcError("float32 is a raw body and plain a text one: give one", field="float32")
-        raw = None if plain else "float32" if float32 else "float64"
-        write_output(path, zgrid.write(item, precision=precision, raw=raw))
-    else:
+        return
+    if not isinstance(item, ZGrid):
         from mzc.meshes import write_mesh
 
         write_mesh(path, as_mesh(item), file_format)
+        return
+    from mzc.rasters import format_for, write_raster
+
+    raster = format_for(path, file_format)
+    if raster:
+        write_raster(path, item, raster, float32=float32)
+        return
+    from mzc.formats import zgrid
+
+    if plain and float32:
+        raise MzcError("float32 is a raw body and plain a text one: give one", field="float32")
+    raw = None if plain else "float32" if float32 else "float64"
+    write_output(path, zgrid.write(item, precision=precision, raw=raw))
 
 
 def batch_encode(sources: Any, dest: PathLike, codec: str = "dwt2d", *, slice_options: dict[str, Any] | None = None,

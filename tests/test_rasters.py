@@ -408,6 +408,17 @@ def test_units_and_the_default_options_apply_to_a_raster(mzc):
     assert result.returncode == 0 and b"\nunits m\n" in result.stdout
 
 
+@pytest.mark.parametrize("name, file_format, written", [
+    ("a.bin", "tiff", "tif"), ("a.bin", "TIF", "tif"), ("a.bin", "asc", "asc"), ("A.TIFF", None, "tif"),
+    ("a.asc", "zg", "zg"),
+])
+def test_write_picks_the_raster_format_by_name_in_any_spelling(tmp_path, name, file_format, written):
+    mzc.write(tmp_path / name, mzc_grid(), file_format=file_format)
+    data = (tmp_path / name).read_bytes()
+    assert {"tif": data[:4] in (b"II*\0", b"MM\0*"), "asc": data.startswith(b"ncols"),
+            "zg": data.startswith(b"mzc-zgrid")}[written]
+
+
 def test_a_raster_needs_a_planar_grid_in_its_own_frame(tmp_path):
     sphere = mzc.slice(mzc.sample("blob"))
     with pytest.raises(MzcError, match="planar grids") as error:

@@ -72,7 +72,7 @@ def grid_writer(output, file_format, plain, float32, precision):
 
     from mzc.rasters import format_for
 
-    raster = format_for(output) if file_format is None else None if file_format == "zg" else file_format
+    raster = format_for(output, file_format)
     if not raster:
         return partial(write_grid, path=output, body=zgrid_body(plain, float32, precision))
     if plain or precision is not None:

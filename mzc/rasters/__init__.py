@@ -44,10 +44,10 @@ def sniff(data):
 
 
 def format_for(path, file_format=None):
-    """The raster format named by ``file_format`` or by ``path``'s extension, or None."""
-    if file_format is not None:
-        return file_format if file_format in FORMATS else None
-    return EXTENSIONS.get(os.path.splitext(str(path or ""))[1].lower())
+    """The raster format (tif or asc) that ``file_format`` names, else ``path``'s extension (any
+    case, .tiff too), or None: a z-grid or a mesh."""
+    extension = "." + file_format if file_format is not None else os.path.splitext(str(path or ""))[1]
+    return EXTENSIONS.get(extension.lower())
 
 
 def read_raster(data, source, path=None):
