@@ -40,6 +40,12 @@ class MzcError(ValueError):
         return f"{where}{field}{self.message}"
 
 
+def first_line(error):
+    """The first line of a library's error message, or the name of its type when it has none."""
+    text = str(error).strip()
+    return text.splitlines()[0] if text else type(error).__name__
+
+
 @contextlib.contextmanager
 def about(source, step):
     """Let an MzcError raised inside name ``source`` (a file name) when it names none: a

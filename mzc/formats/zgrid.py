@@ -36,7 +36,7 @@ OLDEST_MAJOR = 1
 RAW_VERSION = (3, 0)         # 2.0's header with a raw binary body, planar or projected
 GEOREFERENCED_VERSION = (1, 1)       # 1.0 with the crs and raster lines of a grid read from a raster
 RAW_GEOREFERENCED_VERSION = (3, 1)   # 3.0 with them
-GEOREF_SINCE = {1: 1, 3: 1}          # major -> the minor from which the crs and raster lines are read
+GEOREF_SINCE = dict([GEOREFERENCED_VERSION, RAW_GEOREFERENCED_VERSION])   # major -> first minor with crs, raster
 CHECKSUM_SINCE = {RAW_VERSION[0]: 0}   # a raw body is never read without its crc32 line
 SAMPLES = {"float64": "<f8", "float32": "<f4"}   # the raw line's value -> numpy dtype of the body
 

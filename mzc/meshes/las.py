@@ -14,7 +14,7 @@ import io
 
 import numpy as np
 
-from mzc.errors import MzcError
+from mzc.errors import MzcError, first_line
 from mzc.meshes import Mesh
 
 NAME = "las"
@@ -101,7 +101,7 @@ def reading_errors():
 def las_problem(error, held, declared):
     """One line for a laspy or lazrs error: a missing LAZ backend names the extra that brings
     it; a failure after some points (``held`` of ``declared``) is damaged or truncated data."""
-    text = str(error).strip().splitlines()[0] if str(error).strip() else type(error).__name__
+    text = first_line(error)
     if "LazBackend" in text:
         return MISSING_EXTRA
     if declared is not None:

@@ -18,7 +18,7 @@ from collections.abc import Callable, Iterator
 
 import numpy as np
 
-from mzc.errors import MzcError
+from mzc.errors import MzcError, first_line
 from mzc.meshes import Mesh
 from mzc.meshes.common import fan_triangulate
 
@@ -87,8 +87,7 @@ def read_as(kind: str, data: bytes, source: str) -> Mesh:
                 handle.write(data)
             result = reader(name)
     except Exception as error:  # noqa: BLE001 - meshio raises many types on bad data
-        message = str(error).strip().splitlines()[0] if str(error).strip() else type(error).__name__
-        raise MzcError(f"cannot read as {kind.upper()}: {message}", source=source) from None
+        raise MzcError(f"cannot read as {kind.upper()}: {first_line(error)}", source=source) from None
     return Mesh(xyz_of(result.points), surface_triangles(result.cells))
 
 

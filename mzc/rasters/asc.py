@@ -23,7 +23,7 @@ from mzc.formats.header import format_number
 from mzc.formats.zgrid import format_rows
 from mzc.limits import MAX_DIMENSION, check_grid_size, length_problem
 from mzc.numbers import bad_token, parse_int, to_floats
-from mzc.rasters import Layout, grid_of, layout_of, no_data_marker
+from mzc.rasters import Layout, grid_of, holds, layout_of, no_data_marker
 
 KEYWORDS = ("ncols", "nrows", "xllcorner", "yllcorner", "xllcenter", "yllcenter", "cellsize", "dx", "dy",
             "nodata_value")
@@ -48,7 +48,7 @@ def read(data, source, crs=None):
     values = read_values(body, first_line, rows, cols, source)
     nodata = header.get("nodata_value", (None,))[0]
     invalid = np.isnan(values) if nodata is None else (np.isnan(values) | (values == nodata))
-    sample = "int32" if integral(values[~invalid], nodata) else "float64"
+    sample = "int32" if holds("int32", np.append(values[~invalid], [] if nodata is None else [nodata])) else "float64"
     try:
         return grid_of(values, invalid, layout(header, source), sample, nodata=nodata, crs=crs)
     except MzcError as error:
@@ -157,13 +157,6 @@ def first_bad(body, first_line):
         if index is not None:
             return number, index + 1, tokens[index]
     raise AssertionError("no bad token in a body that failed to convert")
-
-
-def integral(values, nodata):
-    """True when ``values`` and the no-data value are all integers in int32's range."""
-    values = np.append(values, [] if nodata is None else [nodata])
-    info = np.iinfo(np.int32)
-    return bool(np.all((values == np.round(values)) & (values >= info.min) & (values <= info.max)))
 
 
 def write(grid):

@@ -31,10 +31,11 @@ from mzc.grid import ZGrid
 from mzc.limits import MAX_MAGNITUDE
 
 KIND = "dwt2d"
-VERSION = (3, 1)             # every grid; 3.0 (no crc32 line) and 2.0 (planar, periodised transform) are still read
+VERSION = (3, 1)             # every grid not read from a raster; 3.0 (no crc32 line) and 2.0 (planar, periodised
+                             # transform) are still read
 PROJECTED_VERSION = (3, 1)
 GEOREFERENCED_VERSION = (3, 2)   # 3.1 with the crs and raster lines of a grid read from a raster
-GEOREF_SINCE = {3: 2}
+GEOREF_SINCE = dict([GEOREFERENCED_VERSION])   # major -> the first minor with the crs and raster lines
 OLDEST_MAJOR = 2             # 1.x were drafts
 CHECKSUM_SINCE = {3: 1}      # the crc32 line is required from 3.1 on
 CODER = "rans-signs-2"     # 2.0 names it on a required line; in 3.0 the version implies it

@@ -100,7 +100,7 @@ def analyse(x, wavelet, periodic=False):
     if len(x) == 1:   # a constant's low coefficient: the DC gain, sqrt 2
         return x * np.sqrt(2), x[:0]
     cyclic = wraps(periodic, len(x))
-    low, high = np.empty(((len(x) + 1) // 2,) + x.shape[1:]), np.empty((len(x) // 2,) + x.shape[1:])
+    low, high = (np.empty((length,) + x.shape[1:]) for length in split_lengths(len(x)))
     for part in strips(x.shape):
         even, odd = x[0::2][part].copy(), x[1::2][part].copy()
         lift(even, odd, steps, cyclic, +1)

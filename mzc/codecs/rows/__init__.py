@@ -40,7 +40,7 @@ MAX_PRECISION = 17
 VERSION = (1, 1)             # every row codec: planar grids (1.0 without the crc32 line)
 PROJECTED_VERSION = (2, 1)   # 1.1 with the projection lines (mzc.formats.header)
 GEOREFERENCED_VERSION = (1, 2)   # 1.1 with the crs and raster lines of a grid read from a raster
-GEOREF_SINCE = {1: 2}
+GEOREF_SINCE = dict([GEOREFERENCED_VERSION])   # major -> the first minor with the crs and raster lines
 OLDEST_MAJOR = 1
 CHECKSUM_SINCE = {1: 1, 2: 1}   # 1.0 and 2.0 files have no crc32 line; from 1.1 and 2.1 on it is required
 QUALITY = Option("quality", int, 100, 1, 100, metavar="Q",
