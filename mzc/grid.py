@@ -168,11 +168,9 @@ class ZGrid:
         """v of every row (grid-frame y for planar grids)."""
         return self.origin[1] + self.d1 * np.arange(self.z.shape[0])
 
-    def node_points(self, rows: slice = slice(None)) -> np.ndarray:
-        """(rows, cols, 3) grid-frame coordinates of every node (NaN where invalid), or of the
-        nodes of the ``rows`` slice only (the same values)."""
-        return projections.to_points(self.projection, self.radius, self.xs()[None, :], self.ys()[rows][:, None],
-                                     self.z[rows])
+    def node_points(self) -> np.ndarray:
+        """(rows, cols, 3) grid-frame coordinates of every node (NaN where invalid)."""
+        return projections.to_points(self.projection, self.radius, self.xs()[None, :], self.ys()[:, None], self.z)
 
     def to_input_frame(self, points: np.ndarray) -> np.ndarray:
         """Map (..., 3) grid-frame points to the input surface's frame."""

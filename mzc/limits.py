@@ -19,6 +19,7 @@ MAX_LENGTH = 1e50             # spacings and radii within 1/MAX_LENGTH..MAX_LENG
 MAX_INSERTED = 20             # densify's n: rows 21 times denser (a biharmonic -n 50 took 78 s on a thesis grid)
 MAX_ITERATIONS = 100_000      # sweeps of the thesis's Jacobi densify (100 by default)
 MAX_SAMPLES = 2_000_000       # diff --surface samples per surface (10^7 ran out of 8 GB)
+MAX_FIELD_VALUES = 1_000_000  # values of one PCD field a point (COUNT; descriptors hold a few hundred)
 
 
 def check_grid_size(rows: int, cols: int, advice: str = "", **where) -> None:

@@ -58,7 +58,7 @@ def split_magic(data, source):
     return kind, int(version[1]), int(version[2])
 
 
-def file_version(grid, planar, projected, georeferenced=None):
+def file_version(grid, planar, projected, georeferenced):
     """The version a format writes ``grid`` with: its ``planar`` one, its ``projected`` one, or
     its ``georeferenced`` one for a planar grid with a CRS or raster layout."""
     if grid.projection != "planar":
@@ -267,6 +267,7 @@ def read_grid_fields(header):
         if (np.abs(rotation.T @ rotation - np.eye(3)).max() > RIGID_TOLERANCE
                 or np.linalg.det(rotation) < 0):
             raise header.error("transform", "the 3x3 part is not a rotation (orthonormal, det +1)")
+    projected = read_projection(header, rows, cols)
     fields = dict(
         d1=header.length("d1"),
         d2=header.length("d2"),
@@ -274,8 +275,8 @@ def read_grid_fields(header):
         transform=transform,
         units=header.word("units", required=False),
         nodata=header.word("nodata", required=False, default="nan"),
-        **read_projection(header, rows, cols),
-        **read_georeference(header),
+        **projected,
+        **read_georeference(header, projected.get("projection", "planar")),
     )
     for name in ("units", "nodata"):
         try:
@@ -308,9 +309,9 @@ def read_projection(header, rows, cols):
     return {"projection": projection, "radius": radius}
 
 
-def read_georeference(header):
+def read_georeference(header, projection):
     """``crs`` (one line of WKT) and ``raster`` (cells, row order, sample type) of a version that
-    reads them; they belong to planar grids."""
+    reads them; they belong to planar grids (``projection``, as ``read_projection`` read it)."""
     if not header.georeferenced:
         return {}
     fields = {}
@@ -325,7 +326,6 @@ def read_georeference(header):
             fields["raster"] = Raster(*header.tokens("raster", 3))
         except MzcError as error:
             raise header.error("raster", error.message) from None
-    projection = header.word("projection", required=False, default="planar")
     if fields and projection != "planar":
         keyword = next(iter(fields))
         raise header.error(keyword, f"a {projection} grid has no raster or CRS: they belong to planar grids")

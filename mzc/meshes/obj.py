@@ -59,10 +59,11 @@ class ObjTokens:
     def __init__(self, data):
         text = np.frombuffer(data, dtype=np.uint8)
         line_end = (text == ord("\n")) | ((text == ord("\r")) & (np.r_[text[1:], 0] != ord("\n")))
-        self.physical = np.flatnonzero(line_end)
+        self.physical = newlines = np.flatnonzero(line_end)
         if b"\\\n" in data or b"\\\r" in data:
             line_end, text = joined_lines(text, line_end)
-        self.newlines = newlines = np.flatnonzero(line_end)
+            newlines = np.flatnonzero(line_end)
+        self.newlines = newlines
         if b"#" in data:
             after_hash = last_index(text == ord("#")) > last_index(line_end)
             text = np.where(after_hash, ord(" "), text).astype(np.uint8)

@@ -35,6 +35,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from mzc.errors import MzcError
+from mzc.limits import MAX_FIELD_VALUES
 from mzc.meshes import Mesh
 from mzc.meshes.common import decode_text
 from mzc.numbers import bad_token, is_count, to_floats
@@ -172,8 +173,9 @@ def header_fields(values, problem):
         if dtype is None:
             raise problem("TYPE", f"field {name!r}: type {kind} of size {size} is none of PCD's "
                                   f"(I and U of 1, 2, 4, 8 bytes; F of 4, 8)")
-        if not is_count(count) or not 1 <= int(count) <= 1_000_000:
-            raise problem("COUNT", f"field {name!r}: count {count[:20]!r} is not a whole number from 1 to 1000000")
+        if not is_count(count) or not 1 <= int(count) <= MAX_FIELD_VALUES:
+            raise problem("COUNT", f"field {name!r}: count {count[:20]!r} is not a whole number from 1 to "
+                                   f"{MAX_FIELD_VALUES}")
         if name != PADDING and name in (field.name for field in fields):
             raise problem("FIELDS", f"field {name!r} is given twice")
         fields.append(Field(name, "<" + dtype, int(count)))

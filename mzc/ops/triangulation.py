@@ -157,7 +157,7 @@ def sight_jumps(points, angle=JUMP_ANGLE):
 
 def grid_triangles(valid, periodic=False, jumps=None):
     """Triangles (m, 3) over the flat node indices of a (rows, cols) validity mask: those of
-    ``cell_triangles``, 1-2-3 first."""
+    ``kept_cells``, every 1-2-3 first, then every 2-4-3."""
     kept = kept_cells(valid, periodic, jumps)
     return np.concatenate([corners(kept, which, valid.shape[1], periodic) for which in (0, 1)])
 
