@@ -193,8 +193,10 @@ def slice_in_frame(mesh, rotation, shift, d1=None, d2=None, rows=None, cols=None
         d1, d2 = spacings(d1, d2, lattice, local, triangles, thesis_grid, nodes[:, :2] if binned else None)
     d1, d2, n_rows, n_cols = grid_size(high - low, d1, d2, rows, cols, full_turn, pole_to_pole, thesis_grid)
     xs, ys = low[0] + d2 * np.arange(n_cols), low[1] + d1 * np.arange(n_rows)
-    window = cloud_window(nodes, low, d1, d2, (n_rows, n_cols), cloud) if mesh.is_point_cloud else None
-    if mesh.is_point_cloud and lattice == (d2, d1):
+    on_lattice = mesh.is_point_cloud and lattice == (d2, d1)   # a cloud's own lattice: its values as they are
+    binnable = mesh.is_point_cloud and not on_lattice
+    window = cloud_window(nodes, low, d1, d2, (n_rows, n_cols), cloud) if binnable else None
+    if on_lattice:
         z = lattice_values(nodes, low, d1, d2, (n_rows, n_cols))
     elif window is not None:
         from mzc.ops.binning import binned_values
