@@ -422,7 +422,8 @@ static PyObject *decode_rows(PyObject *self, PyObject *args)
    (rows x cols bools) from each row's flips (`lengths`: int64 per row): where the row's `unchanged`
    (a bool per row), the row above's flips moved by the next values of `same`, else the next values
    of `gaps` (the first flip, then each flip minus the previous one minus 1); -1, or the
-   first row whose flips leave 0..cols, do not increase, are odd in number or outrun their list. */
+   first row whose flips leave 0..cols, do not increase, are odd in number, outrun their list or,
+   `unchanged`, are not as many as the row above's (none above row 0). */
 static PyObject *fill_spans(PyObject *self, PyObject *args)
 {
     Views v = {.count = 5};
@@ -446,11 +447,13 @@ static PyObject *fill_spans(PyObject *self, PyObject *args)
         return PyErr_NoMemory();
     }
     Py_ssize_t bad = -1, same_used = 0, new_used = 0;
+    int64_t above = 0;   /* the row above's flip count */
     for (Py_ssize_t r = 0; r < rows; r++) {
         int64_t n = lengths[r];
         int moved = unchanged[r] != 0;
         const int64_t *values = moved ? same + same_used : gaps + new_used;
-        if (n < 0 || n % 2 || n > cols + 1 || n > (moved ? same_count - same_used : new_count - new_used)) {
+        if (n < 0 || n % 2 || n > cols + 1 || (moved && n != above)
+                || n > (moved ? same_count - same_used : new_count - new_used)) {
             bad = r;
             break;
         }
@@ -466,6 +469,7 @@ static PyObject *fill_spans(PyObject *self, PyObject *args)
         if (bad >= 0)
             break;
         *(moved ? &same_used : &new_used) += n;
+        above = n;
         unsigned char *row = valid + r * cols;
         memset(row, 0, (size_t)cols);
         for (int64_t i = 0; i < n; i += 2)
