@@ -12,6 +12,7 @@ def kernel(name):
 
 
 setup(ext_modules=[
+    kernel("mzc._elementary"),
     kernel("mzc.codecs.dwt2d._fill"),
     kernel("mzc.codecs.dwt2d._rows"),
     kernel("mzc.measure._nearest"),

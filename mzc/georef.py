@@ -127,10 +127,13 @@ def metres_per_unit(wkt, latitude):
     squared = flattening * (2 - flattening)
     unit = radians_per_unit(wkt)
     phi = latitude * unit
-    sine = math.sin(phi)
-    meridional = axis * (1 - squared) / (1 - squared * sine * sine) ** 1.5
-    prime_vertical = axis / math.sqrt(1 - squared * sine * sine)
-    return prime_vertical * math.cos(phi) * unit, meridional * unit
+    from mzc import elementary
+
+    sine = elementary.sin(phi)
+    across = 1 - squared * sine * sine
+    meridional = axis * (1 - squared) / (across * math.sqrt(across))
+    prime_vertical = axis / math.sqrt(across)
+    return prime_vertical * elementary.cos(phi) * unit, meridional * unit
 
 
 def metric_frame(grid):

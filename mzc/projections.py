@@ -24,6 +24,8 @@ distance R0 from the centre or axis, nodes are d2 apart along a row and d1 acros
 
 import numpy as np
 
+from mzc import elementary
+
 PROJECTIONS = ("planar", "cylindrical", "spherical")
 FULL_TURN_TOLERANCE = 1e-9   # relative: columns spanning 2 pi R0 this closely make a full turn
 
@@ -56,11 +58,11 @@ def to_nodes(projection, radius, points):
     x, y, z = points[..., 0], points[..., 1], points[..., 2]
     if projection == "planar":
         return points.copy()
-    across = np.hypot(x, z)
-    u = radius * np.arctan2(x, z)
+    across = np.sqrt(x * x + z * z)
+    u = radius * elementary.atan2(x, z)
     if projection == "cylindrical":
         return np.stack([u, y, across], axis=-1)
-    return np.stack([u, radius * np.arctan2(y, across), np.hypot(across, y)], axis=-1)
+    return np.stack([u, radius * elementary.atan2(y, across), np.sqrt(x * x + y * y + z * z)], axis=-1)
 
 
 def ray_directions(projection, radius, u, v):
@@ -77,10 +79,10 @@ def ray_components(projection, radius, u, v):
         return np.zeros(()), np.zeros(()), np.ones(())
     azimuth = u / radius
     if projection == "cylindrical":
-        return np.sin(azimuth), np.zeros(()), np.cos(azimuth)
+        return elementary.sin(azimuth), np.zeros(()), elementary.cos(azimuth)
     elevation = v / radius
-    ring = np.cos(elevation)
-    return ring * np.sin(azimuth), np.sin(elevation), ring * np.cos(azimuth)
+    ring = elementary.cos(elevation)
+    return ring * elementary.sin(azimuth), elementary.sin(elevation), ring * elementary.cos(azimuth)
 
 
 def ray_origins(projection, v):
@@ -107,7 +109,7 @@ def metric(projection, radius, v, value):
     scale = value / radius
     if projection == "cylindrical":
         return scale, np.ones(value.shape)
-    return scale * np.cos(np.asarray(v, dtype=float) / radius), scale
+    return scale * elementary.cos(np.asarray(v, dtype=float) / radius), scale
 
 
 def full_turn(projection, radius, cols, d2):

@@ -13,6 +13,7 @@ import math
 
 import numpy as np
 
+from mzc import elementary
 from mzc.grid import ZGrid
 from mzc.meshes import Mesh
 from mzc.vectors import lengths
@@ -29,7 +30,7 @@ def jacksboro():
     data = cbook.get_sample_data("jacksboro_fault_dem.npz")
     latitude = (float(data["ymin"]) + float(data["ymax"])) / 2
     d1 = float(data["dy"]) * METRES_PER_DEGREE
-    d2 = float(data["dx"]) * METRES_PER_DEGREE * math.cos(math.radians(latitude))
+    d2 = float(data["dx"]) * METRES_PER_DEGREE * elementary.cos(math.radians(latitude))
     z = np.flipud(data["elevation"].astype(float))  # the file's first row is the northern one
     return ZGrid(z, d1, d2, units="m")
 
@@ -41,30 +42,22 @@ def topobathy():
     data = cbook.get_sample_data("topobathy.npz")
     latitude, longitude = data["latitude"].astype(float), data["longitude"].astype(float)
     d1 = np.diff(latitude).mean() * METRES_PER_DEGREE
-    d2 = np.diff(longitude).mean() * METRES_PER_DEGREE * math.cos(math.radians(latitude.mean()))
+    d2 = np.diff(longitude).mean() * METRES_PER_DEGREE * elementary.cos(math.radians(latitude.mean()))
     return ZGrid(data["topo"].astype(float), d1, d2, units="m")
-
-
-def libm(function, *arrays):
-    """``function`` of ``math`` (the C library's) on each element of ``arrays``. The samples are
-    files whose bytes should not depend on the machine: numpy's exp, sin and arctan2 take SIMD
-    paths that differ in the last bit from one CPU to another (AVX-512 ones from AVX2 ones), the
-    C library's do not. Used on the few ten thousand values of a sample, never in a hot path."""
-    return np.vectorize(function, otypes=[float])(*arrays)
 
 
 def bump():
     """A generated 120 x 160 mm patch: two Gaussian bumps on a tilted plane, with a round hole."""
     y, x = np.mgrid[0:120:0.5, 0:160:0.5]
-    z = (30 * libm(math.exp, -((x - 60) ** 2 + (y - 60) ** 2) / 800)
-         + 12 * libm(math.exp, -((x - 115) ** 2 + (y - 50) ** 2) / 200) + 0.05 * x - 0.02 * y)
+    z = (30 * elementary.exp(-((x - 60) ** 2 + (y - 60) ** 2) / 800)
+         + 12 * elementary.exp(-((x - 115) ** 2 + (y - 50) ** 2) / 200) + 0.05 * x - 0.02 * y)
     z[(x - 120) ** 2 + (y - 95) ** 2 < 10**2] = np.nan
     return ZGrid(z, 0.5, 0.5, units="mm")
 
 
 def icosphere(subdivisions):
     """(unit vertices, triangles) of a subdivided icosahedron, its triangles facing outwards."""
-    t = (1 + 5 ** 0.5) / 2
+    t = (1 + math.sqrt(5)) / 2
     points = np.array([[-1, t, 0], [1, t, 0], [-1, -t, 0], [1, -t, 0], [0, -1, t], [0, 1, t], [0, -1, -t],
                        [0, 1, -t], [t, 0, -1], [t, 0, 1], [-t, 0, -1], [-t, 0, 1]], dtype=float)
     faces = np.array([[0, 11, 5], [0, 5, 1], [0, 1, 7], [0, 7, 10], [0, 10, 11], [1, 5, 9], [5, 11, 4],
@@ -86,7 +79,7 @@ def icosphere(subdivisions):
 def blob_radius(directions):
     """The blob's radius along unit ``directions``: 50 mm with three lobes and a bulge upwards."""
     x, y, z = directions.T
-    return 50 * (1 + 0.15 * libm(math.sin, 3 * libm(math.atan2, x, z)) * (1 - y ** 2) + 0.1 * y ** 3)
+    return 50 * (1 + 0.15 * elementary.sin(3 * elementary.atan2(x, z)) * (1 - y * y) + 0.1 * (y * y * y))
 
 
 def blob(subdivisions=5):
@@ -97,7 +90,7 @@ def blob(subdivisions=5):
 
 def tube_radius(azimuth, height):
     """The tube's distance from its axis (y): 30 mm, four flutes of 3 mm, widening along y."""
-    return 30 + 3 * libm(math.sin, 4 * azimuth) + 0.05 * height
+    return 30 + 3 * elementary.sin(4 * azimuth) + 0.05 * height
 
 
 def tube(around=240, along=200):
@@ -106,7 +99,7 @@ def tube(around=240, along=200):
     radius = tube_radius(azimuth, height)
     from mzc.ops.triangulation import grid_triangles
 
-    points = np.stack([radius * libm(math.sin, azimuth), height, radius * libm(math.cos, azimuth)],
+    points = np.stack([radius * elementary.sin(azimuth), height, radius * elementary.cos(azimuth)],
                       axis=-1).reshape(-1, 3)
     return Mesh(points, grid_triangles(np.ones(azimuth.shape, dtype=bool), periodic=True))
 

@@ -1,13 +1,16 @@
-"""The command runs whose output bytes must not change when the code is reorganised.
+"""The command runs whose output bytes must not change when the code is reorganised, nor
+from one machine to another.
 
-Each case is a chain of ``mzc`` commands run in-process (click's runner) on a built-in sample
-or a shared face; the SHA-256 of every output is kept in ``tests/data/golden-outputs.json``.
-``tests/test_unchanged_outputs.py`` reruns them and compares. After a deliberate change of
-output (a new format version, a better default), rewrite the reference with
+Each case is a chain of ``mzc`` commands run in-process (click's runner) on a built-in sample,
+a shared face or a format fixture; the SHA-256 of every output is kept in
+``tests/data/golden-outputs.json``. ``tests/test_unchanged_outputs.py`` reruns them and
+compares, here and in subprocesses with numpy's AVX-512 and AVX2 loops switched off. After a
+deliberate change of output (a new format version, a better default), rewrite the reference with
 
     python tests/golden.py --write
 
-and say in the commit which outputs changed and why.
+and say in the commit which outputs changed and why. ``python tests/golden.py --print``
+prints the digests as JSON (what the subprocesses report).
 """
 
 import hashlib
@@ -18,6 +21,8 @@ import tempfile
 from pathlib import Path
 
 from click.testing import CliRunner
+
+from codec_contract import fixture_bytes, fixture_names
 
 REPO = Path(__file__).resolve().parents[1]
 FACES = REPO.parent / "shared" / "data" / "faces"
@@ -85,6 +90,7 @@ def surface_cases(name, mesh, detailed):
     for label, options in codecs.items():
         coded = outputs[f"{name}: encode {label}"] = run(["encode", *options], grid)
         outputs[f"{name}: decode {label}"] = run(["decode", "--plain", "--precision", "6"], coded)
+        outputs[f"{name}: decode {label} exact"] = run(["decode"], coded)
     if not detailed:
         return outputs
     outputs[f"{name}: slice --thesis-grid"] = run(["slice", mesh, "--thesis-grid"])
@@ -117,15 +123,24 @@ def face_cases():
     return outputs
 
 
+def fixture_cases():
+    """Every format fixture decoded to an exact (raw) z-grid: the decoders' promise of the same
+    bits on every machine (spec/arithmetic.md)."""
+    return {f"fixture {name}: decode": run(["decode"], fixture_bytes(name)) for name in fixture_names()}
+
+
 def all_digests():
-    """{case: SHA-256 of its output} for the samples and the faces."""
+    """{case: SHA-256 of its output} for the samples, the fixtures and the faces."""
     with tempfile.TemporaryDirectory() as folder:
-        outputs = {**sample_cases(Path(folder)), **face_cases()}
+        outputs = {**sample_cases(Path(folder)), **fixture_cases(), **face_cases()}
     return {case: digest(data) for case, data in outputs.items()}
 
 
 if __name__ == "__main__":
-    if sys.argv[1:] != ["--write"]:
-        sys.exit("usage: python tests/golden.py --write")
-    REFERENCE.write_text(json.dumps(all_digests(), indent=1, sort_keys=True) + "\n")
-    print(f"wrote {REFERENCE}")
+    if sys.argv[1:] == ["--write"]:
+        REFERENCE.write_text(json.dumps(all_digests(), indent=1, sort_keys=True) + "\n")
+        print(f"wrote {REFERENCE}")
+    elif sys.argv[1:] == ["--print"]:
+        print(json.dumps(all_digests(), sort_keys=True))
+    else:
+        sys.exit("usage: python tests/golden.py --write | --print")

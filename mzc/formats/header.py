@@ -39,6 +39,7 @@ from mzc.errors import MzcError
 from mzc.grid import IDENTITY_TRANSFORM, Raster, check_crs, check_token
 from mzc.limits import MAX_DIMENSION, check_grid_size, length_problem
 from mzc.numbers import parse_int
+from mzc.vectors import determinant, matrix_product
 
 RIGID_TOLERANCE = 1e-6
 CHECKSUM = "crc32"   # the header keyword of a file's checksum
@@ -264,8 +265,8 @@ def read_grid_fields(header):
     else:
         transform = np.array(transform).reshape(3, 4)
         rotation = transform[:, :3]
-        if (np.abs(rotation.T @ rotation - np.eye(3)).max() > RIGID_TOLERANCE
-                or np.linalg.det(rotation) < 0):
+        if (np.abs(matrix_product(rotation.T, rotation) - np.eye(3)).max() > RIGID_TOLERANCE
+                or determinant(rotation) < 0):
             raise header.error("transform", "the 3x3 part is not a rotation (orthonormal, det +1)")
     projected = read_projection(header, rows, cols)
     fields = dict(

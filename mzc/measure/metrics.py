@@ -95,7 +95,7 @@ def nearest_triangles(samples, points, triangles):
 def radius_groups(radius):
     """Indices of triangles grouped by radius, each group within a factor of two."""
     smallest = max(radius.min(), radius.max() * 1e-9, np.finfo(float).tiny)
-    level = np.floor(np.log2(np.maximum(radius, smallest) / smallest)).astype(int)
+    level = np.frexp(np.maximum(radius, smallest) / smallest)[1]   # floor(log2) + 1, exactly
     return [np.flatnonzero(level == value) for value in np.unique(level)]
 
 

@@ -42,8 +42,8 @@
  * meets the triangle where its barycentric weights D . ((b - O) x (c - O)) and their cyclic
  * shifts, each times s = 1 / (D . n) (n = ab x ac; s finite), are all >= -tolerance, at the
  * distance t = (n . a - v n.y) s > 0 (n . a s for spherical grids); a weight is computed as
- * D . (b x c) - v D . (y x (c - b)) (D . (b x c) for spherical grids), with numpy's np.cross
- * and einsum (``cross``, ``dot``). The GIL is released while they run, on one thread.
+ * D . (b x c) - v D . (y x (c - b)) (D . (b x c) for spherical grids), in np.cross's order and
+ * a fixed one for dot products (``cross``, ``dot``). The GIL is released while they run, on one thread.
  */
 #define PY_SSIZE_T_CLEAN
 #include <Python.h>
@@ -144,8 +144,8 @@ static void cross(const double *p, const double *q, double *out) {
     out[2] = p[0] * q[1] - p[1] * q[0];
 }
 
-/* p . q as numpy's einsum("ij,ij->i") sums rows of three (its x86-64 wheels: two SIMD lanes hold p0 q0 + p2 q2
- * and p1 q1, then are added), unfused on every CPU; a zero's sign aside, which no hit or distance depends on. */
+/* p . q in one fixed order, (p0 q0 + p2 q2) + p1 q1 (the order numpy's einsum("ij,ij->i") took on x86-64 when
+ * these grids were first computed, kept so that they stay the same bits), unfused on every CPU. */
 static double dot(const double *p, const double *q) { return (p[0] * q[0] + p[2] * q[2]) + p[1] * q[1]; }
 
 /* What the ray test needs of a triangle a, b, c: its normal n, n . a, the products b x c, c x a,

@@ -39,6 +39,8 @@ binning keeps the front one); 3% fewer nodes are valid.
 
 import numpy as np
 
+from mzc.vectors import lengths
+
 WINDOW_POINTS = 8      # points a node's window should hold on average
 MAX_RADIUS = 3         # the widest window, 7 x 7 nodes; sparser clouds are triangulated
 BLOCK = 4              # the density counts the area covered in blocks of 4 x 4 nodes
@@ -185,5 +187,5 @@ def cloud_spacing(uv, patches=16, patch_points=1000, seed=0):
             continue
         inner = triangulation.simplices[(triangulation.neighbors >= 0).all(axis=1)]
         corners = uv[patch][inner]
-        edges.append(np.hypot(*(corners - np.roll(corners, 1, axis=1)).reshape(-1, 2).T))
+        edges.append(lengths((corners - np.roll(corners, 1, axis=1)).reshape(-1, 2)))
     return float(np.median(np.concatenate(edges))) if edges else None

@@ -53,6 +53,7 @@ import numpy as np
 
 from mzc.errors import MzcError
 from mzc.limits import MAX_INSERTED, MAX_ITERATIONS, check_grid_size, length_problem
+from mzc.vectors import inner
 
 METHODS = ("thesis", "laplace", "biharmonic")
 DEFAULT_METHOD = "biharmonic"
@@ -251,35 +252,31 @@ def thesis_inserted(z, n, gaps, iterations, tol):
 
 
 def laplace_inserted(z, n, gaps, step, d2):
-    """Inserted rows solving the 5-point Laplace equation with true steps, one sparse solve for all gaps.
+    """Inserted rows solving the 5-point Laplace equation with true steps, one band solve for all gaps.
 
     Dirichlet data: the two rows of each gap and the thesis's straight lines at the run ends.
+    Unknowns are numbered gap by gap, column by column, row by row, so the negated Laplacian
+    is a symmetric positive definite band of half-width n (the node beside one in the next
+    column of its gap is n on): factored by ``band_factor``, the biharmonic's own Cholesky.
     """
-    from scipy.sparse import csr_matrix
-    from scipy.sparse.linalg import spsolve
-
     domain = gaps.domain
     free = np.broadcast_to(gaps.interior[:, None, :], (len(domain), n, z.shape[1]))
     known = np.nan_to_num(gap_stack(z, n, straight_lines(z, n)))
-    # Unknowns numbered gap by gap, column by column, row by row: the matrix is banded (width n).
     order = np.full(known.shape, -1)
     gap, col, row = np.nonzero(np.pad(free, ((0, 0), (1, 1), (0, 0))).transpose(0, 2, 1))
     order[gap, row, col] = np.arange(len(gap))
-    weights = {(-1, 0): step**-2, (1, 0): step**-2, (0, -1): d2**-2, (0, 1): d2**-2}
-    rows, cols, values = [np.arange(len(gap))], [np.arange(len(gap))], [np.full(len(gap), -sum(weights.values()))]
-    rhs = np.zeros(len(gap))
-    for (drow, dcol), weight in weights.items():
-        neighbour = order[gap, row + drow, col + dcol]
-        unknown = neighbour >= 0
-        rows.append(np.nonzero(unknown)[0])
-        cols.append(neighbour[unknown])
-        values.append(np.full(unknown.sum(), weight))
-        rhs -= np.where(unknown, 0.0, weight * known[gap, row + drow, col + dcol])
-    matrix = csr_matrix((np.concatenate(values), (np.concatenate(rows), np.concatenate(cols))),
-                        shape=(len(gap), len(gap)))
+    across, along = 1 / (step * step), 1 / (d2 * d2)
+    band, rhs = np.zeros((len(gap), n + 1)), np.zeros(len(gap))
+    band[:, 0] = 2 * across + 2 * along
+    for (drow, dcol), weight, reach in (((-1, 0), across, 1), ((1, 0), across, -1), ((0, -1), along, n),
+                                        ((0, 1), along, -n)):
+        unknown = order[gap, row + drow, col + dcol] >= 0
+        if reach > 0:   # the band holds each pair once, in the later unknown's row
+            band[unknown, reach] = -weight
+        rhs += np.where(unknown, 0.0, weight * known[gap, row + drow, col + dcol])
     inside = np.where(domain[:, None, :], known[:, 1:-1], np.nan)
     if len(gap):
-        inside[gap, row - 1, col] = spsolve(matrix, rhs, permc_spec="NATURAL")
+        inside[gap, row - 1, col] = band_solve(band_factor(band), rhs)
     return inside
 
 
@@ -303,7 +300,8 @@ def biharmonic_inserted(z, n, gaps, step, d2):
         unknowns = inside.transpose(0, 2, 1)             # (gaps, cols, n) views: unknown first[g, c] + r
         start = np.empty(len(rhs))
         start.reshape(-1, n)[first[domain] // n] = unknowns[domain]
-        solution = solve_plate(band, rhs, start, evens, coupled_pairs(domain, first, n, evens), step**-4)
+        solution = solve_plate(band, rhs, start, evens, coupled_pairs(domain, first, n, evens),
+                                plate_weights(step, d2)[1])
         unknowns[domain] = solution.reshape(-1, n)[first[domain] // n]
     return inside
 
@@ -339,9 +337,16 @@ def plate_equations(z, n, gaps, step, d2, first):
     size = int(first.max()) + n
     band, rhs = np.empty((size, 2 * n + 1)), np.empty(size)
     _plate.plate(np.ascontiguousarray(z, dtype=np.float64), first, np.ascontiguousarray(~gaps.rows_along),
-                 np.ascontiguousarray(~gaps.along), len(first), z.shape[1], n, (d2**-4, step**-4, 2 / (step * d2) ** 2),
+                 np.ascontiguousarray(~gaps.along), len(first), z.shape[1], n, plate_weights(step, d2),
                  band, rhs)
     return band, rhs
+
+
+def plate_weights(step, d2):
+    """(1/d2^4, 1/step^4, 2/(step d2)^2): the weights of the plate's second differences along
+    rows, across them and of its twist, as products (a C library's pow may round otherwise)."""
+    along, across = 1 / (d2 * d2), 1 / (step * step)
+    return along * along, across * across, 2 * along * across
 
 
 def coupled_pairs(domain, first, n, evens):
@@ -375,7 +380,7 @@ def solve_plate(band, rhs, start, evens, pairs, weight, rtol=1e-12, max_steps=10
     from mzc.ops import _plate
 
     even_factor, odd_band = band_factor(band[:evens]), band[evens:]
-    coupled = lambda vector: weight**2 * carried(band_solve(even_factor, carried(vector, pairs, 1, 0, evens)),  # noqa: E731
+    coupled = lambda vector: weight * weight * carried(band_solve(even_factor, carried(vector, pairs, 1, 0, evens)),  # noqa: E731
                                                  pairs, 0, 1, len(vector))
     right = rhs[evens:] - weight * carried(band_solve(even_factor, rhs[:evens].copy()), pairs, 0, 1, len(rhs) - evens)
     odd = start[evens:].copy()
@@ -385,7 +390,7 @@ def solve_plate(band, rhs, start, evens, pairs, weight, rtol=1e-12, max_steps=10
     residual = right - (image - coupled(odd))
     direction = band_solve(odd_factor, residual.copy())
     product, kept_image = inner(residual, direction), residual.copy()   # r.z, and O p (= r: p = z)
-    goal = rtol**2 * inner(rhs, rhs)
+    goal = rtol * rtol * inner(rhs, rhs)
     for _ in range(max_steps):
         if inner(residual, residual) <= goal:
             break
@@ -427,7 +432,3 @@ def band_solve(factor, vector):
     _plate.solve(factor, factor.shape[1] - 1, vector)
     return vector
 
-
-def inner(u, v):
-    """Inner product of two vectors."""
-    return float(np.sum(u * v))

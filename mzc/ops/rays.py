@@ -16,6 +16,7 @@ triangle's block there.
 
 import numpy as np
 
+from mzc import elementary
 from mzc.ops.raster import BARYCENTRIC_TOLERANCE, checked
 
 TURN = 2 * np.pi
@@ -49,9 +50,11 @@ def candidate_boxes(points, triangles, projection, radius, u_start):
     every azimuth. Each coordinate is a (3, m) array, a row per corner, so that every step
     works on whole rows and reduces over three of them.
     """
-    x, y, z = np.ascontiguousarray(points.T).take(triangles.T, axis=1)
+    coordinates = np.ascontiguousarray(points.T)
+    x, y, z = coordinates.take(triangles.T, axis=1)
     turn = TURN * radius
-    u = u_start + np.mod(radius * np.arctan2(x, z) - u_start, turn)
+    azimuth = radius * elementary.atan2(coordinates[0], coordinates[2])   # once a point, not once a corner
+    u = u_start + np.mod(azimuth.take(triangles.T) - u_start, turn)
     around = around_axis(x, z)
     straddles = ~around & (u.max(axis=0) - u.min(axis=0) > 0.5 * turn)
     u = np.where(straddles & (u < u_start + 0.5 * turn), u + turn, u)
@@ -85,12 +88,12 @@ def v_bounds(x, y, z, projection, radius, around, u_box):
     low, high = y.min(axis=0), y.max(axis=0)
     if projection == "cylindrical":
         return np.stack([low, high], axis=1)
-    distance = np.hypot(x, z)
+    distance = np.sqrt(x * x + z * z)
     spread = np.minimum((u_box[:, 1] - u_box[:, 0]) / radius, np.pi)
-    near = np.where(around, 0.0, distance.min(axis=0) * np.cos(spread / 2))
+    near = np.where(around, 0.0, distance.min(axis=0) * elementary.cos(spread / 2))
     far = distance.max(axis=0)
-    top = np.arctan2(high, np.where(high >= 0, near, far))
-    bottom = np.arctan2(low, np.where(low <= 0, near, far))
+    top = elementary.atan2(high, np.where(high >= 0, near, far))
+    bottom = elementary.atan2(low, np.where(low <= 0, near, far))
     return radius * np.stack([bottom, top], axis=1)
 
 
@@ -99,8 +102,8 @@ def direction_factors(projection, radius, xs, ys):
     each row's elevation (1 and 0 on cylindrical rays): node (row, column)'s ray runs along
     (ring sin, rise, ring cos), ring and rise the row's factors (``mzc.projections``)."""
     azimuth = xs / radius
-    columns = np.stack([np.sin(azimuth), np.cos(azimuth)])
+    columns = np.stack([elementary.sin(azimuth), elementary.cos(azimuth)])
     if projection == "spherical":
         elevation = ys / radius
-        return columns, np.stack([np.cos(elevation), np.sin(elevation)])
+        return columns, np.stack([elementary.cos(elevation), elementary.sin(elevation)])
     return columns, np.stack([np.ones(len(ys)), np.zeros(len(ys))])

@@ -16,7 +16,7 @@ from mzc.grid import ZGrid
 from mzc.limits import MAX_DIMENSION, check_grid_size, length_problem
 from mzc.ops.raster import rasterize
 from mzc.ops.rays import cast
-from mzc.vectors import lengths, of_each_row, rotated
+from mzc.vectors import dotted, inner, lengths, of_each_row, rotated, symmetric_eigen
 
 DEFAULT_ROWS = 72           # the thesis cuts a face with about 70 horizontal planes (--thesis-grid)
 COLUMN_STEP_RATIO = 10      # and uses about 10x as many vertical planes: d2 = d1/10
@@ -44,9 +44,11 @@ def pca_frame(points, triangles):
     """
     points = np.asarray(points, dtype=np.float64)
     shift = points.mean(axis=0)
-    _spread, axes = np.linalg.eigh(np.cov((points - shift).T))
+    offsets = np.ascontiguousarray((points - shift).T)
+    spread = [[inner(offsets[i], offsets[j]) for j in range(3)] for i in range(3)]   # the covariance, times n - 1
+    _spread, axes = symmetric_eigen(spread)
     z_axis, y_axis = axes[:, 0], axes[:, 2]
-    if np.dot(z_axis, facing_direction(points, triangles)) < 0:
+    if dotted(z_axis, facing_direction(points, triangles)) < 0:
         z_axis = -z_axis
     if y_axis[1] < 0:
         y_axis = -y_axis
@@ -405,7 +407,7 @@ def wrapping_count(count):
     """``count`` rounded to a multiple of 2^k, k = min(5, floor(log2 count) - 3): at least 3."""
     if count < 16:
         return max(3, count)
-    multiple = 2 ** min(5, int(np.log2(count)) - 3)
+    multiple = 2 ** min(5, int(count).bit_length() - 4)   # bit_length - 1: floor(log2 count), exactly
     return int(round(count / multiple)) * multiple
 
 

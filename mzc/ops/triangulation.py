@@ -24,7 +24,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from mzc import projections
+from mzc import elementary, projections
 
 if TYPE_CHECKING:
     from mzc.grid import ZGrid
@@ -79,7 +79,7 @@ def jumps_between(grid, low, high, angle=None):
                      along=np.zeros((len(z), z.shape[1] - 1), dtype=bool),
                      diagonal=np.zeros((len(z) - 1, z.shape[1] - 1), dtype=bool))
     chords = EdgeChords.of(grid, grid.ys()[low:high + 1])
-    cosine2 = np.cos(np.radians(angle)) ** 2
+    cosine2 = squared_cosine(angle)
     jumps = Jumps(across=is_jump(z[:-1], z[1:], chords.across, cosine2),
                   along=is_jump(z[:, :-1], z[:, 1:], chords.along, cosine2),
                   diagonal=is_jump(z[:-1, 1:], z[1:, :-1], chords.diagonal, cosine2))
@@ -111,13 +111,25 @@ class EdgeChords:
         d1, d2 = grid.d1, grid.d2
         if grid.projection == "planar":
             return cls(across=(None, d1 * d1), along=(None, d2 * d2), diagonal=(None, d1 * d1 + d2 * d2))
-        turn = 4 * np.sin(d2 / grid.radius / 2) ** 2             # 2 - 2 cos of the columns' angle
+        turn = 4 * squared_sine(d2 / grid.radius / 2)            # 2 - 2 cos of the columns' angle
         if grid.projection == "cylindrical":
             return cls(across=(0.0, d1 * d1), along=(turn, 0.0), diagonal=(turn, d1 * d1))
-        ring = np.cos(ys / grid.radius)[:, None]                 # spherical: rows are cones of elevation ys / R
-        tilt = 4 * np.sin(d1 / grid.radius / 2) ** 2
+        ring = elementary.cos(ys / grid.radius)[:, None]         # spherical: rows are cones of elevation ys / R
+        tilt = 4 * squared_sine(d1 / grid.radius / 2)
         return cls(across=(tilt, 0.0), along=(ring * ring * turn, 0.0),
                    diagonal=(tilt + ring[:-1] * ring[1:] * turn, 0.0))
+
+
+def squared_sine(angle):
+    """sin^2 of ``angle`` (radians)."""
+    sine = elementary.sin(angle)
+    return sine * sine
+
+
+def squared_cosine(degrees):
+    """cos^2 of an angle given in degrees (the jump angle)."""
+    cosine = elementary.cos(np.radians(degrees))
+    return cosine * cosine
 
 
 def is_jump(start, end, chord, cosine2):
@@ -144,7 +156,7 @@ def sight_jumps(points, angle=JUMP_ANGLE):
     whose node lines are the lines of sight from the origin (a spherical grid's rays, but not
     on a regular grid of angles): the spec's test on the points themselves, with ``is_jump``'s
     algebra (2 e . m = |end|^2 - |start|^2, 2m = start + end)."""
-    cosine2 = np.cos(np.radians(angle)) ** 2
+    cosine2 = squared_cosine(angle)
 
     def jump(start, end):
         squared = lambda vectors: np.sum(vectors * vectors, axis=-1)  # noqa: E731

@@ -31,11 +31,13 @@ turn runs from pole to pole.
 """
 
 from dataclasses import dataclass
+from decimal import Decimal
 
 import numpy as np
 
+from mzc import elementary
 from mzc.errors import MzcError
-from mzc.vectors import dotted, lengths
+from mzc.vectors import dotted, inner, length, lengths, matrix_product, symmetric_eigen
 
 FACING_COSINE = 0.5          # 60 degrees between the normal and the node line
 PLANAR_MARGIN = 0.05         # a central projection must see 5% more of the area than planar
@@ -116,7 +118,7 @@ def planar_view(surface, rotation, view):
         view = ("+" if surface.facing(rotation[:, k]) >= 0 else "-") + "xyz"[k]
     if view not in PLANAR_VIEWS:
         raise MzcError(f"unknown view {view!r} (choose auto or one of {', '.join(PLANAR_VIEWS)})", field="view")
-    rotation = rotation @ np.array(PLANAR_VIEWS[view], dtype=float).T
+    rotation = matrix_product(rotation, np.array(PLANAR_VIEWS[view], dtype=float).T)
     return rotation, surface.share_along(rotation[:, 2])
 
 
@@ -129,7 +131,7 @@ class Facets:
     def __init__(self, centroid, normal, area, points, oriented=True):
         self.centroid, self.normal, self.area, self.oriented = centroid, normal, area, oriented
         low, high = points.min(axis=0), points.max(axis=0)
-        self.box_centre, self.half_diagonal = (low + high) / 2, np.linalg.norm(high - low) / 2
+        self.box_centre, self.half_diagonal = (low + high) / 2, length(high - low) / 2
 
     @classmethod
     def of_mesh(cls, mesh):
@@ -163,7 +165,7 @@ class Facets:
         """Which way along ``direction`` the surface faces: the sign of its area-weighted
         normal (its winding, or the normals a cloud's file gives); + when the normals are
         unoriented (a bare cloud: which side it was seen from is not in its points)."""
-        return float(np.dot(self.area, dotted(self.normal, direction))) if self.oriented else 1.0
+        return inner(self.area, dotted(self.normal, direction)) if self.oriented else 1.0
 
     def share(self, rays):
         """Area share of the facets whose normal is within 60 degrees of their (unit) ray.
@@ -172,10 +174,10 @@ class Facets:
         may wind either way): a facet facing the other way is the inside of a fold or the
         near side of a closed surface seen from outside, hidden behind the outermost hit.
         """
-        cosine = np.einsum("ij,ij->i", self.normal, rays)
+        cosine = dotted(self.normal, rays)
         if not self.oriented:
             cosine = np.abs(cosine)
-        cosine *= 1.0 if np.dot(self.area, cosine) >= 0 else -1.0
+        cosine *= 1.0 if inner(self.area, cosine) >= 0 else -1.0
         total = self.area.sum()
         return float(self.area[cosine >= FACING_COSINE].sum() / total) if total > 0 else 0.0
 
@@ -231,7 +233,7 @@ def axis_candidate(surface, kind, view, direction, center):
     if center is not None:
         centre = np.asarray(center, dtype=float)
     else:
-        along_axis = kind == "cylindrical" and abs(direction @ view) > 0.999
+        along_axis = kind == "cylindrical" and abs(dotted(direction, view)) > 0.999
         centre = behind(0.0 if along_axis else best_offset(lambda s: score(behind(s)),
                                                            lambda s: surface.spread_from(kind, behind(s), direction)))
     return score(centre), kind, centre, direction
@@ -282,17 +284,17 @@ def cloud_normals(points, chosen):
     _distance, neighbours = cKDTree(points).query(points[chosen], k=count)
     near = points[np.asarray(neighbours).reshape(len(chosen), count)]
     offsets = near - near.mean(axis=1, keepdims=True)
-    _spread, axes = np.linalg.eigh(np.einsum("nki,nkj->nij", offsets, offsets))
+    _spread, axes = symmetric_eigen((offsets[:, :, :, None] * offsets[:, :, None, :]).sum(axis=1))
     return axes[:, :, 0]
 
 
 def unit(vector, name):
     """``vector`` scaled to length 1, or an error naming the option."""
     vector = np.asarray(vector, dtype=float)
-    length = np.linalg.norm(vector)
-    if vector.shape != (3,) or not np.isfinite(length) or length == 0:
+    size = length(vector)
+    if vector.shape != (3,) or not np.isfinite(size) or size == 0:
         raise MzcError("must be a non-zero 3-vector", field=name)
-    return vector / length
+    return vector / size
 
 
 def central_view(points, kind, centre, axis, view):
@@ -306,9 +308,9 @@ def central_view(points, kind, centre, axis, view):
     across = offset - dotted(offset, axis)[:, None] * axis
     reference = perpendicular(view, axis)
     side = np.cross(axis, reference)
-    middle, full_turn = azimuth_middle(np.arctan2(dotted(across, side), dotted(across, reference)))
+    middle, full_turn = azimuth_middle(elementary.atan2(dotted(across, side), dotted(across, reference)))
     middle = np.radians(np.round(np.degrees(middle)))   # whole degrees: no turn at all when near the view
-    front = reference if middle == 0 else np.cos(middle) * reference + np.sin(middle) * side
+    front = reference if middle == 0 else elementary.cos(middle) * reference + elementary.sin(middle) * side
     rotation = np.column_stack([np.cross(axis, front), axis, front])
     distance = lengths(across if kind == "cylindrical" else offset).mean()
     radius = float(rounded(distance, distance)) if distance > 0 else 0.0
@@ -320,7 +322,7 @@ def central_view(points, kind, centre, axis, view):
 def rounded(values, scale, digits=4, down=False):
     """``values`` rounded (``down``: floored) to ``digits`` significant digits of ``scale`` (a
     length of the surface), each the float nearest its decimal, so that it is written short."""
-    decimals = max(0, digits - 1 - int(np.floor(np.log10(max(float(scale), 1e-300)))))
+    decimals = max(0, digits - 1 - Decimal(max(float(scale), 1e-300)).adjusted())   # adjusted: floor(log10)
     if down:
         values = np.floor(np.asarray(values, dtype=float) * 10.0 ** decimals) / 10.0 ** decimals
     return np.array([round(float(v), decimals) for v in np.ravel(values)]).reshape(np.shape(values))
@@ -329,9 +331,9 @@ def rounded(values, scale, digits=4, down=False):
 def perpendicular(view, axis):
     """The unit component of ``view`` across ``axis`` (another axis of the frame when parallel)."""
     for candidate in (view, np.array([0.0, 0.0, 1.0]), np.array([1.0, 0.0, 0.0])):
-        across = candidate - (candidate @ axis) * axis
-        if np.linalg.norm(across) > 1e-6:
-            return across / np.linalg.norm(across)
+        across = candidate - dotted(candidate, axis) * axis
+        if length(across) > 1e-6:
+            return across / length(across)
     raise MzcError("cannot orient the axis", field="axis")
 
 
@@ -344,4 +346,4 @@ def azimuth_middle(azimuth):
     if gaps[widest] < FULL_TURN_GAP:
         return 0.0, True
     gap_middle = ordered[widest] + gaps[widest] / 2
-    return float(np.angle(-np.exp(1j * gap_middle))), False
+    return float(np.remainder(gap_middle, 2 * np.pi) - np.pi), False   # opposite the gap, in [-pi, pi)

@@ -14,6 +14,7 @@ just before). So a decode does not load constriction.
 
 import numpy as np
 
+from mzc import elementary
 from mzc.codecs.dwt2d import _rows
 from mzc.errors import MzcError
 
@@ -78,15 +79,15 @@ def table_codes(counts):
     counts = np.asarray(counts, dtype=np.float64)
     if not counts.any():
         return np.zeros(len(counts), dtype=np.int64)
-    target = np.log2(np.maximum(counts, 1e-300) * (CODE_WEIGHTS[-1] / counts.max()))
-    distance = np.abs(target[:, None] - np.log2(np.maximum(CODE_WEIGHTS[1:], 1))[None, :])
+    target = elementary.log2(np.maximum(counts, 1e-300) * (CODE_WEIGHTS[-1] / counts.max()))
+    distance = np.abs(target[:, None] - elementary.log2(np.maximum(CODE_WEIGHTS[1:], 1))[None, :])
     return np.where(counts > 0, 1 + np.argmin(distance, axis=1), 0)
 
 
 def table_cost_bits(codes, counts):
     """Bits to code ``counts`` symbols per class with the table of ``codes``, plus the table itself."""
     freq = frequencies(codes)
-    ideal = -(counts * np.log2(freq[: len(counts)] / (1 << TABLE_BITS))).sum()
+    ideal = -(counts * elementary.log2(freq[: len(counts)] / (1 << TABLE_BITS))).sum()
     return ideal + 8 * len(encode_table(codes))
 
 

@@ -13,15 +13,17 @@ periodization, which joined a grid's opposite edges.
 """
 
 import functools
+import math
 import warnings
 from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
 
-from mzc import projections
+from mzc import elementary, projections
 from mzc.codecs.dwt2d import lifting
 from mzc.errors import MzcError
+from mzc.vectors import inner
 
 WAVELETS = ("bior4.4", "bior2.2", "bior3.3", "db2", "db4", "sym4", "coif1", "haar")   # of dwt2d 2.0
 MODE = "periodization"
@@ -223,18 +225,12 @@ def conjugate_gradients(multigrid, b):
     return x
 
 
-def inner(a, b):
-    """The dot product of two vectors, kept off BLAS: its threads spin, and on a busy
-    machine they made the fill's small products 10-100x slower."""
-    return float(np.einsum("i,i->", a, b))
-
-
 # --------------------------------------------------------------------------- transform
 
 
 def default_levels(shape, coarsest):
     """Levels until the coarsest band is about ``coarsest`` nodes across (measured: deeper stops paying)."""
-    return int(max(0, min(MAX_LEVELS, np.floor(np.log2(max(1, min(shape) / coarsest))))))
+    return max(0, min(MAX_LEVELS, math.frexp(max(1, min(shape) / coarsest))[1] - 1))   # frexp: floor(log2) + 1
 
 
 def forward(z, wavelet, levels):
@@ -506,6 +502,7 @@ def corrections(z, decoded, valid, step):
 SEARCH_TOLERANCE = 1.005   # the search ends with an x that meets the target and one within 0.5% above that does not
 SEARCH_OVERSHOOT = 1.01    # a point aimed at the side of the target not yet seen lands this far past the crossing
 SEARCH_LIMIT = 40          # costs taken at most (the rd corpus's --rmse encodes take 3-8, --size ones 4-7)
+LEVER = elementary.log(1.02)   # two points fix the power law's slope when their x are 2% apart or more
 
 
 def search_step(cost, target, low, high, guess, slope, snap=float):
@@ -553,8 +550,7 @@ def search_step(cost, target, low, high, guess, slope, snap=float):
 
 def log_cost(points, x, target):
     """log(cost(x) / target), -inf for a cost of 0."""
-    with np.errstate(divide="ignore"):
-        return float(np.log(points[x] / target))
+    return elementary.log(points[x] / target)
 
 
 def reaching_point(points, target, slope, upwards):
@@ -564,21 +560,22 @@ def reaching_point(points, target, slope, upwards):
     that and past every point taken, towards the other side."""
     near = sorted(points, key=lambda p: abs(log_cost(points, p, target)))
     x0, f0 = near[0], log_cost(points, near[0], target)
-    lever = [p for p in near[1:] if abs(np.log(p / x0)) > np.log(1.02) and np.isfinite(log_cost(points, p, target))]
+    lever = [p for p in near[1:] if abs(elementary.log(p / x0)) > LEVER and np.isfinite(log_cost(points, p, target))]
     if lever and np.isfinite(f0):
-        rise = (log_cost(points, lever[0], target) - f0) / np.log(lever[0] / x0)
+        rise = (log_cost(points, lever[0], target) - f0) / elementary.log(lever[0] / x0)
         slope = float(np.clip(rise, slope / 4, slope * 4))   # a jitter between the two must not fling x far
-    jump = np.clip(-f0 / slope, -np.log(1000.0), np.log(1000.0)) if np.isfinite(f0) else np.log(1000.0)
+    reach = elementary.log(1000.0)   # a jump moves x at most 1000x
+    jump = np.clip(-f0 / slope, -reach, reach) if np.isfinite(f0) else reach
     if upwards:
-        return max(x0 * np.exp(jump), max(points)) * SEARCH_OVERSHOOT
-    return min(x0 * np.exp(jump), min(points)) / SEARCH_OVERSHOOT
+        return max(x0 * elementary.exp(jump), max(points)) * SEARCH_OVERSHOOT
+    return min(x0 * elementary.exp(jump), min(points)) / SEARCH_OVERSHOOT
 
 
 def closing_point(points, target, best, ceiling, sides):
     """The next x between the best x and the smallest x above it that costs more (Illinois
     regula falsi on the logs), where one more point closes the bracket when it can (within
     SEARCH_TOLERANCE of both ends), else at least half the tolerance inside each end."""
-    low, high = np.log(best), np.log(ceiling)
+    low, high = elementary.log(best), elementary.log(ceiling)
     f_low, f_high = log_cost(points, best, target), log_cost(points, ceiling, target)
     if len(sides) > 1 and sides[-1] == sides[-2]:
         if sides[-1]:
@@ -586,7 +583,7 @@ def closing_point(points, target, best, ceiling, sides):
         else:
             f_low /= 2
     middle = low + (high - low) * f_low / (f_low - f_high) if np.isfinite(f_low) else (low + high) / 2
-    tolerance = np.log(SEARCH_TOLERANCE)
+    tolerance = elementary.log(SEARCH_TOLERANCE)
     if high - tolerance <= low + tolerance:
-        return float(np.exp(np.clip(middle, high - tolerance, low + tolerance)))
-    return float(np.exp(np.clip(middle, low + tolerance / 2, high - tolerance / 2)))
+        return float(elementary.exp(np.clip(middle, high - tolerance, low + tolerance)))
+    return float(elementary.exp(np.clip(middle, low + tolerance / 2, high - tolerance / 2)))

@@ -42,8 +42,8 @@ def fill_holes(span):
 
 # --- polynomial (Ch. 5) -------------------------------------------------------------
 
-VANDER_BUDGET = 1 << 22   # basis values evaluated at once when decoding (32 MB)
 FIT_BUDGET = 1 << 26      # basis values of one least-squares fit when encoding (512 MB)
+RANK_TOLERANCE = np.finfo(float).eps   # times the samples: a fit's columns this dependent are dropped
 
 
 def chebyshev_points(length):
@@ -63,7 +63,7 @@ def poly_degree(degree, length):
 
 
 def poly_forward(spans, degree, basis="chebyshev", first=1, step=1.0):
-    """Least-squares polynomial coefficients of each span.
+    """Least-squares polynomial coefficients of each span (``least_squares``).
 
     ``chebyshev`` (default): coefficients of T0..Tn on the span mapped to [-1, 1], lowest
     first. The Chebyshev-Vandermonde matrix is well conditioned at any degree, so high
@@ -81,7 +81,7 @@ def poly_forward(spans, degree, basis="chebyshev", first=1, step=1.0):
                        f"(at most {8 * FIT_BUDGET / 1e9:.1f}): use a lower degree", field="degree")
     if basis == "chebyshev":
         vander = np.polynomial.chebyshev.chebvander(chebyshev_points(length), n)
-        return np.linalg.lstsq(vander, spans.T, rcond=None)[0].T
+        return least_squares(vander, spans.reshape(-1, length)).reshape(spans.shape[:-1] + (n + 1,))
     rows = np.atleast_2d(spans)
     xs = np.broadcast_to(np.atleast_2d(power_points(first, length, step)), rows.shape)
     fits = np.array([_power_fit(x, row, n) for x, row in zip(xs, rows)])
@@ -89,51 +89,89 @@ def poly_forward(spans, degree, basis="chebyshev", first=1, step=1.0):
 
 
 def _power_fit(x, row, n):
-    """``polyfit`` of one row; rank warnings are the documented instability, not news. A degree
-    whose powers of x overflow cannot be fitted at all: that is an error, not a row of NaN."""
-    import warnings
-
-    with warnings.catch_warnings(), np.errstate(all="ignore"):
-        warnings.simplefilter("ignore", np.exceptions.RankWarning)
+    """``polyfit`` of one row (its Vandermonde matrix, highest power first). A degree whose
+    powers of x overflow cannot be fitted at all: that is an error, not a row of NaN."""
+    with np.errstate(over="ignore", invalid="ignore"):
         scale = np.abs(x).max() ** (2 * n)
-        if n and not (np.isfinite(scale) and scale > 0):
-            raise MzcError(f"the power basis cannot fit degree {n} on columns up to x = {x.max():g} (x^{2 * n} "
-                           "leaves binary64; the thesis's basis is unstable past degree ~40): use --basis chebyshev "
-                           "or a lower degree", field="degree")
-        try:
-            fit = np.polyfit(x, row, n)
-        except np.linalg.LinAlgError:
-            fit = np.full(n + 1, np.nan)
+    if n and not (np.isfinite(scale) and scale > 0):
+        raise MzcError(f"the power basis cannot fit degree {n} on columns up to x = {x.max():g} (x^{2 * n} "
+                       "leaves binary64; the thesis's basis is unstable past degree ~40): use --basis chebyshev "
+                       "or a lower degree", field="degree")
+    fit = least_squares(np.vander(x, n + 1), row[None, :])[0]
     if not np.isfinite(fit).all():
         raise MzcError(f"the power basis fit of degree {n} failed (its Vandermonde matrix is singular in binary64): "
                        "use --basis chebyshev or a lower degree", field="degree")
     return fit
 
 
-def poly_inverse(coefficients, length, basis="chebyshev", first=1, step=1.0):
-    """Evaluate the polynomials of ``poly_forward`` at the span's samples.
+def least_squares(basis, values):
+    """(k, p) coefficients c minimising |basis @ c_i - values_i| for each of the k rows of
+    ``values`` (k, m), ``basis`` (m, p), by Householder QR of the basis with its columns
+    scaled to unit length (as ``polyfit`` scales them).
 
-    Through the basis matrix (span x coefficients) while it holds at most VANDER_BUDGET values,
-    the way every file so far decoded; beyond that by a recurrence over the coefficients
-    (Clenshaw's for Chebyshev, Horner's for powers), whose memory is the output's, so no
-    degree and length a file declares can ask for more than the grid it decodes to.
+    Written in numpy's elementwise operations and sums, not LAPACK's: LAPACK works through
+    BLAS, whose kernels are chosen by the CPU and round differently, and a file must be the
+    same bytes on every machine. Columns are taken in order until one lies within
+    m * RANK_TOLERANCE (relative) of those before it: the fit then stops at the degree the
+    basis can still tell apart in binary64, and the higher coefficients are 0 (LAPACK's
+    lstsq would spread them at random over the dependent columns).
     """
+    a = np.array(basis, dtype=float)
+    b = np.array(values, dtype=float).T
+    m, p = a.shape
+    scale = np.sqrt((a * a).sum(axis=0))
+    scale[scale == 0] = 1.0
+    a /= scale
+    rank = 0
+    for j in range(min(m, p)):
+        if not reflect(a, b, j, len(a) * RANK_TOLERANCE):
+            break
+        rank = j + 1
+    coefficients = np.zeros((b.shape[1], p))
+    for j in range(rank - 1, -1, -1):   # back substitution in R, the upper triangle of a
+        known = (a[j, j + 1:rank, None] * coefficients[:, j + 1:rank].T).sum(axis=0)
+        coefficients[:, j] = (b[j] - known) / a[j, j]
+    return coefficients / scale
+
+
+def reflect(a, b, j, tolerance):
+    """One Householder step: ``a``'s column j zeroed below its diagonal, the same reflection
+    applied to ``a``'s later columns and to every column of ``b`` (in place). False, and
+    nothing changed, when column j is within ``tolerance`` of the columns before it."""
+    v = a[j:, j].copy()
+    norm = np.sqrt((v * v).sum())
+    if not norm > tolerance:
+        return False
+    alpha = -norm if v[0] >= 0 else norm
+    v[0] -= alpha
+    factor = 2 / (v * v).sum()
+    for target in (a[j:, j:], b[j:]):
+        target -= (factor * v)[:, None] * (v[:, None] * target).sum(axis=0)
+    return True
+
+
+def poly_inverse(coefficients, length, basis="chebyshev", first=1, step=1.0):
+    """Evaluate the polynomials of ``poly_forward`` at the span's samples: by Clenshaw's
+    recurrence for Chebyshev, Horner's for powers, elementwise over the spans, so every
+    machine decodes the same bits and memory is the output's whatever degree a file declares."""
     coefficients = np.asarray(coefficients, dtype=float)
-    count = coefficients.shape[-1]
     with np.errstate(over="ignore", invalid="ignore"):
         if basis == "chebyshev":
-            points = chebyshev_points(length)
-            if length * count <= VANDER_BUDGET:
-                return coefficients @ np.polynomial.chebyshev.chebvander(points, count - 1).T
-            return np.polynomial.chebyshev.chebval(points, np.moveaxis(coefficients, -1, 0))
+            return clenshaw(coefficients, chebyshev_points(length))
         x = power_points(first, length, step)
-        if length * count <= VANDER_BUDGET:
-            powers = np.arange(count)[::-1]
-            return np.einsum("...mn,...n->...m", x[..., None] ** powers, coefficients)
         values = np.zeros(coefficients.shape[:-1] + (length,))
-        for index in range(count):   # Horner, highest power first as the coefficients are stored
+        for index in range(coefficients.shape[-1]):   # Horner, highest power first as the coefficients are stored
             values = values * x + coefficients[..., index:index + 1]
         return values
+
+
+def clenshaw(coefficients, points):
+    """sum_i c_i T_i(t) at ``points`` t for each row of ``coefficients`` (..., p), lowest order first."""
+    after = np.zeros(coefficients.shape[:-1] + points.shape)
+    current = np.zeros_like(after)
+    for index in range(coefficients.shape[-1] - 1, 0, -1):
+        current, after = coefficients[..., index:index + 1] + 2 * points * current - after, current
+    return coefficients[..., :1] + points * current - after
 
 
 # --- DFT (Ch. 6, §6.2.2) --------------------------------------------------------------
