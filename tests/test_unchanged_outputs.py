@@ -10,17 +10,20 @@ as an AVX2 machine (AVX-512 off, OpenBLAS's Haswell kernels) and an SSE4 one (AV
 Nehalem's) would run it.
 """
 
+import importlib
 import json
 import os
 import platform
 import subprocess
 import sys
 
+import numpy as np
 import pytest
 
 from golden import FACES, REFERENCE, all_digests
 
 GOLDEN = REFERENCE.parents[1] / "golden.py"
+UMATH = "numpy._core._multiarray_umath" if np.__version__ >= "2" else "numpy.core._multiarray_umath"
 OTHER_MACHINES = {   # case: (the feature it switches off, numpy's dispatch targets at or above it, OpenBLAS's core)
     "AVX-512 off": ("AVX512F", lambda target: target == "X86_V4" or target.startswith("AVX512"), "Haswell"),
     "AVX2 off": ("AVX2", lambda target: target in ("X86_V3", "X86_V4", "AVX2", "FMA3") or target.startswith("AVX512"),
@@ -58,10 +61,9 @@ def test_the_reference_covers_every_command_and_codec():
 
 
 def numpy_cpu():
-    """(numpy's dispatch targets, the features this CPU has) as numpy reads them."""
-    from numpy._core._multiarray_umath import __cpu_dispatch__, __cpu_features__
-
-    return list(__cpu_dispatch__), {name for name, present in __cpu_features__.items() if present}
+    """(numpy's dispatch targets, the features it uses on this CPU)."""
+    umath = importlib.import_module(UMATH)
+    return list(umath.__cpu_dispatch__), {name for name, present in umath.__cpu_features__.items() if present}
 
 
 def switched_off_environment(case):
@@ -72,7 +74,8 @@ def switched_off_environment(case):
         pytest.skip(f"{case}: numpy's x86 features do not exist on {platform.machine()}")
     targets, present = numpy_cpu()
     if feature not in present:
-        pytest.skip(f"{case}: this CPU has no {feature}, so numpy never runs those loops here: nothing to switch off")
+        pytest.skip(f"{case}: numpy does not use {feature} here (the CPU lacks it, or NPY_DISABLE_CPU_FEATURES "
+                    "switched it off already), so it runs none of those loops: nothing more to switch off")
     off = [target for target in targets if above(target)]
     return {**os.environ, "NPY_DISABLE_CPU_FEATURES": " ".join(off), "OPENBLAS_CORETYPE": core}, off
 
@@ -88,7 +91,7 @@ def other_machines():
         except pytest.skip.Exception as skipped:
             started[case] = str(skipped)
             continue
-        check = f"import numpy._core._multiarray_umath as m; assert not any(m.__cpu_features__[t] for t in {off!r})"
+        check = f"import {UMATH} as m; assert not any(m.__cpu_features__[t] for t in {off!r})"
         command = [sys.executable, "-c", f"{check}; import runpy, sys; sys.argv = ['golden', '--print']; "
                                          f"runpy.run_path({str(GOLDEN)!r}, run_name='__main__')"]
         started[case] = (subprocess.Popen(command, env=environment, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
