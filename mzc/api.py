@@ -97,11 +97,12 @@ def slice(surface: Any, d1: float | None = None, d2: float | None = None, *, row
           cols: int | None = None, align: str = "none", projection: str = "auto", view: str = "auto",
           center: tuple[float, float, float] | None = None, axis: tuple[float, float, float] | None = None,
           units: str | None = None, thesis_grid: bool = False, classes: Sequence[int] | None = None,
-          cloud: str = "auto") -> ZGrid:
+          cloud: str = "auto", charts: str | int = "auto") -> ZGrid:
     """Cut a surface into a z-grid (``mzc slice``): spacings d1 (rows) and d2 (columns) default to
     the data's own, the cutting surfaces (``projection``) to the ones that see it best; ``classes``
     keeps those ASPRS classes of a LAS/LAZ cloud (2: ground), ``cloud`` (auto, bin, delaunay)
-    says how a point cloud becomes a surface.
+    says how a point cloud becomes a surface; ``charts`` (1, N or auto) whether a closed or
+    many-part object is cut into charts, planar grids each seeing its own piece (``ZGrid.charts``).
 
     A raster (a GeoTIFF or ESRI ASCII grid path, or a grid read from one: it has a ``raster``
     layout) is its own z-grid, node for node: it is returned as it is (with ``units`` when
@@ -115,7 +116,7 @@ def slice(surface: Any, d1: float | None = None, d2: float | None = None, *, row
         surface = as_mesh(surface)
     return slice_surface(surface, d1=d1, d2=d2, rows=rows, cols=cols, align=align, units=units,
                          projection=projection, center=center, axis=axis, view=view, thesis_grid=thesis_grid,
-                         classes=None if classes is None else tuple(classes), cloud=cloud)
+                         classes=None if classes is None else tuple(classes), cloud=cloud, charts=charts)
 
 
 def encode(grid: ZGrid | np.ndarray, codec: str = "dwt2d", **options: Any) -> bytes:

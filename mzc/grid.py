@@ -6,6 +6,11 @@ grid frame's (x, y) and the value is z; central projections (``mzc.projections``
 planes and half-planes or cones through an axis, the value being the distance along the
 node's ray. Row r is one "horizontal" cutting surface of the thesis; a rigid transform maps
 the grid frame back to the frame of the input surface.
+
+A multi-chart grid (``charts``) holds several planar grids, each a block of the values
+looking along one axis of the grid's frame, so that a closed or many-part surface is seen
+whole: every chart is a piece of the surface that its own node lines meet within 60
+degrees (``mzc.ops.charts``), and triangulation zips the charts together.
 """
 
 import re
@@ -16,7 +21,7 @@ import numpy as np
 from mzc import projections
 from mzc.errors import MzcError
 from mzc.limits import length_problem
-from mzc.vectors import rotated
+from mzc.vectors import matrix_product, rotated
 
 IDENTITY_TRANSFORM = np.hstack([np.eye(3), np.zeros((3, 1))])
 TOKEN = re.compile(r"[^\s\x00-\x1f\x7f]{1,64}")   # one header token: no space, no control character
@@ -24,6 +29,7 @@ MAX_CRS = 16384            # characters of a crs line's WKT (a WKT2 of a project
 CELLS = ("area", "point")  # what a raster's value stands for: its cell, or a sample at its node
 ROW_ORDERS = ("down", "up")   # a raster's first row: the grid's last (north-up images) or its first
 SAMPLES = ("uint8", "int8", "uint16", "int16", "uint32", "int32", "float32", "float64")   # a raster's type
+MAX_CHARTS = 65536         # charts of one grid
 
 
 @dataclass(frozen=True)
@@ -48,6 +54,62 @@ class Raster:
     def words(self) -> str:
         """The values of the header's ``raster`` line."""
         return f"{self.cells} {self.rows} {self.sample}"
+
+
+@dataclass(frozen=True)
+class Chart:
+    """One chart of a multi-chart grid: the block of values at rows row0..row0+rows-1 and columns
+    col0..col0+cols-1, a planar grid looking along ``view`` (a key of projections.PLANAR_VIEWS) of
+    the grid's frame, whose node (0, 0) lies on the lattice of the grid's spacings at (i0, j0):
+    u = i0 d2, v = j0 d1 in the view's frame (spec/zgrid.md, Charts)."""
+
+    view: str
+    row0: int
+    col0: int
+    rows: int
+    cols: int
+    i0: int
+    j0: int
+
+    def __post_init__(self) -> None:
+        if self.view not in projections.PLANAR_VIEWS:
+            raise MzcError(f"chart view {self.view!r} is not one of {', '.join(projections.PLANAR_VIEWS)}",
+                           field="charts")
+        for name in ("row0", "col0", "rows", "cols", "i0", "j0"):
+            value = getattr(self, name)
+            if not isinstance(value, int) or abs(value) > 1 << 40:
+                raise MzcError(f"chart {name} {value!r} is not a whole number of nodes", field="charts")
+        if min(self.row0, self.col0) < 0 or min(self.rows, self.cols) < 1:
+            raise MzcError("a chart's block starts at row and column 0 or later and has a row and a column",
+                           field="charts")
+
+    def block(self) -> tuple[slice, slice]:
+        """The chart's (rows, columns) of the grid's values."""
+        return slice(self.row0, self.row0 + self.rows), slice(self.col0, self.col0 + self.cols)
+
+    def words(self) -> list[str]:
+        """The chart's seven values on the header's ``charts`` line."""
+        return [self.view, *(str(getattr(self, name)) for name in ("row0", "col0", "rows", "cols", "i0", "j0"))]
+
+    def with_rows_inserted(self, n: int) -> "Chart":
+        """The chart after ``n`` rows are inserted between each pair of the grid's rows (densify)."""
+        return replace(self, row0=self.row0 * (n + 1), rows=(self.rows - 1) * (n + 1) + 1, j0=self.j0 * (n + 1))
+
+
+def check_charts(charts, shape):
+    """Refuse charts that leave the grid, overlap, or are too many."""
+    if len(charts) > MAX_CHARTS:
+        raise MzcError(f"{len(charts)} charts: at most {MAX_CHARTS}", field="charts")
+    covered = np.zeros(shape, dtype=np.int8)
+    for chart in charts:
+        if chart.row0 + chart.rows > shape[0] or chart.col0 + chart.cols > shape[1]:
+            raise MzcError(f"a chart's block (rows {chart.row0}.., columns {chart.col0}..) leaves the "
+                           f"{shape[0]} x {shape[1]} grid", field="charts")
+        block = covered[chart.block()]
+        if block.any():
+            raise MzcError(f"the charts at row {chart.row0}, column {chart.col0} overlap another", field="charts")
+        block[...] = 1
+    return covered.astype(bool)
 
 
 def check_crs(value):
@@ -102,6 +164,7 @@ class ZGrid:
     radius: float | None = None
     crs: str | None = None
     raster: Raster | None = None
+    charts: tuple[Chart, ...] | None = None
 
     def __post_init__(self) -> None:
         self.z = np.asarray(self.z, dtype=float)
@@ -134,6 +197,21 @@ class ZGrid:
         if self.projection != "planar" and self.georeferenced:
             raise MzcError(f"a {self.projection} grid has no raster or CRS: they belong to planar grids",
                            field="crs" if self.crs else "raster")
+        if self.charts is not None:
+            self.check_charts()
+
+    def check_charts(self) -> None:
+        """Refuse charts that a multi-chart grid cannot hold: they are planar blocks of its values,
+        without a raster's georeferencing, and no value lies outside them."""
+        self.charts = tuple(self.charts or ())
+        if not self.charts:
+            raise MzcError("a multi-chart grid has at least one chart", field="charts")
+        if self.projection != "planar" or self.georeferenced or self.origin != (0.0, 0.0):
+            raise MzcError("a multi-chart grid is planar, at origin 0 0, without a CRS or raster layout",
+                           field="charts")
+        covered = check_charts(self.charts, self.z.shape)
+        if (self.valid & ~covered).any():
+            raise MzcError("a value lies outside every chart", field="charts")
 
     @property
     def georeferenced(self) -> bool:
@@ -181,6 +259,17 @@ class ZGrid:
         """Map (..., 3) input-frame points to the grid frame (inverse of to_input_frame)."""
         rotation, shift = self.transform[:, :3], self.transform[:, 3]
         return rotated(points - shift, rotation.T)
+
+    def chart_grids(self) -> list["ZGrid"]:
+        """Each chart as a planar grid of its own: its block of values, its origin on the lattice and
+        its frame (the grid's, turned to look along the chart's view); [self] without charts."""
+        if self.charts is None:
+            return [self]
+        rotation, shift = self.transform[:, :3], self.transform[:, 3:]
+        return [ZGrid(z=self.z[chart.block()], d1=self.d1, d2=self.d2, origin=(chart.i0 * self.d2, chart.j0 * self.d1),
+                      transform=np.hstack([matrix_product(rotation, projections.view_rotation(chart.view)), shift]),
+                      units=self.units, nodata=self.nodata)
+                for chart in self.charts]
 
     def with_z(self, z: np.ndarray, **changes) -> "ZGrid":
         """A copy with new values (and any other fields changed)."""

@@ -27,7 +27,21 @@ import numpy as np
 from mzc import elementary
 
 PROJECTIONS = ("planar", "cylindrical", "spherical")
+PLANAR_VIEWS = {   # the axes of a planar grid frame looking along each axis of a frame, in that frame
+    "+z": ((1, 0, 0), (0, 1, 0), (0, 0, 1)),
+    "-z": ((-1, 0, 0), (0, 1, 0), (0, 0, -1)),
+    "+x": ((0, 0, -1), (0, 1, 0), (1, 0, 0)),
+    "-x": ((0, 0, 1), (0, 1, 0), (-1, 0, 0)),
+    "+y": ((-1, 0, 0), (0, 0, 1), (0, 1, 0)),
+    "-y": ((1, 0, 0), (0, 0, 1), (0, -1, 0)),
+}
 FULL_TURN_TOLERANCE = 1e-9   # relative: columns spanning 2 pi R0 this closely make a full turn
+
+
+def view_rotation(view):
+    """The rotation (3x3, columns the grid frame's axes) from a planar grid frame looking along
+    ``view`` (a key of PLANAR_VIEWS) to the frame it looks along an axis of."""
+    return np.array(PLANAR_VIEWS[view], dtype=float).T
 
 
 def to_points(projection, radius, u, v, value):

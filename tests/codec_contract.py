@@ -170,6 +170,7 @@ def assert_same_grid(got, want):
     assert (got.projection, bits(got.radius)) == (want.projection, bits(want.radius))
     assert (got.units, got.nodata) == (want.units, want.nodata)
     assert (got.crs, got.raster) == (want.crs, want.raster)
+    assert got.charts == want.charts
 
 
 def check_fixtures(codec):

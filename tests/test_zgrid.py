@@ -108,7 +108,7 @@ GOOD = b"mzc-zgrid 1.0\nrows 2\ncols 2\nd1 1\nd2 1\ndata\n1 2\n3 4\n"
 @pytest.mark.parametrize("data, message, line", [
     (b"rows 2\n", "missing magic", 1),
     (b"", "missing magic", 1),
-    (GOOD.replace(b"mzc-zgrid 1.0", b"mzc-zgrid 4.0"), "newer than this mzc reads", 1),
+    (GOOD.replace(b"mzc-zgrid 1.0", b"mzc-zgrid 5.0"), "newer than this mzc reads", 1),
     (GOOD.replace(b"mzc-zgrid 1.0", b"mzc-zgrid one"), "bad version", 1),
     (GOOD.replace(b"mzc-zgrid", b"mzc-other"), "expected an mzc-zgrid file", 1),
     (GOOD.replace(b"d2 1\n", b""), "required header line missing", None),

@@ -14,7 +14,7 @@ Reads the header only (and checks the file's checksum), so it is quick on any fi
 def command(input, decode):
     import numpy as np
 
-    from mzc.formats import projected_major, read_any
+    from mzc.formats import header_versions, read_any
     from mzc.formats.header import read_grid_fields, read_header, split_magic
     from mzc.grid import ZGrid
     from mzc.streams import display_name, read_input
@@ -22,7 +22,7 @@ def command(input, decode):
     data = read_input(input)
     source = display_name(input)
     kind, major, minor = split_magic(data, source)
-    header, _body, _line = read_header(data, source, kind, major, projected_major=projected_major(kind, source))
+    header, _body, _line = read_header(data, source, kind, major, **header_versions(kind, source))
     fields, rows, cols = read_grid_fields(header)
     grid = read_any(data, source) if decode else ZGrid(z=np.broadcast_to(np.nan, (rows, cols)), **fields)
     lines = [
@@ -31,12 +31,25 @@ def command(input, decode):
         f"bytes     {len(data)}",
         f"grid      {rows} rows x {cols} cols, d1 {grid.d1:g} d2 {grid.d2:g}{' ' + grid.units if grid.units else ''}",
         f"cut by    {cutting_surfaces(grid)}",
+        *chart_lines(grid),
     ]
     if decode:
         lines += decoded_lines(grid, len(data))
     lines.append("header")
     lines += [f"  {keyword} {' '.join(values)}" for keyword, (values, _) in header.fields.items()]
     click.echo("\n".join(lines))
+
+
+def chart_lines(grid):
+    """A multi-chart grid's charts: how many, and each one's view, block and nodes' lattice place."""
+    if grid.charts is None:
+        return []
+    from collections import Counter
+
+    views = Counter(chart.view for chart in grid.charts)
+    lines = [f"charts    {len(grid.charts)} ({', '.join(f'{count} {view}' for view, count in sorted(views.items()))})"]
+    return lines + [f"  {chart.view} {chart.rows} x {chart.cols} at row {chart.row0}, column {chart.col0}; "
+                    f"lattice {chart.i0} {chart.j0}" for chart in grid.charts]
 
 
 def decoded_lines(grid, size):
@@ -51,6 +64,8 @@ def decoded_lines(grid, size):
 
 def cutting_surfaces(grid):
     """What cut the grid: the thesis's planes, or a central projection about its centre and axis."""
+    if grid.charts is not None:
+        return "charts (planar grids along the frame's axes, each its own piece of the surface)"
     if grid.projection == "planar":
         return "planar (parallel planes; values along the grid's z)"
     centre, axis = grid.transform[:, 3], grid.transform[:, 1]

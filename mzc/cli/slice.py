@@ -24,6 +24,15 @@ def one_word(value):
     return value
 
 
+def chart_count(value):
+    """``--charts`` as auto or a positive count, or a usage error."""
+    if value == "auto":
+        return value
+    if not (value.isascii() and value.isdigit() and 1 <= int(value) <= 65536):
+        raise click.BadParameter(f"{value!r} is not auto or a number of charts 1..65536")
+    return int(value)
+
+
 def class_codes(value):
     """``--classes`` as a tuple of ASPRS class codes (0..255), or a usage error."""
     if value is None:
@@ -63,6 +72,11 @@ SLICE_OPTIONS = [   # the grid's options, shared with 'mzc batch encode'
     click.option("--classes", metavar="LIST", callback=lambda ctx, param, value: class_codes(value),
                  help="Keep only the points of these classes of a LAS/LAZ cloud: ASPRS codes, comma-separated "
                       "(2: ground; 2,9: ground and water)."),
+    click.option("--charts", metavar="auto|N", default="auto", show_default=True,
+                 callback=lambda ctx, param, value: chart_count(value),
+                 help="1: one grid; N: at most N charts, planar grids along the frame's six axes, each seeing its "
+                      "own piece of the surface within 60 degrees (a closed or many-part object); auto: charts "
+                      "when one grid would hold less than 90% of the surface's area (spec/zgrid.md, Charts)."),
     click.option("--cloud", type=click.Choice(["auto", "bin", "delaunay"]), default="auto", show_default=True,
                  help="How a point cloud becomes a surface: bin (a local plane fit at each node, for dense clouds) "
                       "or delaunay (triangles between its points); auto bins clouds of over 100,000 points that "
@@ -100,7 +114,7 @@ refused.
 @slice_options
 @grid_output_options
 def command(input, output, d1, d2, rows, cols, thesis_grid, align, projection, view, center, axis, units,
-            classes, cloud, file_format, plain, float32, precision):
+            classes, charts, cloud, file_format, plain, float32, precision):
     from mzc.api import slice as slice_surface
     from mzc.errors import about
     from mzc.rasters import raster_or_mesh
@@ -114,5 +128,5 @@ def command(input, output, d1, d2, rows, cols, thesis_grid, align, projection, v
     with about(source, "slicing it"):
         grid = slice_surface(surface, d1=d1, d2=d2, rows=rows, cols=cols, align=align, units=units,
                              projection=projection, center=center, axis=axis, view=view,
-                             thesis_grid=thesis_grid, classes=classes, cloud=cloud)
+                             thesis_grid=thesis_grid, classes=classes, charts=charts, cloud=cloud)
     write(grid)

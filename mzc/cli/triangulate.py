@@ -21,8 +21,8 @@ placed back in the input surface's frame. The output format follows the -o exten
 @jump_angle_option
 def command(input, output, file_format, jump_angle):
     from mzc.meshes import write_mesh
-    from mzc.ops.triangulation import GridMesh
+    from mzc.ops.triangulation import mesh_of
     from mzc.streams import check_not_input
 
     check_not_input(output, input)
-    write_mesh(output, GridMesh(read_grid(input), jump_angle), file_format)   # made as it is written
+    write_mesh(output, mesh_of(read_grid(input), jump_angle), file_format)   # a grid's made as it is written

@@ -29,12 +29,15 @@ def reader_for(data, source):
     return known_codec(kind, source).decode
 
 
-def projected_major(kind, source):
-    """The first major version of ``kind`` whose files may hold a central projection (the newest
-    one: a codec's files of projected grids take the major version it writes)."""
-    if kind == "zgrid":
-        return module_for(kind).PROJECTED_VERSION[0]
-    return known_codec(kind, source).version[0]
+def header_versions(kind, source):
+    """{projected_major, charted_major}: the first major versions of ``kind`` whose files may hold
+    a central projection and charts (a built-in format's own; for another codec, its newest
+    version for projections and none for charts)."""
+    if kind in REGISTRY:
+        module = module_for(kind)
+        return {"projected_major": module.PROJECTED_VERSION[0],
+                "charted_major": getattr(module, "CHARTED_VERSION", (None,))[0]}
+    return {"projected_major": known_codec(kind, source).version[0], "charted_major": None}
 
 
 def known_codec(kind, source):

@@ -15,6 +15,10 @@ the version its writer gives planar grids (``VERSION``: the older one where the 
 not change, so older readers keep reading them), the one it gives projected grids
 (``PROJECTED_VERSION``) and the oldest major it reads (``OLDEST_MAJOR``).
 
+The version rule for charts is the same: a multi-chart grid's ``charts`` line changes the
+surface a file decodes to, so it needs a major version that knows it (``CHARTED_VERSION``
+of the z-grid and of dwt2d; the thesis's row codecs code one chart).
+
 The georeferencing lines (``crs``, ``raster``) of a planar grid read from a raster describe
 the same nodes, so they came in a minor version of each format (``GEOREF_SINCE``: major ->
 first minor that reads them; older readers ignore them and decode the same surface); a grid
@@ -36,7 +40,7 @@ import numpy as np
 
 from mzc import projections
 from mzc.errors import MzcError
-from mzc.grid import IDENTITY_TRANSFORM, Raster, check_crs, check_token
+from mzc.grid import IDENTITY_TRANSFORM, MAX_CHARTS, Chart, Raster, check_charts, check_crs, check_token
 from mzc.limits import MAX_DIMENSION, check_grid_size, length_problem
 from mzc.numbers import parse_int
 from mzc.vectors import determinant, matrix_product
@@ -59,9 +63,15 @@ def split_magic(data, source):
     return kind, int(version[1]), int(version[2])
 
 
-def file_version(grid, planar, projected, georeferenced):
-    """The version a format writes ``grid`` with: its ``planar`` one, its ``projected`` one, or
-    its ``georeferenced`` one for a planar grid with a CRS or raster layout."""
+def file_version(grid, planar, projected, georeferenced, charted=None):
+    """The version a format writes ``grid`` with: its ``planar`` one, its ``projected`` one, its
+    ``georeferenced`` one for a planar grid with a CRS or raster layout, or its ``charted`` one
+    for a multi-chart grid (refused by a format that has none)."""
+    if grid.charts is not None:
+        if charted is None:
+            raise MzcError(f"this format codes one chart; the grid has {len(grid.charts)} (code it with --dwt2d, "
+                           "or slice with --charts 1)", field="charts")
+        return tuple(charted)
     if grid.projection != "planar":
         return tuple(projected)
     return tuple(georeferenced) if grid.georeferenced else tuple(planar)
@@ -76,15 +86,17 @@ class Header:
     """The keyword lines of a header, with the line number of each for error messages.
 
     ``major`` is the file's major version; ``projected`` is True when it may hold a central
-    projection, ``georeferenced`` when its version reads the ``crs`` and ``raster`` lines.
+    projection, ``georeferenced`` when its version reads the ``crs`` and ``raster`` lines,
+    ``charted`` when it may hold charts.
     """
 
-    def __init__(self, source, major=1, projected=False, georeferenced=False):
+    def __init__(self, source, major=1, projected=False, georeferenced=False, charted=False):
         self.source = source
         self.fields = {}
         self.major = major
         self.projected = projected
         self.georeferenced = georeferenced
+        self.charted = charted
 
     def add(self, keyword, values, line):
         if keyword in self.fields:
@@ -115,9 +127,10 @@ class Header:
         values = self.tokens(keyword, 1, required)
         if values is None:
             return default
-        value = parse_int(values[0])
-        if value is None:
-            raise self.error(keyword, f"not an integer: {values[0][:40]!r}")
+        try:
+            value = integer_word(values[0])
+        except MzcError as error:
+            raise self.error(keyword, error.message) from None
         if (low is not None and value < low) or (high is not None and value > high):
             raise self.error(keyword, f"{value} is outside {low}..{high}")
         return value
@@ -163,7 +176,7 @@ class Header:
 
 
 def read_header(data, source, kind, supported_major, oldest_major=1, projected_major=None, checksum_since=None,
-                binary=False, georef_since=None):
+                binary=False, georef_since=None, charted_major=None):
     """Parse magic and header lines of ``data``; return (Header, body bytes, first body line number).
 
     Majors above ``supported_major`` are refused (upgrade mzc), and so are majors below
@@ -172,7 +185,7 @@ def read_header(data, source, kind, supported_major, oldest_major=1, projected_m
     is checked against the whole file; from ``checksum_since[major]`` (a minor version) on
     it is required. A ``binary`` body (dwt2d's payload) refuses CRLF line ends: a text-mode copy
     changed its bytes. From ``georef_since[major]`` on, the ``crs`` and ``raster`` lines are read
-    (an older version's reader ignored them).
+    (an older version's reader ignored them); from ``charted_major`` on, the ``charts`` line.
     """
     found, major, minor = split_magic(data, source)
     if found != kind:
@@ -185,7 +198,8 @@ def read_header(data, source, kind, supported_major, oldest_major=1, projected_m
                        source=source, line=1)
     since = (georef_since or {}).get(major)
     header = Header(source, major, projected=projected_major is not None and major >= projected_major,
-                    georeferenced=since is not None and minor >= since)
+                    georeferenced=since is not None and minor >= since,
+                    charted=charted_major is not None and major >= charted_major)
     position = data.index(b"\n") + 1 if b"\n" in data else len(data)
     line_number = 1
     checksum_line = None
@@ -278,6 +292,7 @@ def read_grid_fields(header):
         nodata=header.word("nodata", required=False, default="nan"),
         **projected,
         **read_georeference(header, projected.get("projection", "planar")),
+        **read_charts(header, rows, cols),
     )
     for name in ("units", "nodata"):
         try:
@@ -333,6 +348,36 @@ def read_georeference(header, projection):
     return fields
 
 
+def read_charts(header, rows, cols):
+    """``charts`` of a version that holds them: seven values per chart (view, row0, col0, rows,
+    cols, i0, j0), checked against the grid (mzc.grid.Chart); {} without the line."""
+    if not header.has("charts"):
+        return {}
+    if not header.charted:
+        raise header.error("charts", "a multi-chart grid needs a newer major version of this format (older "
+                                     "readers would read its charts as one grid)")
+    words = header.tokens("charts")
+    if not words or len(words) % 7:
+        raise header.error("charts", f"expected 7 values per chart, found {len(words)}")
+    if len(words) // 7 > MAX_CHARTS:
+        raise header.error("charts", f"{len(words) // 7} charts: at most {MAX_CHARTS}")
+    try:
+        charts = tuple(Chart(words[at], *(integer_word(word) for word in words[at + 1:at + 7]))
+                       for at in range(0, len(words), 7))
+        check_charts(charts, (rows, cols))
+    except MzcError as error:
+        raise header.error("charts", error.message) from None
+    return {"charts": charts}
+
+
+def integer_word(word):
+    """An integer of a header line, or an error quoting the word."""
+    value = parse_int(word)
+    if value is None:
+        raise MzcError(f"not an integer: {word[:40]!r}")
+    return value
+
+
 def format_number(value):
     """The shortest text that reads back as ``value`` (``3`` rather than ``3.0``)."""
     text = repr(float(value))
@@ -362,5 +407,7 @@ def grid_header_lines(grid, write_defaults=True):
         lines.append(f"crs {grid.crs}")
     if grid.raster is not None:
         lines.append(f"raster {grid.raster.words()}")
+    if grid.charts is not None:
+        lines.append("charts " + " ".join(word for chart in grid.charts for word in chart.words()))
     return lines
 

@@ -10,7 +10,8 @@ line, then the heights, in one of two bodies (as netpbm's plain and raw variants
   for invalid nodes. A new major version, so readers that only know text bodies refuse it.
 
 A planar grid read from a raster adds the ``crs`` and ``raster`` lines, a minor version of
-each body (1.1, 3.1); other grids keep 1.0, 2.0 and 3.0 byte for byte.
+each body (1.1, 3.1); other grids keep 1.0, 2.0 and 3.0 byte for byte. A multi-chart grid
+(``charts``) is ``mzc-zgrid 4.0``: 3.0 with the ``charts`` line, a raw body only.
 """
 
 import numpy as np
@@ -36,8 +37,9 @@ OLDEST_MAJOR = 1
 RAW_VERSION = (3, 0)         # 2.0's header with a raw binary body, planar or projected
 GEOREFERENCED_VERSION = (1, 1)       # 1.0 with the crs and raster lines of a grid read from a raster
 RAW_GEOREFERENCED_VERSION = (3, 1)   # 3.0 with them
+CHARTED_VERSION = (4, 0)     # 3.0 with the charts line of a multi-chart grid
 GEOREF_SINCE = dict([GEOREFERENCED_VERSION, RAW_GEOREFERENCED_VERSION])   # major -> first minor with crs, raster
-CHECKSUM_SINCE = {RAW_VERSION[0]: 0}   # a raw body is never read without its crc32 line
+CHECKSUM_SINCE = {RAW_VERSION[0]: 0, CHARTED_VERSION[0]: 0}   # a raw body is never read without its crc32 line
 SAMPLES = {"float64": "<f8", "float32": "<f4"}   # the raw line's value -> numpy dtype of the body
 
 
@@ -68,8 +70,9 @@ def read(data, source="<bytes>"):
     """Parse z-grid bytes (a plain or a raw body) into a ZGrid; raise MzcError naming the line
     and field on bad input."""
     raw = split_magic(data, source)[1] >= RAW_VERSION[0]
-    header, body, first_line = read_header(data, source, KIND, RAW_VERSION[0], projected_major=PROJECTED_VERSION[0],
-                                           checksum_since=CHECKSUM_SINCE, binary=raw, georef_since=GEOREF_SINCE)
+    header, body, first_line = read_header(data, source, KIND, CHARTED_VERSION[0],
+                                           projected_major=PROJECTED_VERSION[0], checksum_since=CHECKSUM_SINCE,
+                                           binary=raw, georef_since=GEOREF_SINCE, charted_major=CHARTED_VERSION[0])
     fields, rows, cols = read_grid_fields(header)
     z = read_raw(body, header, rows, cols) if raw else read_plain(body, first_line, fields["nodata"], rows, cols,
                                                                   source)
@@ -136,6 +139,9 @@ def write(grid, precision=None, raw=None):
     """Serialise a ZGrid to z-grid bytes: plain text (``raw`` None; ``precision`` decimals round
     the heights), or a raw body of ``raw`` samples, "float64" (exact) or "float32"."""
     if raw is None:
+        if grid.charts is not None:
+            raise MzcError("a multi-chart grid is written with a raw body (mzc-zgrid 4.0), not as text rows",
+                           field="plain")
         lines = [magic_line(KIND, file_version(grid, VERSION, PROJECTED_VERSION, GEOREFERENCED_VERSION)),
                  *grid_header_lines(grid), "data",
                  *format_rows(grid.z, grid.nodata, precision)]
@@ -143,7 +149,7 @@ def write(grid, precision=None, raw=None):
     if precision is not None:
         raise MzcError("precision rounds the text of a plain body; a raw body holds the values exactly",
                        field="precision")
-    version = file_version(grid, RAW_VERSION, RAW_VERSION, RAW_GEOREFERENCED_VERSION)
+    version = file_version(grid, RAW_VERSION, RAW_VERSION, RAW_GEOREFERENCED_VERSION, CHARTED_VERSION)
     lines = [magic_line(KIND, version), *grid_header_lines(grid), f"raw {raw}", "data"]
     return file_bytes(lines, raw_body(grid.z, raw))
 

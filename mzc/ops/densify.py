@@ -72,9 +72,12 @@ def densify_grid(grid, n, method=DEFAULT_METHOD, iterations=DEFAULT_ITERATIONS, 
     docstring). A periodic grid (a full turn) is densified with its columns wrapped round.
     ``strip``: as ``densify``'s; the jumps are found strip by strip too. A geographic grid is
     solved with its steps and jumps in metres (``mzc.georef.metric_frame``) and keeps its degrees.
+    A multi-chart grid is densified chart by chart (``densify_charts``).
     """
     from mzc.georef import metric_frame
 
+    if grid.charts is not None:
+        return densify_charts(grid, n, method, iterations, tol, jump_angle, strip)
     original, grid = grid, metric_frame(grid)
     cols = grid.shape[1]
     pad = wrap_width(grid, method, iterations, tol) if grid.periodic else 0
@@ -82,6 +85,17 @@ def densify_grid(grid, n, method=DEFAULT_METHOD, iterations=DEFAULT_ITERATIONS, 
     breaks = lambda low, high: strip_jumps(grid, low, high, jump_angle, pad)  # noqa: E731
     dense = densify(z, n, grid.d1, grid.d2, method=method, iterations=iterations, tol=tol, breaks=breaks, strip=strip)
     return original.with_z(dense[:, pad:pad + cols], d1=original.d1 / (n + 1))
+
+
+def densify_charts(grid, n, method, iterations, tol, jump_angle, strip):
+    """A multi-chart ``grid`` densified chart by chart, each chart's rows and place scaled by n+1
+    (``Chart.with_rows_inserted``): no chart is smoothed into the one beside it."""
+    check_request(grid.z, n, grid.d1, grid.d2, method, iterations, tol)   # the whole grid's request, first
+    charts = tuple(chart.with_rows_inserted(n) for chart in grid.charts)
+    z = np.full(((grid.shape[0] - 1) * (n + 1) + 1, grid.shape[1]), np.nan)
+    for chart, part in zip(charts, grid.chart_grids()):
+        z[chart.block()] = densify_grid(part, n, method, iterations, tol, jump_angle, strip).z
+    return grid.with_z(z, d1=grid.d1 / (n + 1), charts=charts)
 
 
 def strip_jumps(grid, low, high, jump_angle, pad):

@@ -98,7 +98,7 @@ def triangulate_point_cloud(points_xy, long_edge_factor=LONG_EDGE_FACTOR):
 
 def slice_surface(surface, d1=None, d2=None, rows=None, cols=None, align="none", units=None,
                   projection="auto", center=None, axis=None, view="auto", thesis_grid=False, classes=None,
-                  cloud="auto"):
+                  cloud="auto", charts="auto"):
     """Cut ``surface`` (a Mesh; no triangles = point cloud) into a ZGrid; a raster's grid (a
     ZGrid with a ``raster`` layout) is its own grid (``raster_as_sliced``).
 
@@ -112,24 +112,39 @@ def slice_surface(surface, d1=None, d2=None, rows=None, cols=None, align="none",
     thesis's ~70 planes, and d2 = d1/10. ``classes`` (ASPRS codes) keeps only the points of
     those classes of a LAS/LAZ cloud (``Mesh.with_classes``); ``cloud`` says how a cloud
     becomes a surface (``slice_in_frame``). A planar grid keeps the cloud's CRS (``grid_crs``).
-    Warns (MzcWarning) when the grid's lines meet less than SEEN_WARNING of the area well.
+
+    ``charts``: 1 for one grid, N for a multi-chart grid of at most N charts (``mzc.ops.charts``),
+    ``auto`` for one grid when it holds SINGLE_COVER of the surface's area (a face, terrain, a
+    star-shaped ball) and charts otherwise (a closed or many-part object); cutting options that
+    shape one grid (projection, view, centre, axis, counts, the thesis's grid) ask for one.
+    Warns (MzcWarning) when one grid's lines meet less than SEEN_WARNING of the area well.
     """
     from mzc.limits import check_magnitude
+    from mzc.ops.charts import SINGLE_COVER, chart_surface, single_grid_cover
     from mzc.ops.views import SEEN_WARNING, choose_view
 
     if isinstance(surface, ZGrid):
         return raster_as_sliced(surface, units, d1=d1, d2=d2, rows=rows, cols=cols, center=center, axis=axis,
                                 thesis_grid=thesis_grid or None, align=None if align == "none" else align,
                                 projection=None if projection in ("auto", "planar") else projection,
-                                view=None if view in ("auto", "+z") else view)
+                                view=None if view in ("auto", "+z") else view,
+                                charts=None if charts in ("auto", 1) else charts)
     mesh = surface if classes is None else surface.with_classes(classes)
     check_magnitude(mesh.points, "coordinates")
+    one_grid = one_grid_option(projection=projection != "auto", view=view != "auto", center=center is not None,
+                               axis=axis is not None, thesis_grid=thesis_grid, rows=rows is not None,
+                               cols=cols is not None)
+    count = chart_count(charts, one_grid)
+    if count is not None and count > 1:
+        return chart_surface(mesh, *frame_for(mesh, align), chart_spacing(d1, d2, mesh), units, count)
     chosen = choose_view(mesh, frame_for(mesh, align), projection, center, axis, view)
     grid = slice_in_frame(mesh, chosen.rotation, chosen.shift, d1=d1, d2=d2, rows=rows, cols=cols, units=units,
                           projection=chosen.projection, radius=chosen.radius, full_turn=chosen.full_turn,
                           thesis_grid=thesis_grid, cloud=cloud)
     if np.isnan(grid.z).all():
         raise MzcError("no grid node meets the surface (seen edge-on? try --view or --align pca)")
+    if count is None and not one_grid and (single_grid_cover(grid, mesh) or 1.0) < SINGLE_COVER:
+        return chart_surface(mesh, *frame_for(mesh, align), grid.d1, units)
     crs = grid_crs(mesh.crs) if grid.projection == "planar" else None
     if crs is not None:
         grid = grid.with_z(grid.z, crs=crs)   # the transform maps the grid to the cloud's frame, the CRS's
@@ -143,6 +158,41 @@ def slice_surface(surface, d1=None, d2=None, rows=None, cols=None, align="none",
             f"60 degrees of its node lines; the rest comes back coarse or not at all (try --projection auto, "
             f"--view or --align pca)"), stacklevel=2)
     return grid
+
+
+def one_grid_option(**given):
+    """The name of the first cutting option that shapes one grid (True in ``given``), or None."""
+    return next((name for name, value in given.items() if value), None)
+
+
+def chart_count(charts, one_grid):
+    """``charts`` as a count (None for auto), refused when not a positive count or when more than
+    one chart meets an option that shapes one grid (``one_grid``, its name)."""
+    if charts == "auto":
+        return None
+    if isinstance(charts, bool) or not isinstance(charts, (int, np.integer)) or charts < 1:
+        raise MzcError(f"{charts!r} is not auto or a positive number of charts", field="charts")
+    if charts > 1 and one_grid:
+        raise MzcError(f"charts are planar grids along the frame's axes: {one_grid.replace('_', ' ')} shapes one "
+                       "grid (give --charts 1, or leave it out)", field="charts")
+    return int(charts)
+
+
+def chart_spacing(d1, d2, mesh):
+    """The one spacing of a multi-chart grid: d1 or d2 as given (equal when both are), else the
+    data's (``data_spacing``; a cloud's DATA_SPACING_FRACTION of its median nearest-point distance)."""
+    if d1 is not None and d2 is not None and d1 != d2:
+        raise MzcError("charts take one spacing: give --d1 alone (or equal --d1 and --d2)", field="d2")
+    given = d1 if d1 is not None else d2
+    if given is not None:
+        return given
+    points = np.asarray(mesh.points, dtype=float)
+    if len(mesh.triangles):
+        return data_spacing(points, mesh.triangles)
+    from scipy.spatial import cKDTree
+
+    distance, _near = cKDTree(points).query(points, k=2)
+    return within_longest_side(DATA_SPACING_FRACTION * float(np.median(distance[:, 1])), points)
 
 
 def raster_as_sliced(grid, units, **given):

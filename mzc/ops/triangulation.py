@@ -204,8 +204,25 @@ def corners(kept, which, cols, periodic):
 
 
 def grid_to_mesh(grid: "ZGrid", jump_angle: float | None = None) -> "Mesh":
-    """The Mesh of a ZGrid (its ``grid`` set to it): ``GridMesh``'s, whole."""
-    return GridMesh(grid, jump_angle).mesh()
+    """The Mesh of a ZGrid (its ``grid`` set to it): ``GridMesh``'s, whole, or ``charted_mesh``."""
+    return GridMesh(grid, jump_angle).mesh() if grid.charts is None else charted_mesh(grid, jump_angle)
+
+
+def mesh_of(grid, jump_angle=None):
+    """What makes a ZGrid's mesh: a GridMesh (streamed a strip at a time), or for a multi-chart
+    grid the Mesh of its charts (``charted_mesh``)."""
+    return GridMesh(grid, jump_angle) if grid.charts is None else charted_mesh(grid, jump_angle)
+
+
+def charted_mesh(grid, jump_angle=None):
+    """The Mesh of a multi-chart grid (its ``grid`` set): each chart's GridMesh, one after the other."""
+    from mzc.meshes import Mesh
+
+    meshes = [GridMesh(chart, jump_angle).mesh() for chart in grid.chart_grids()]
+    offsets = np.cumsum([0] + [len(mesh.points) for mesh in meshes])
+    points = np.concatenate([mesh.points for mesh in meshes])
+    triangles = np.concatenate([mesh.triangles + offset for mesh, offset in zip(meshes, offsets)])
+    return Mesh(points, triangles, grid=grid)
 
 
 class GridMesh:

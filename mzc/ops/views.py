@@ -37,6 +37,7 @@ import numpy as np
 
 from mzc import elementary
 from mzc.errors import MzcError
+from mzc.projections import PLANAR_VIEWS, view_rotation
 from mzc.vectors import dotted, inner, length, lengths, matrix_product, symmetric_eigen
 
 FACING_COSINE = 0.5          # 60 degrees between the normal and the node line
@@ -63,14 +64,6 @@ class View:
     seen: float | None = None
 
 
-PLANAR_VIEWS = {   # the grid frame's axes (columns) in the slicing frame, per view direction
-    "+z": ((1, 0, 0), (0, 1, 0), (0, 0, 1)),
-    "-z": ((-1, 0, 0), (0, 1, 0), (0, 0, -1)),
-    "+x": ((0, 0, -1), (0, 1, 0), (1, 0, 0)),
-    "-x": ((0, 0, 1), (0, 1, 0), (-1, 0, 0)),
-    "+y": ((-1, 0, 0), (0, 0, 1), (0, 1, 0)),
-    "-y": ((1, 0, 0), (0, 0, 1), (0, -1, 0)),
-}
 VIEW_MARGIN = 0.05           # another axis must see 5% more of the area than the frame's z
 SEEN_WARNING = 0.5           # say so when the grid sees less than half the area well
 NEIGHBOURS = 10              # points whose spread gives a cloud point's normal
@@ -118,7 +111,7 @@ def planar_view(surface, rotation, view):
         view = ("+" if surface.facing(rotation[:, k]) >= 0 else "-") + "xyz"[k]
     if view not in PLANAR_VIEWS:
         raise MzcError(f"unknown view {view!r} (choose auto or one of {', '.join(PLANAR_VIEWS)})", field="view")
-    rotation = matrix_product(rotation, np.array(PLANAR_VIEWS[view], dtype=float).T)
+    rotation = matrix_product(rotation, view_rotation(view))
     return rotation, surface.share_along(rotation[:, 2])
 
 

@@ -36,8 +36,9 @@ VERSION = (3, 1)             # every grid not read from a raster; 3.0 (no crc32 
 PROJECTED_VERSION = (3, 1)
 GEOREFERENCED_VERSION = (3, 2)   # 3.1 with the crs and raster lines of a grid read from a raster
 GEOREF_SINCE = dict([GEOREFERENCED_VERSION])   # major -> the first minor with the crs and raster lines
+CHARTED_VERSION = (4, 0)     # 3.1 with the charts line of a multi-chart grid (its charts side by side)
 OLDEST_MAJOR = 2             # 1.x were drafts
-CHECKSUM_SINCE = {3: 1}      # the crc32 line is required from 3.1 on
+CHECKSUM_SINCE = {3: 1, 4: 0}   # the crc32 line is required from 3.1 on
 CODER = "rans-signs-2"     # 2.0 names it on a required line; in 3.0 the version implies it
 # detail contexts, shared by every detail band: activity of parent, siblings, two rows above
 THRESHOLDS = (0.5, 1.0, 1.5, 3.0, 5.0, 8.0, 14.0, 24.0, 40.0, 70.0)
@@ -360,7 +361,8 @@ class Prepared:
     def header_lines(self, step, correction, max_error):
         """The lines of the text header, the magic line to the ``data`` line."""
         # lines at their defaults are left out: a face's file can be 1.5 KB, and they were 50 B of it
-        lines = [magic_line(KIND, file_version(self.grid, VERSION, PROJECTED_VERSION, GEOREFERENCED_VERSION)),
+        lines = [magic_line(KIND, file_version(self.grid, VERSION, PROJECTED_VERSION, GEOREFERENCED_VERSION,
+                                               CHARTED_VERSION)),
                  *grid_header_lines(self.grid, write_defaults=False)]
         if self.wavelet != DEFAULT_WAVELET:
             lines.append(f"wavelet {self.wavelet}")
@@ -548,9 +550,9 @@ def read_codec_fields(header, shape, transform):
 def read(data, source="<bytes>"):
     """Decode dwt2d bytes (3.0, or 2.0 with its periodised transform) into a ZGrid; any bad input
     raises MzcError."""
-    header, body, _first = read_header(data, source, KIND, VERSION[0], oldest_major=OLDEST_MAJOR,
+    header, body, _first = read_header(data, source, KIND, CHARTED_VERSION[0], oldest_major=OLDEST_MAJOR,
                                        projected_major=PROJECTED_VERSION[0], checksum_since=CHECKSUM_SINCE,
-                                       binary=True, georef_since=GEOREF_SINCE)
+                                       binary=True, georef_since=GEOREF_SINCE, charted_major=CHARTED_VERSION[0])
     fields, rows, cols = read_grid_fields(header)
     transform = w2.TRANSFORMS[header.major]
     wavelet, levels, steps, slope_limit, correction = read_codec_fields(header, (rows, cols), transform)
@@ -577,7 +579,7 @@ def read(data, source="<bytes>"):
 
 
 CODEC = Codec(
-    "dwt2d", encode_grid, read, writer_with_decoded=encode_grid_with_decoded, version=GEOREFERENCED_VERSION,
+    "dwt2d", encode_grid, read, writer_with_decoded=encode_grid_with_decoded, version=CHARTED_VERSION,
     oldest_major=OLDEST_MAJOR, extension=".mzw2", spec="spec/dwt2d.md",
     summary="2D wavelet of the whole grid, entropy coded, error-bounded", check_options=one_target,
     example={"max_error": 0.05}, options=(

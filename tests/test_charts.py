@@ -1,0 +1,235 @@
+"""Multi-chart grids (spec/zgrid.md, Charts): the model, its files, densify, and slicing whole
+objects into charts by default while faces, terrain and star-shaped surfaces keep one grid."""
+
+import numpy as np
+import pytest
+
+from mzc.codecs import dwt2d
+from mzc.codecs.rows import dct
+from mzc.errors import MzcError
+from mzc.formats import read_any, zgrid
+from mzc.grid import Chart, ZGrid
+from mzc.meshes import Mesh, read_mesh
+from mzc.ops.charts import FACING, JOINING, SINGLE_COVER, single_grid_cover
+from mzc.ops.densify import densify_grid
+from mzc.ops.slicing import slice_surface
+from mzc.ops.triangulation import grid_to_mesh
+from mzc.projections import PLANAR_VIEWS, view_rotation
+from mzc.samples import blob, icosphere
+
+from conftest import REPO
+
+OBJECTS = REPO.parent / "shared" / "data" / "objects"
+TRANSFORM = np.array([[0.0, -1.0, 0.0, 4.5], [1.0, 0.0, 0.0, -2.0], [0.0, 0.0, 1.0, 7.25]])
+
+
+def two_charts(z=None):
+    """A 6 x 9 grid of two charts, a +z one and a -x one, a column apart."""
+    if z is None:
+        z = np.arange(54.0).reshape(6, 9) / 7 + 10
+        z[:, 4] = np.nan
+        z[4:, 5:] = np.nan
+    charts = (Chart("+z", 0, 0, 6, 4, -3, 2), Chart("-x", 0, 5, 4, 4, 4, -1))
+    return ZGrid(z, 1.5, 1.5, transform=TRANSFORM, charts=charts)
+
+
+def torus(rings=48, around=24, big=30.0, small=10.0):
+    """A closed torus mesh about the z axis (genus 1: no one grid sees its inside)."""
+    a, b = np.meshgrid(*(np.linspace(0, 2 * np.pi, count, endpoint=False) for count in (rings, around)))
+    points = np.stack([(big + small * np.cos(b)) * np.cos(a), (big + small * np.cos(b)) * np.sin(a), small * np.sin(b)],
+                      axis=-1).reshape(-1, 3)
+    index = np.arange(rings * around).reshape(around, rings)
+    right, up = np.roll(index, -1, axis=1), np.roll(index, -1, axis=0)
+    corner = np.roll(right, -1, axis=0)
+    triangles = np.concatenate([np.stack([index, right, corner], -1).reshape(-1, 3),
+                                np.stack([index, corner, up], -1).reshape(-1, 3)])
+    return Mesh(points, triangles)
+
+
+def two_spheres():
+    """Two separate unit-ish spheres: a many-part surface."""
+    points, triangles = icosphere(3)
+    return Mesh(np.concatenate([points * 10, points * 6 + [25.0, 0, 0]]),
+                np.concatenate([triangles, triangles + len(points)]))
+
+
+# --------------------------------------------------------------------------- the model
+
+
+def test_a_chart_places_its_nodes_on_its_lattice_in_its_view():
+    grid = two_charts()
+    first, second = grid.chart_grids()
+    assert first.origin == (-4.5, 3.0) and second.origin == (6.0, -1.5)
+    node = second.to_input_frame(second.node_points()[1, 2])   # chart row 1, column 2
+    u, v, w = (4 + 2) * 1.5, (-1 + 1) * 1.5, grid.z[1, 7]
+    expected = TRANSFORM[:, :3] @ view_rotation("-x") @ np.array([u, v, w]) + TRANSFORM[:, 3]
+    np.testing.assert_allclose(node, expected, rtol=1e-15)
+
+
+@pytest.mark.parametrize("charts, message", [
+    ((Chart("+z", 0, 0, 6, 5, 0, 0), Chart("-x", 0, 4, 4, 4, 0, 0)), "overlap"),
+    ((Chart("+z", 0, 0, 7, 4, 0, 0),), "leaves the 6 x 9 grid"),
+    ((Chart("+z", 0, 0, 6, 4, 0, 0),), "outside every chart"),
+])
+def test_charts_that_leave_overlap_or_miss_values_are_refused(charts, message):
+    with pytest.raises(MzcError, match=message) as error:
+        ZGrid(two_charts().z, 1.5, 1.5, charts=charts)
+    assert error.value.field == "charts"
+
+
+@pytest.mark.parametrize("bad", [{"origin": (1.0, 0.0)}, {"projection": "spherical", "radius": 50.0}])
+def test_a_multi_chart_grid_is_planar_at_origin_zero(bad):
+    with pytest.raises(MzcError, match="planar, at origin 0 0"):
+        ZGrid(two_charts().z, 1.5, 1.5, charts=two_charts().charts, **bad)
+
+
+@pytest.mark.parametrize("view, field", [("+w", "view"), (1.5, "row0")])
+def test_a_chart_is_one_of_six_views_with_whole_places(view, field):
+    with pytest.raises(MzcError):
+        Chart(view, 0, 0, 1, 1, 0, 0) if field == "view" else Chart("+z", view, 0, 1, 1, 0, 0)
+
+
+# --------------------------------------------------------------------------- files
+
+
+def test_a_multi_chart_zgrid_is_4_0_raw_and_reads_back_exactly():
+    grid = two_charts()
+    data = zgrid.write(grid, raw="float64")
+    assert data.startswith(b"mzc-zgrid 4.0\n") and b"\ncharts +z 0 0 6 4 -3 2 -x 0 5 4 4 4 -1\n" in data
+    back = read_any(data, "t.zg")
+    assert back.charts == grid.charts and back.z.tobytes() == grid.z.tobytes()
+    with pytest.raises(MzcError, match="raw body"):
+        zgrid.write(grid)
+
+
+@pytest.mark.parametrize("line, message", [
+    ("charts +z 0 0 6 4 -3", "7 values per chart"),
+    ("charts +z 0 0 6 4 -3 two", "not an integer"),
+    ("charts +q 0 0 6 4 -3 2 -x 0 5 4 4 4 -1", "chart view"),
+    ("charts +z 0 0 6 5 -3 2 -x 0 4 4 4 4 -1", "overlap"),
+])
+def test_a_bad_charts_line_is_refused_naming_its_line(line, message):
+    data = zgrid.write(two_charts(), raw="float64")
+    header, payload = data.split(b"\ndata\n", 1)
+    lines = [text if not text.startswith(b"charts ") else line.encode() for text in header.split(b"\n")]
+    damaged = b"\n".join(text for text in lines if not text.startswith(b"crc32 ")) + b"\ndata\n" + payload
+    from mzc.formats.header import with_checksum
+
+    with pytest.raises(MzcError, match=message) as error:
+        read_any(with_checksum(damaged), "t.zg")
+    assert error.value.field == "charts" and error.value.line == lines.index(line.encode()) + 1
+
+
+def test_a_charts_line_in_a_3_0_file_is_refused_as_needing_a_newer_version():
+    data = zgrid.write(two_charts(), raw="float64").replace(b"mzc-zgrid 4.0", b"mzc-zgrid 3.0")
+    from mzc.formats.header import with_checksum
+
+    header, payload = data.split(b"\ndata\n", 1)
+    header = b"\n".join(line for line in header.split(b"\n") if not line.startswith(b"crc32 "))
+    with pytest.raises(MzcError, match="newer major version"):
+        read_any(with_checksum(header + b"\ndata\n" + payload), "t.zg")
+
+
+def test_dwt2d_codes_every_chart_within_one_bound():
+    rng = np.random.default_rng(3)
+    z = two_charts().z + rng.normal(0, 0.3, (6, 9))
+    grid = two_charts(z)
+    back = read_any(dwt2d.write(grid, max_error=0.05), "t.mzw2")
+    assert back.charts == grid.charts and np.array_equal(back.valid, grid.valid)
+    assert np.nanmax(np.abs(back.z - grid.z)) <= 0.05
+
+
+def test_the_row_codecs_refuse_charts_in_one_line():
+    with pytest.raises(MzcError, match="codes one chart; the grid has 2") as error:
+        dct.write(two_charts(), quality=50)
+    assert error.value.field == "charts"
+
+
+# --------------------------------------------------------------------------- densify and meshes
+
+
+def test_densify_works_chart_by_chart():
+    grid = two_charts()
+    dense = densify_grid(grid, 2)
+    assert dense.shape == (16, 9) and dense.d1 == 0.5
+    assert dense.charts == (Chart("+z", 0, 0, 16, 4, -3, 6), Chart("-x", 0, 5, 10, 4, 4, -3))
+    for chart, part in zip(dense.chart_grids(), grid.chart_grids()):
+        alone = densify_grid(part, 2)
+        np.testing.assert_array_equal(chart.z, alone.z)
+        np.testing.assert_array_equal(chart.to_input_frame(chart.node_points()[::3]),
+                                      part.to_input_frame(part.node_points()))
+
+
+def test_a_multi_chart_mesh_is_its_charts_meshes():
+    grid = two_charts()
+    mesh = grid_to_mesh(grid)
+    parts = [grid_to_mesh(chart) for chart in grid.chart_grids()]
+    assert len(mesh.points) == sum(len(part.points) for part in parts)
+    np.testing.assert_array_equal(mesh.points, np.concatenate([part.points for part in parts]))
+    assert mesh.grid is grid
+
+
+# --------------------------------------------------------------------------- slicing
+
+
+def element_views(mesh, grid):
+    """Per triangle of ``mesh`` that some chart holds (its centroid within 3 spacings of the
+    chart's surface along the chart's lines), the best cosine between its normal and such a chart's
+    view; NaN for triangles no chart holds."""
+    corners = mesh.points[mesh.triangles]
+    normal = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
+    normal /= np.linalg.norm(normal, axis=1)[:, None]
+    centroid = corners.mean(axis=1)
+    best = np.full(len(normal), np.nan)
+    for chart in grid.chart_grids():
+        local = chart.to_grid_frame(centroid)
+        col = np.round((local[:, 0] - chart.origin[0]) / chart.d2).astype(int)
+        row = np.round((local[:, 1] - chart.origin[1]) / chart.d1).astype(int)
+        inside = (row >= 0) & (row < chart.shape[0]) & (col >= 0) & (col < chart.shape[1])
+        held = np.zeros(len(normal), dtype=bool)
+        held[inside] = np.abs(chart.z[row[inside], col[inside]] - local[inside, 2]) <= 3 * chart.d1
+        cosine = normal @ chart.transform[:, 2]
+        best[held] = np.fmax(best[held], cosine[held])
+    return best
+
+
+@pytest.mark.parametrize("mesh", [torus(), two_spheres()], ids=["torus", "two spheres"])
+def test_a_closed_or_many_part_surface_is_cut_into_charts_that_see_it_within_60_degrees(mesh):
+    single = slice_surface(mesh, charts=1)
+    assert single.charts is None and single_grid_cover(single, mesh) < SINGLE_COVER
+    grid = slice_surface(mesh)
+    assert grid.charts is not None and {chart.view for chart in grid.charts} <= set(PLANAR_VIEWS)
+    cosine = element_views(mesh, grid)
+    assert np.mean(np.isnan(cosine)) < 0.01
+    assert np.nanmin(cosine) >= JOINING and np.nanmean(cosine >= FACING) > 0.99
+
+
+def test_a_count_of_charts_caps_them_and_one_gives_one_grid():
+    mesh = torus()
+    assert slice_surface(mesh, charts=1).charts is None
+    assert len(slice_surface(mesh, charts=3).charts) <= 3
+    with pytest.raises(MzcError, match="projection shapes one grid") as error:
+        slice_surface(mesh, charts=3, projection="spherical")
+    assert error.value.field == "charts"
+    with pytest.raises(MzcError, match="positive number of charts"):
+        slice_surface(mesh, charts=0)
+
+
+def test_a_star_shaped_ball_keeps_its_one_spherical_grid():
+    grid = slice_surface(blob())
+    assert grid.charts is None and grid.projection == "spherical"
+
+
+def test_a_face_keeps_its_one_grid(f18):
+    assert slice_surface(read_mesh(f18)).charts is None
+
+
+@pytest.mark.parametrize("name", ["hand.ply", "armadillo.ply", "featuretype.ply"])
+def test_the_shared_whole_objects_are_cut_into_charts(name):
+    path = OBJECTS / name
+    if not path.is_file():
+        pytest.skip(f"shared objects not available ({path})")
+    mesh = read_mesh(path)
+    grid = slice_surface(mesh)
+    assert grid.charts is not None and len(grid.charts) > 6
+    assert read_any(zgrid.write(grid, raw="float64"), name).charts == grid.charts
