@@ -27,6 +27,7 @@ from mzc.formats.header import (
     split_magic,
 )
 from mzc.grid import ZGrid
+from mzc.limits import check_grid_magnitudes
 from mzc.numbers import floats
 
 KIND = "zgrid"
@@ -134,7 +135,9 @@ def check_marker_unused(z, nodata):
 
 def write(grid, precision=None, raw=None):
     """Serialise a ZGrid to z-grid bytes: plain text (``raw`` None; ``precision`` decimals round
-    the heights), or a raw body of ``raw`` samples, "float64" (exact) or "float32"."""
+    the heights), or a raw body of ``raw`` samples, "float64" (exact) or "float32". Heights or
+    coordinates beyond mzc.limits' are refused: no reader would take them back."""
+    check_grid_magnitudes(grid)
     if raw is None:
         lines = [magic_line(KIND, file_version(grid, VERSION, PROJECTED_VERSION, GEOREFERENCED_VERSION)),
                  *grid_header_lines(grid), "data",

@@ -1,0 +1,156 @@
+"""The hostile corpus of issue 29 (reliability, round 3) for the readers, the API, the Zarr
+codec and diff: each case is refused in one line naming the file and the reason, or done
+right, in bounded time and memory. The command-line cases run through tests/test_hostile.py's
+in-process runner and its general promise (``kept_promises``)."""
+
+import contextlib
+import tracemalloc
+
+import numpy as np
+import pytest
+from test_hostile import kept_promises, run
+
+
+def write_obj(path, points, faces=((1, 2, 3), (2, 4, 3))):
+    """An OBJ file of ``points`` and 1-based ``faces``; returns its path."""
+    lines = [f"v {x!r} {y!r} {z!r}" for x, y, z in np.asarray(points, dtype=float).tolist()]
+    path.write_text("\n".join(lines + [f"f {a} {b} {c}" for a, b, c in faces]) + "\n")
+    return path
+
+
+def square(z=0.0, size=1.0):
+    """The corners of a flat square at height ``z``."""
+    return [[0, 0, z], [size, 0, z], [0, size, z], [size, size, z]]
+
+
+def lattice(tmp_path, count=300):
+    """A z-grid of count x count nodes of a gentle slope, about 180,000 triangles as a mesh."""
+    y, x = np.mgrid[0:count, 0:count] / count
+    rows = "\n".join(" ".join(repr(v) for v in row) for row in (0.1 * x + 0.05 * y).tolist())
+    path = tmp_path / "lattice.zg"
+    path.write_text(f"mzc-zgrid 1.0\nrows {count}\ncols {count}\nd1 {1 / count!r}\nd2 {1 / count!r}\norigin 0 0\n"
+                    f"data\n{rows}\n")
+    return path
+
+
+@contextlib.contextmanager
+def traced():
+    """Trace Python's allocations inside; yields a function giving their peak in bytes."""
+    tracemalloc.start()
+    try:
+        yield lambda: tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+
+
+# --- 6. the 1e100 limit kept on reading ------------------------------------------------------
+
+def bump_grid():
+    """A small planar grid of the bump sample, with holes."""
+    import mzc
+
+    return mzc.slice(mzc.sample("bump"), 4.0, 4.0)
+
+
+def edited(data, pattern, replacement):
+    """``data`` with the first match of ``pattern`` replaced, its checksum made right again."""
+    import re
+
+    from codec_contract import rechecksummed
+
+    changed, found = re.subn(pattern, replacement, data, count=1)
+    assert found
+    return rechecksummed(changed)
+
+
+def coefficient_set(data, value):
+    """A row codec's file with the first coefficient of its first coded row set to ``value``."""
+    head, body = data.split(b"\ndata\n", 1)
+    lines = body.split(b"\n")
+    row = next(i for i, line in enumerate(lines) if len(line.split()) > 3)
+    tokens = lines[row].split()
+    tokens[2] = value
+    lines[row] = b" ".join(tokens)
+    return edited(head + b"\ndata\n" + b"\n".join(lines), rb"\ndata\n", b"\ndata\n")
+
+
+def beyond_the_limit():
+    """CRC-valid files whose decoded heights or coordinates pass 1e100: name -> bytes."""
+    import mzc
+    from mzc.formats import zgrid
+
+    grid = bump_grid()
+    dwt2d, dct = mzc.encode(grid, max_error=0.1), mzc.encode(grid, "dct", quality=50)
+    raw = zgrid.write(grid, raw="float64")
+    huge = np.full(grid.shape, 1e299).tobytes()
+    return {
+        "dwt2d correction 1e300": edited(dwt2d, rb"\ncorrection [^\n]*\n", b"\ncorrection 1e300\n"),
+        "dwt2d steps 1e300": edited(dwt2d, rb"\nsteps [^\n]*\n", b"\nsteps 1e300 1e300\n"),
+        "dwt2d origin 1e300": edited(dwt2d, rb"\norigin [^\n]*\n", b"\norigin 1e300 0\n"),
+        "dct coefficient 1e308": coefficient_set(dct, b"1e308"),
+        "dct coefficient 1e200": coefficient_set(dct, b"1e200"),
+        "dct transform shift 1e300": edited(dct, rb"\norigin [^\n]*\n", b"\norigin 0 0\ntransform 1 0 0 1e300 0 1 0 0 "
+                                                                          b"0 0 1 0\n"),
+        "raw heights 1e299": raw.split(b"\ndata\n")[0] + b"\ndata\n" + huge,
+        "plain heights 1e299": b"mzc-zgrid 1.0\nrows 1\ncols 2\nd1 1\nd2 1\ndata\n1 1e299\n",
+        "plain origin 1e300": b"mzc-zgrid 1.0\nrows 1\ncols 2\nd1 1\nd2 1\norigin 1e300 0\ndata\n1 2\n",
+    }
+
+
+BEYOND = beyond_the_limit()
+
+
+@pytest.mark.parametrize("name", BEYOND)
+def test_a_file_beyond_the_limit_is_refused_by_every_reader(name, tmp_path):
+    data = BEYOND[name]
+    if name.startswith("raw"):
+        data = edited(data, rb"\ndata\n", b"\ndata\n")
+    path = tmp_path / "big.mzc"
+    path.write_bytes(data)
+    for command in (["decode"], ["densify", "-n", "1"], ["triangulate"], ["diff", path], ["info", "--decode"]):
+        result = kept_promises(run(*command, path))
+        assert result.status == 1 and "big.mzc" in result.stderr[0] and " reach " in result.stderr[0], result.stderr
+    import mzc
+
+    with pytest.raises(mzc.MzcError, match="reach"):
+        mzc.decode(data)
+    with pytest.raises(mzc.MzcError, match="reach"):
+        mzc.read(path)
+
+
+def test_a_legacy_file_beyond_the_limit_is_refused():
+    data = b"1 1 1 4 100\n1 4 1e200 0 0 0\n"
+    result = kept_promises(run("decode", "--legacy", "dct", stdin=data))
+    assert result.status == 1 and "heights reach" in result.stderr[0], result.stderr
+
+
+@pytest.mark.parametrize("corner", ["xllcorner 1e300\nyllcorner 0", "xllcorner 0\nyllcorner -1e150"])
+def test_a_raster_beyond_the_limit_is_refused(tmp_path, corner):
+    path = tmp_path / "far.asc"
+    path.write_text(f"ncols 2\nnrows 2\n{corner}\ncellsize 1\n1 2\n3 4\n")
+    for command in (["slice", path], ["diff", path, path]):
+        result = kept_promises(run(*command))
+        assert result.status == 1 and "far.asc" in result.stderr[0] and "coordinates reach" in result.stderr[0]
+
+
+@pytest.mark.parametrize("file_name", ["g.zg", "g.asc", "g.tif"])
+def test_writers_refuse_what_no_reader_takes_back(tmp_path, file_name):
+    import mzc
+
+    grid = bump_grid()
+    for bad in (grid.with_z(grid.z * 1e300), grid.with_z(grid.z, origin=(1e120, 0))):
+        with pytest.raises(mzc.MzcError, match="reach"):
+            mzc.write(tmp_path / file_name, bad)
+    assert not list(tmp_path.iterdir())
+
+
+def test_a_lossy_file_whose_decoded_heights_would_pass_the_limit_is_not_written():
+    """Heights of 1e100 (the limit) coded by a DCT at quality 50 decode to 1.7e100: the encoder
+    refuses the file that every reader would refuse, rather than write it."""
+    import mzc
+
+    z = np.random.default_rng(1).choice([-1e100, 1e100], size=(20, 50))
+    with pytest.raises(mzc.MzcError, match="decoded heights reach"):
+        mzc.encode(z, "dct", quality=50)
+    back = mzc.decode(mzc.encode(z / 10, "dct", quality=100))
+    assert np.abs(back.z).max() <= 1e100
