@@ -43,6 +43,40 @@ def traced():
         tracemalloc.stop()
 
 
+# --- 1. diff's nearest-triangle search: bounded work ---------------------------------------
+
+@pytest.mark.parametrize("height", [1e10, 9e99])
+def test_diff_of_a_surface_far_above_a_fine_one_ends_in_seconds(tmp_path, height):
+    """Every triangle of the fine mesh lay within the search's slack of a sample that far away,
+    so each of the samples measured all 180,000 of them (1e10: over 20 s for 10,000 samples,
+    3e299: over 11 minutes)."""
+    far = write_obj(tmp_path / "far.obj", square(height))
+    for pair in ((far, lattice(tmp_path)), (lattice(tmp_path), far)):
+        result = kept_promises(run("diff", *pair, "--surface", "--samples", "10000"))
+        assert result.status == 0 and result.seconds < 10, result.stderr
+        report = dict(line.split() for line in result.stdout.decode().splitlines())
+        assert np.isclose(float(report["surface_hausdorff"]), height, rtol=1e-6)
+
+
+@pytest.mark.parametrize("points", [square(3e299), [[0, 0, 0], [1, 0, 0], [0, 1, 1e250], [1, 1, 1]]],
+                         ids=["heights 3e299", "one 1e250"])
+def test_diff_refuses_coordinates_beyond_the_limit_naming_the_file(tmp_path, points):
+    huge = write_obj(tmp_path / "huge.obj", points)
+    small = write_obj(tmp_path / "small.obj", square())
+    for pair in ((huge, small), (small, huge)):
+        result = kept_promises(run("diff", *pair, "--surface"))
+        assert result.status == 1 and "huge.obj: coordinates reach" in result.stderr[0]
+
+
+def test_diff_samples_a_surface_whose_areas_overflow(tmp_path):
+    """Coordinates of 9e99 (within the limit) square to past float64's range in a triangle's area:
+    the draw by area was 'Probabilities contain NaN', an internal error."""
+    wide = write_obj(tmp_path / "wide.obj", [[0, 0, 0], [9e99, 0, 0], [0, 9e99, 1], [9e99, 9e99, 0]])
+    small = write_obj(tmp_path / "small.obj", square())
+    result = kept_promises(run("diff", small, wide, "--surface"))
+    assert result.status == 0, result.stderr
+
+
 # --- 6. the 1e100 limit kept on reading ------------------------------------------------------
 
 def bump_grid():
