@@ -77,6 +77,38 @@ def test_diff_samples_a_surface_whose_areas_overflow(tmp_path):
     assert result.status == 0, result.stderr
 
 
+# --- 3. degenerate meshes: refused by name, not divided by zero ------------------------------
+
+DEGENERATE = {"equal corners": "v 1 1 1\nv 1 1 1\nv 1 1 1\nf 1 2 3\n",
+              "collinear corners": "v 0 0 0\nv 1 1 1\nv 2 2 2\nf 1 2 3\n"}
+
+
+@pytest.mark.parametrize("projection", ["auto", "planar", "cylindrical", "spherical"])
+@pytest.mark.parametrize("name", DEGENERATE)
+def test_a_mesh_without_area_is_refused_by_slice(tmp_path, name, projection):
+    path = tmp_path / "flat.obj"
+    path.write_text(DEGENERATE[name])
+    result = kept_promises(run("slice", path, "--projection", projection))
+    assert result.status == 1 and "flat.obj: the mesh has no area" in result.stderr[0], result.stderr
+
+
+def test_an_organised_cloud_of_equal_points_is_refused_at_once(tmp_path):
+    """A 640 x 480 depth image whose every pixel is one point: its lattice's triangles have no area."""
+    path = tmp_path / "equal.pcd"
+    path.write_bytes(b"VERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\nWIDTH 640\nHEIGHT 480\n"
+                     b"POINTS 307200\nDATA binary\n" + np.ones((307200, 3), "<f4").tobytes())
+    result = kept_promises(run("slice", path))
+    assert result.status == 1 and "equal.pcd: the mesh has no area" in result.stderr[0], result.stderr
+    assert result.seconds < 10
+
+
+def test_diff_refuses_a_mesh_without_area(tmp_path):
+    from mzc.measure.metrics import sample_surface
+
+    with pytest.raises(ValueError, match="no area"):
+        sample_surface(np.ones((3, 3)), np.array([[0, 1, 2]]), 10, np.random.default_rng(0))
+
+
 # --- 6. the 1e100 limit kept on reading ------------------------------------------------------
 
 def bump_grid():
