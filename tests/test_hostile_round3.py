@@ -4,11 +4,17 @@ right, in bounded time and memory. The command-line cases run through tests/test
 in-process runner and its general promise (``kept_promises``)."""
 
 import contextlib
+import struct
+import time
 import tracemalloc
+from pathlib import Path
 
 import numpy as np
 import pytest
 from test_hostile import kept_promises, run
+
+from mzc.errors import MzcError
+from mzc.meshes import mesh_from_bytes
 
 
 def write_obj(path, points, faces=((1, 2, 3), (2, 4, 3))):
@@ -75,6 +81,38 @@ def test_diff_samples_a_surface_whose_areas_overflow(tmp_path):
     small = write_obj(tmp_path / "small.obj", square())
     result = kept_promises(run("diff", small, wide, "--surface"))
     assert result.status == 0, result.stderr
+
+
+# --- 2. declared counts checked against the file before any work -----------------------------
+
+LAS = Path(__file__).parent / "data" / "public"
+
+
+@pytest.mark.parametrize("name, offset", [("simple.las", 100), ("autzen_geo_proj.las", 100),
+                                          ("1_4_w_evlr.laz", 243)])
+def test_a_las_file_declaring_4e9_records_is_refused_before_laspy_reads_them(name, offset):
+    """laspy built records past the end of a 34 KB file: 68 s and 1.4 GB before running out."""
+    pytest.importorskip("laspy")
+    data = bytearray((LAS / name).read_bytes())
+    struct.pack_into("<I", data, offset, 4_000_000_000)
+    with traced() as peak:
+        with pytest.raises(MzcError, match="truncated: the header declares 4000000000 (extended )?variable"):
+            mesh_from_bytes(bytes(data), name)
+    assert peak() < 10_000_000
+
+
+@pytest.mark.parametrize("properties", [20_000, 100_000])
+def test_a_ply_header_of_many_properties_is_read_in_linear_time(properties):
+    """Each property's name was checked against all before it: 17 s for 20,000, over 90 s for 100,000."""
+    extra = "".join(f"property float p{i}\n" for i in range(properties))
+    data = ("ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
+            f"{extra}end_header\n" + ("1 2 3" + " 0" * properties + "\n") * 3).encode()
+    start = time.perf_counter()
+    mesh = mesh_from_bytes(data, "wide.ply")
+    assert time.perf_counter() - start < 5 and mesh.points.tolist() == [[1, 2, 3]] * 3
+    twice = data.replace(b"property float p7\n", b"property float p6\n")
+    with pytest.raises(MzcError, match="second property 'p6'"):
+        mesh_from_bytes(twice, "twice.ply")
 
 
 # --- 3. degenerate meshes: refused by name, not divided by zero ------------------------------

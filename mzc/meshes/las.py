@@ -7,10 +7,14 @@ cloud, so ``mzc slice --classes 2`` keeps the ground alone (as PDAL's filters.ra
 Classification does); the coordinate reference system the header names, if any, is kept
 as ``Mesh.crs`` (a WKT string, or ``EPSG:code`` from GeoTIFF keys). Points are read in
 chunks, so memory grows with the points the file really holds, whatever its header
-declares: a file with fewer points than it declares is refused as truncated.
+declares: a file with fewer points than it declares is refused as truncated, and one with
+fewer bytes than its declared variable-length records take is refused before laspy reads
+it (laspy reads records past the end of the file: a 34 KB file declaring 4e9 of them took
+68 s and 1.4 GB before it ran out of memory).
 """
 
 import io
+import struct
 
 import numpy as np
 
@@ -24,6 +28,9 @@ CHUNK_POINTS = 1_000_000
 GEO_KEYS_CRS = (3072, 2048)   # ProjectedCSTypeGeoKey, then GeographicTypeGeoKey
 MODEL_TYPE_KEY, MODEL_GEOGRAPHIC = 1024, 2   # GTModelTypeGeoKey: 2 = longitude and latitude
 MISSING_EXTRA = "reading LAS/LAZ needs laspy and lazrs: pip install 'mzc[las]'"
+# the public header block's fields that place and count records: (struct format, offset)
+HEADER_SIZE, VLR_COUNT, EVLR_START, EVLR_COUNT = ("<H", 94), ("<I", 100), ("<Q", 235), ("<I", 243)
+VLR_HEADER, EVLR_HEADER, EVLR_HEADER_SIZE = 54, 60, 375   # bytes of a record's header; LAS 1.4's header size
 
 
 def sniff(data: bytes) -> bool:
@@ -37,6 +44,7 @@ def read(data: bytes, source: str) -> Mesh:
         import laspy
     except ImportError:
         raise MzcError(MISSING_EXTRA, source=source) from None
+    check_records(data, source)
     chunks: list = []
     declared = None
     try:
@@ -66,6 +74,28 @@ def read(data: bytes, source: str) -> Mesh:
     points = np.concatenate([chunk[0] for chunk in chunks] or [np.empty((0, 3))])
     classes = np.concatenate([chunk[1] for chunk in chunks] or [np.empty(0, dtype=np.uint8)])
     return Mesh(points, classification=classes, crs=crs)
+
+
+def check_records(data, source):
+    """Refuse a file too short for the variable-length records (and LAS 1.4's extended ones)
+    its header declares, each at least its record header long, before laspy reads them."""
+    if len(data) < VLR_COUNT[1] + 4:
+        raise MzcError(f"not a LAS file: {len(data)} bytes, shorter than its public header block", source=source)
+    header_size, vlrs = header_field(data, HEADER_SIZE), header_field(data, VLR_COUNT)
+    if header_size + VLR_HEADER * vlrs > len(data):
+        raise MzcError(f"truncated: the header declares {vlrs} variable length records, which take at least "
+                       f"{VLR_HEADER * vlrs} bytes after its {header_size}, the file holds {len(data)}", source=source)
+    if header_size >= EVLR_HEADER_SIZE and len(data) >= EVLR_HEADER_SIZE:
+        start, evlrs = header_field(data, EVLR_START), header_field(data, EVLR_COUNT)
+        if evlrs and start + EVLR_HEADER * evlrs > len(data):
+            raise MzcError(f"truncated: the header declares {evlrs} extended variable length records from byte "
+                           f"{start}, which take at least {EVLR_HEADER * evlrs} bytes, the file holds {len(data)}",
+                           source=source)
+
+
+def header_field(data, field):
+    """The value of a field of the public header block, (struct format, offset)."""
+    return struct.unpack_from(field[0], data, field[1])[0]
 
 
 def check_room(header, size, declared, source):
