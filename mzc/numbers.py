@@ -7,6 +7,9 @@ refused everywhere rather than read by some readers only (and ``'²'``, which
 
 numpy converts a whole row of tokens at once; only when that fails is the row searched for
 the first token that is not a number, so the common case stays vectorised.
+
+Text files may end in NUL bytes (a copy padded to a block: LeePerrySmith.obj, a head scan,
+ends with one), which every text reader reads past, as other mesh tools do (``unpadded``).
 """
 
 import re
@@ -18,6 +21,12 @@ from mzc.errors import MzcError
 
 WHOLE_NUMBER = re.compile(r"[0-9]+")
 INTEGER = re.compile(r"[+-]?[0-9]{1,18}")
+
+
+def unpadded(data: bytes) -> bytes:
+    """Text ``data`` without the NUL bytes that pad its end; a NUL anywhere else is still there
+    to say the data is binary. Copies only a padded file."""
+    return data.rstrip(b"\0") if data.endswith(b"\0") else data
 
 
 def is_number(token: str) -> bool:

@@ -258,3 +258,52 @@ def test_a_lossy_file_whose_decoded_heights_would_pass_the_limit_is_not_written(
         mzc.encode(z, "dct", quality=50)
     back = mzc.decode(mzc.encode(z / 10, "dct", quality=100))
     assert np.abs(back.z).max() <= 1e100
+
+
+# --- 7. text files padded with NUL bytes -----------------------------------------------------
+
+def text_files():
+    """name -> valid bytes of every text format mzc reads."""
+    import mzc
+    from mzc.formats import zgrid
+    from mzc.meshes import mesh_to_bytes
+    from mzc.rasters import asc
+
+    mesh = mzc.Mesh([[0, 0, 0], [1, 0, 0.5], [0, 1, 1], [1, 1, 0.25]], [[0, 1, 2], [1, 3, 2]])
+    grid = bump_grid()
+    ply = (b"ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\nproperty float z\n"
+           b"element face 2\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n1 0 0.5\n0 1 1\n"
+           b"1 1 0.25\n3 0 1 2\n3 1 3 2\n")
+    pcd = (b"VERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\nWIDTH 4\nHEIGHT 1\nPOINTS 4\n"
+           b"DATA ascii\n0 0 0\n1 0 0.5\n0 1 1\n1 1 0.25\n")
+    return {"m.obj": mesh_to_bytes(mesh, "obj"), "m.ply": ply, "m.xyz": b"0 0 0\n1 0 0.5\n0 1 1\n1 1 0.25\n",
+            "m.pcd": pcd, "m.stl": mesh_to_bytes(mesh, "stl"), "m.off": mesh_to_bytes(mesh, "off"),
+            "g.asc": asc.write(grid), "g.zg": zgrid.write(grid), "dct-1.0.mzd": (FIXTURES / "dct-1.0.mzd").read_bytes()}
+
+
+FIXTURES = Path(__file__).parent / "fixtures"
+TEXT_FILES = text_files()
+
+
+@pytest.mark.parametrize("padding", [b"\0", b"\0" * 3, b"\n\0\0"], ids=["one NUL", "three", "newline and two"])
+@pytest.mark.parametrize("name", TEXT_FILES)
+def test_a_text_file_padded_with_nul_bytes_reads_as_without(tmp_path, name, padding):
+    """LeePerrySmith.obj, a real head scan, ends with one NUL byte, and was refused."""
+    import mzc
+
+    plain, padded = tmp_path / name, tmp_path / f"padded-{name}"
+    plain.write_bytes(TEXT_FILES[name])
+    padded.write_bytes(TEXT_FILES[name] + padding)
+    if name.endswith(".mzd"):
+        plain_item, padded_item = (mzc.decode(path.read_bytes(), legacy=None) for path in (plain, padded))
+    else:
+        plain_item, padded_item = mzc.read(plain), mzc.read(padded)
+    for field in ("points", "triangles", "z"):
+        if hasattr(plain_item, field):
+            np.testing.assert_array_equal(getattr(plain_item, field), getattr(padded_item, field))
+
+
+def test_a_nul_inside_text_is_still_binary_data():
+    data = TEXT_FILES["m.obj"]
+    with pytest.raises(MzcError, match="NUL"):
+        mesh_from_bytes(data[:20] + b"\0" + data[20:], "m.obj")

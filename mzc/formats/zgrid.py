@@ -28,7 +28,7 @@ from mzc.formats.header import (
 )
 from mzc.grid import ZGrid
 from mzc.limits import check_grid_magnitudes
-from mzc.numbers import floats
+from mzc.numbers import floats, unpadded
 
 KIND = "zgrid"
 VERSION = (1, 0)             # planar grids, byte for byte as before projections
@@ -54,9 +54,10 @@ def parse_values(tokens, nodata, source, line):
 
 
 def body_lines(body, first_line, source):
-    """Split a text body into (line number, text) pairs, skipping blank trailing lines."""
+    """Split a text body into (line number, text) pairs, skipping blank trailing lines and the NUL
+    bytes that may pad its end."""
     try:
-        text = body.decode("utf-8")
+        text = unpadded(body).decode("utf-8")
     except UnicodeDecodeError:
         raise MzcError("data is not UTF-8 text", source=source, line=first_line) from None
     lines = text.splitlines()

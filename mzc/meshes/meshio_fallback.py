@@ -21,27 +21,32 @@ import numpy as np
 from mzc.errors import MzcError, first_line
 from mzc.meshes import Mesh
 from mzc.meshes.common import fan_triangulate
+from mzc.numbers import unpadded
 
 
 class MeshioFormat:
     """One format meshio reads and writes, declared like a format module."""
 
-    def __init__(self, name: str, extensions: tuple[str, ...], sniff: Callable[[bytes], bool]):
+    def __init__(self, name: str, extensions: tuple[str, ...], sniff: Callable[[bytes], bool],
+                 is_text: Callable[[bytes], bool]):
         self.NAME = name
         self.EXTENSIONS = extensions
         self.sniff = sniff
+        self.is_text = is_text
 
     def read(self, data: bytes, source: str) -> Mesh:
-        """The mesh in ``data``, read by meshio."""
-        return read_as(self.NAME, data, source)
+        """The mesh in ``data``, read by meshio; a text file without the NUL bytes that pad its end."""
+        return read_as(self.NAME, unpadded(data) if self.is_text(data) else data, source)
 
     def write(self, mesh: Mesh) -> bytes:
         """The bytes meshio writes for ``mesh``."""
         return write_as(self.NAME, mesh)
 
 
-VTK = MeshioFormat("vtk", (".vtk",), lambda data: data.startswith(b"# vtk DataFile"))
-OFF = MeshioFormat("off", (".off",), lambda data: bool(re.match(rb"\s*[NCST4]*OFF\b", data[:4096])))
+VTK = MeshioFormat("vtk", (".vtk",), lambda data: data.startswith(b"# vtk DataFile"),
+                   lambda data: data[:1024].split(b"\n", 3)[2:3] == [b"ASCII"])   # the legacy format's third line
+OFF = MeshioFormat("off", (".off",), lambda data: bool(re.match(rb"\s*[NCST4]*OFF\b", data[:4096])),
+                   lambda data: b"BINARY" not in data[:64])
 
 
 @contextlib.contextmanager
