@@ -147,6 +147,61 @@ def test_diff_refuses_a_mesh_without_area(tmp_path):
         sample_surface(np.ones((3, 3)), np.array([[0, 1, 2]]), 10, np.random.default_rng(0))
 
 
+# --- 4. the Zarr codec: a chunk lands only where it fits --------------------------------------
+
+def zarr_chunk():
+    """(the codec, a 32 x 128 chunk's bytes)."""
+    pytest.importorskip("numcodecs")
+    from mzc.zarr import Dwt2d
+
+    codec = Dwt2d(max_error=0.1)
+    return codec, codec.encode(np.linspace(0, 144, 32 * 128).reshape(32, 128))
+
+
+@pytest.mark.parametrize("out", [np.empty((64, 64)), np.empty((128, 32)), np.empty((32, 128), np.float32),
+                                 np.empty(4000), np.empty((32, 128), ">f4")],
+                         ids=["64 x 64", "128 x 32", "float32", "too few", "big-endian float32"])
+def test_a_chunk_is_not_decoded_into_an_out_of_another_shape_or_type(out):
+    codec, data = zarr_chunk()
+    with pytest.raises(MzcError, match="the chunk is 32 x 128 float64, not the"):
+        codec.decode(data, out=out)
+
+
+@pytest.mark.parametrize("out", [np.empty((32, 128)), np.empty(32 * 128), bytearray(32 * 128 * 8)],
+                         ids=["its shape", "flat", "bytes"])
+def test_a_chunk_is_decoded_into_an_out_that_fits(out):
+    codec, data = zarr_chunk()
+    codec.decode(data, out=out)
+    values = np.frombuffer(out, dtype=float) if isinstance(out, bytearray) else out
+    assert np.abs(values.reshape(32, 128) - np.linspace(0, 144, 32 * 128).reshape(32, 128)).max() <= 0.1
+
+
+@pytest.mark.filterwarnings("ignore:Numcodecs codecs are not in the Zarr version 3")
+@pytest.mark.parametrize("dtype", ["f8", "f4"])
+def test_a_version_3_array_refuses_a_chunk_of_another_shape_or_type(dtype):
+    """Off by 144 against a bound of 0.1: a 32 x 128 chunk read as 64 x 64."""
+    zarr = pytest.importorskip("zarr")
+    from zarr.core.buffer import default_buffer_prototype
+
+    from mzc.zarr import Dwt2dV3
+
+    _, data = zarr_chunk()
+    store = {}
+    array = zarr.create_array(store=store, shape=(64, 64), chunks=(64, 64), dtype=dtype, zarr_format=3,
+                              serializer=Dwt2dV3(max_error=0.1), compressors=None, fill_value=np.nan)
+    array[:] = np.ones((64, 64))
+    key = next(key for key in store if key.startswith("c"))
+    store[key] = default_buffer_prototype().buffer.from_bytes(data)
+    with pytest.raises(MzcError, match="the chunk is 32 x 128 float64, not the 64 x 64"):
+        array[:]
+
+
+@pytest.mark.parametrize("config", [{}, {"max_error": None}, {"max_error": "x"}, {"max_error": "nan"},
+                                    {"max_error": [1]}, {"max_error": 0.1, "level": "x"}])
+def test_a_zarr_codec_config_without_a_valid_max_error_is_one_error(config):
+    numcodecs = pytest.importorskip("numcodecs")
+    with pytest.raises(MzcError):
+        numcodecs.get_codec({"id": "mzc_dwt2d", **config})
 # --- 6. the 1e100 limit kept on reading ------------------------------------------------------
 
 def bump_grid():
