@@ -28,6 +28,8 @@ def check_grid_size(rows: int, cols: int, advice: str = "", **where) -> None:
     (source, line, field) and ``advice`` says what to do instead."""
     if 1 <= rows <= MAX_DIMENSION and 1 <= cols <= MAX_DIMENSION and rows * cols <= MAX_NODES:
         return
+    if min(rows, cols) < 1:
+        raise MzcError(f"{rows} x {cols} nodes is empty: a grid has at least 1 row and 1 column", **where)
     raise MzcError(f"{rows} x {cols} nodes is too large: this mzc accepts 1..{MAX_DIMENSION} per side and "
                    f"at most {MAX_NODES} nodes{'; ' + advice if advice else ''}", **where)
 

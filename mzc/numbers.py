@@ -29,6 +29,25 @@ def unpadded(data: bytes) -> bytes:
     return data.rstrip(b"\0") if data.endswith(b"\0") else data
 
 
+def real_array(values, what: str, check_shape=None) -> np.ndarray:
+    """``values`` as a float64 array (a float64 array itself, not a copy), or an MzcError naming
+    ``what``: complex numbers (a cast would drop their imaginary parts), text, objects and
+    ragged lists are no numbers mzc computes with. ``check_shape(shape)`` may refuse the shape
+    before anything is converted."""
+    try:
+        array = np.asarray(values)
+    except (TypeError, ValueError):   # a ragged list
+        raise MzcError(f"must be an array of numbers, not a {type(values).__name__} of rows of different lengths",
+                       field=what) from None
+    if array.dtype.kind == "c":
+        raise MzcError("complex numbers: mzc computes with real ones", field=what)
+    if array.dtype.kind not in "biuf":
+        raise MzcError(f"must be numbers, not {array.dtype} values", field=what)
+    if check_shape is not None:
+        check_shape(array.shape)
+    return array.astype(np.float64, copy=False)
+
+
 def is_number(token: str) -> bool:
     """True when ``token`` is a number in ASCII (``nan`` and ``inf`` included)."""
     if not token.isascii() or "_" in token:

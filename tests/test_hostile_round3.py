@@ -39,6 +39,13 @@ def lattice(tmp_path, count=300):
     return path
 
 
+def bump_grid():
+    """A small planar grid of the bump sample, with holes."""
+    import mzc
+
+    return mzc.slice(mzc.sample("bump"), 4.0, 4.0)
+
+
 @contextlib.contextmanager
 def traced():
     """Trace Python's allocations inside; yields a function giving their peak in bytes."""
@@ -202,14 +209,108 @@ def test_a_zarr_codec_config_without_a_valid_max_error_is_one_error(config):
     numcodecs = pytest.importorskip("numcodecs")
     with pytest.raises(MzcError):
         numcodecs.get_codec({"id": "mzc_dwt2d", **config})
-# --- 6. the 1e100 limit kept on reading ------------------------------------------------------
+# --- 5. the API: MzcError for bad input, checked before work ---------------------------------
 
-def bump_grid():
-    """A small planar grid of the bump sample, with holes."""
+def api_calls():
+    """name -> a call of the public API with one hostile argument."""
     import mzc
 
-    return mzc.slice(mzc.sample("bump"), 4.0, 4.0)
+    grid, mesh, pts = bump_grid(), mzc.Mesh(square(), [[0, 1, 2], [1, 3, 2]]), np.random.default_rng(0).random((9, 3))
+    huge = np.broadcast_to(np.float64(1), (10001, 10001))   # no memory: a size refused before any work
+    return {
+        "encode 0 x 0": lambda: mzc.encode(np.zeros((0, 0))), "encode 0 x 5": lambda: mzc.encode(np.zeros((0, 5))),
+        "encode 1000001 x 1": lambda: mzc.encode(np.zeros((1_000_001, 1)), max_error=0.1),
+        "encode 10001 x 10001": lambda: mzc.encode(huge, max_error=0.1),
+        "encode complex": lambda: mzc.encode(np.ones((4, 4)) * (1 + 1j), max_error=0.1),
+        "encode objects": lambda: mzc.encode(np.array([[object()]])), "encode text": lambda: mzc.encode("abc"),
+        "encode None": lambda: mzc.encode(None), "encode 3D": lambda: mzc.encode(np.zeros((2, 2, 2))),
+        "encode ragged": lambda: mzc.encode([[1, 2], [3]]), "encode inf": lambda: mzc.encode(np.full((4, 4), np.inf)),
+        "encode 1e200": lambda: mzc.encode(np.full((4, 4), 1e200), "dct"),
+        "encode max_error nan": lambda: mzc.encode(grid, max_error=float("nan")),
+        "encode quality text": lambda: mzc.encode(grid, "dct", quality="x"),
+        "encode codec 3": lambda: mzc.encode(grid, 3),
+        "decode text": lambda: mzc.decode("mzc-zgrid 1.0"), "decode None": lambda: mzc.decode(None),
+        "decode int": lambda: mzc.decode(10**12), "decode empty": lambda: mzc.decode(b""),
+        "decode legacy kind": lambda: mzc.decode(b"1 2 3", legacy="nope"),
+        "densify n text": lambda: mzc.densify(grid, "x"), "densify n 1.5": lambda: mzc.densify(grid, 1.5),
+        "densify n huge": lambda: mzc.densify(grid, 10**30), "densify None": lambda: mzc.densify(None, 1),
+        "densify 10001 x 10001": lambda: mzc.densify(huge, 1),
+        "densify tol text": lambda: mzc.densify(grid, 1, tol="x"),
+        "densify tol nan": lambda: mzc.densify(grid, 1, tol=float("nan")),
+        "densify iterations text": lambda: mzc.densify(grid, 1, method="thesis", iterations="x"),
+        "densify jump_angle text": lambda: mzc.densify(grid, 1, jump_angle="x"),
+        "triangulate None": lambda: mzc.triangulate(None),
+        "triangulate jump inf": lambda: mzc.triangulate(grid, jump_angle=np.inf),
+        "triangulate 1D": lambda: mzc.triangulate(np.ones(5)),
+        "slice None": lambda: mzc.slice(None), "slice empty": lambda: mzc.slice(np.zeros((0, 3))),
+        "slice NaN points": lambda: mzc.slice(np.full((5, 3), np.nan)),
+        "slice complex points": lambda: mzc.slice(pts * 1j),
+        "slice index 5 of 3": lambda: mzc.slice((pts[:3], [[0, 1, 5]])),
+        "slice index 2.5": lambda: mzc.slice((pts[:3], [[0, 1, 2.5]])),
+        "slice index 2^70": lambda: mzc.slice((pts[:3], [[0, 1, 2**70]])),
+        "slice faces None": lambda: mzc.slice(type("M", (), {"vertices": pts, "faces": None})()),
+        "slice d1 text": lambda: mzc.slice(mesh, d1="x"), "slice rows text": lambda: mzc.slice(mesh, rows="x"),
+        "slice rows 2.5": lambda: mzc.slice(mesh, rows=2.5),
+        "slice center of 2": lambda: mzc.slice(mesh, projection="spherical", center=(1, 2)),
+        "slice center text": lambda: mzc.slice(mesh, projection="spherical", center="abc"),
+        "slice axis text": lambda: mzc.slice(mesh, projection="cylindrical", axis="abc"),
+        "slice classes 5": lambda: mzc.slice(mesh, classes=5), "slice path NUL": lambda: mzc.slice("a\0b.obj"),
+        "compare None": lambda: mzc.compare(None, mesh),
+        "compare samples text": lambda: mzc.compare(mesh, mesh, samples="x"),
+        "compare samples 1000.5": lambda: mzc.compare(mesh, mesh, surface=True, samples=1000.5),
+        "compare seed text": lambda: mzc.compare(mesh, mesh, surface=True, seed="x"),
+        "compare seed -1": lambda: mzc.compare(mesh, mesh, surface=True, seed=-1),
+        "compare d1 text": lambda: mzc.compare(mesh, mesh, d1="x"),
+        "sample list": lambda: mzc.sample([1]), "read None": lambda: mzc.read(None), "read 5": lambda: mzc.read(5),
+        "read NUL": lambda: mzc.read("a\0b"), "write None": lambda: mzc.write(None, grid),
+        "write precision text": lambda: mzc.write("x.zg", grid, precision="x", plain=True),
+        "write precision 10^6": lambda: mzc.write("x.zg", grid, precision=10**6, plain=True),
+        "write 5": lambda: mzc.write("x.zg", 5),
+        "ZGrid complex": lambda: mzc.ZGrid(np.ones((3, 3)) * 1j, 1, 1),
+        "ZGrid d1 text": lambda: mzc.ZGrid(np.ones((3, 3)), "x", 1),
+        "ZGrid origin 5": lambda: mzc.ZGrid(np.ones((3, 3)), 1, 1, origin=5),
+        "ZGrid origin NaN": lambda: mzc.ZGrid(np.ones((3, 3)), 1, 1, origin=(np.nan, 0)),
+        "ZGrid transform of 5": lambda: mzc.ZGrid(np.ones((3, 3)), 1, 1, transform=np.zeros(5)),
+        "ZGrid radius text": lambda: mzc.ZGrid(np.ones((3, 3)), 1, 1, projection="cylindrical", radius="x"),
+        "ZGrid raster text": lambda: mzc.ZGrid(np.ones((3, 3)), 1, 1, raster="x"),
+        "Mesh text": lambda: mzc.Mesh("abc"), "Mesh triangles (2, 2)": lambda: mzc.Mesh(pts, np.ones((2, 2))),
+        "Mesh normals (2, 3)": lambda: mzc.Mesh(pts, normals=np.ones((2, 3))),
+        "batch_decode densify text": lambda: mzc.batch_decode([], "out", densify="x"),
+        "batch_encode sources 5": lambda: mzc.batch_encode(5, "out", max_error=0.1),
+        "batch_encode d1 text": lambda: mzc.batch_encode([], "out", slice_options={"d1": "x"}, max_error=0.1),
+        "register_codec 5": lambda: mzc.register_codec(5),
+    }
 
+
+API_CALLS = api_calls()
+
+
+@pytest.mark.parametrize("name", API_CALLS)
+def test_the_api_refuses_hostile_arguments_with_an_mzc_error_before_work(name, tmp_path, monkeypatch):
+    """Each raised IndexError, OverflowError, ZeroDivisionError, TypeError, AttributeError, a
+    ComplexWarning (the imaginary part dropped) or a bare MemoryError after seconds, or returned
+    bytes that mzc.decode refuses."""
+    import warnings
+
+    monkeypatch.chdir(tmp_path)
+    start = time.perf_counter()
+    with warnings.catch_warnings(), traced() as peak:
+        warnings.simplefilter("error")
+        with pytest.raises(MzcError):
+            API_CALLS[name]()
+    assert time.perf_counter() - start < 5 and peak() < 100_000_000
+    assert not list(tmp_path.iterdir())
+
+
+def test_arrays_are_grids_to_densify_and_triangulate():
+    import mzc
+
+    z = np.add.outer(np.arange(4.0), np.arange(5.0))
+    assert mzc.densify(z, 1).shape == (7, 5)
+    assert len(mzc.triangulate(z).triangles) == 2 * 3 * 4
+
+
+# --- 6. the 1e100 limit kept on reading ------------------------------------------------------
 
 def edited(data, pattern, replacement):
     """``data`` with the first match of ``pattern`` replaced, its checksum made right again."""
