@@ -33,7 +33,8 @@ def real_array(values, what: str, check_shape=None) -> np.ndarray:
     """``values`` as a float64 array (a float64 array itself, not a copy), or an MzcError naming
     ``what``: complex numbers (a cast would drop their imaginary parts), text, objects and
     ragged lists are no numbers mzc computes with. ``check_shape(shape)`` may refuse the shape
-    before anything is converted."""
+    before anything is converted. A signalling NaN of a float32 file (a depth camera's pixel
+    that saw nothing, in any bits) becomes a quiet one without numpy's 'invalid value' warning."""
     try:
         array = np.asarray(values)
     except (TypeError, ValueError):   # a ragged list
@@ -45,7 +46,8 @@ def real_array(values, what: str, check_shape=None) -> np.ndarray:
         raise MzcError(f"must be numbers, not {array.dtype} values", field=what)
     if check_shape is not None:
         check_shape(array.shape)
-    return array.astype(np.float64, copy=False)
+    with np.errstate(invalid="ignore"):
+        return array.astype(np.float64, copy=False)
 
 
 def is_number(token: str) -> bool:

@@ -11,10 +11,11 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from test_hostile import kept_promises, run
 
 from mzc.errors import MzcError
 from mzc.meshes import mesh_from_bytes
+
+from test_hostile import kept_promises, run
 
 
 def write_obj(path, points, faces=((1, 2, 3), (2, 4, 3))):
@@ -209,6 +210,8 @@ def test_a_zarr_codec_config_without_a_valid_max_error_is_one_error(config):
     numcodecs = pytest.importorskip("numcodecs")
     with pytest.raises(MzcError):
         numcodecs.get_codec({"id": "mzc_dwt2d", **config})
+
+
 # --- 5. the API: MzcError for bad input, checked before work ---------------------------------
 
 def api_calls():
@@ -463,3 +466,76 @@ def test_a_nul_inside_text_is_still_binary_data():
     data = TEXT_FILES["m.obj"]
     with pytest.raises(MzcError, match="NUL"):
         mesh_from_bytes(data[:20] + b"\0" + data[20:], "m.obj")
+
+
+# --- 8. what the fuzz found (tests/test_fuzz_readers.py, tests/fuzz/) -------------------------
+
+def test_a_laz_chunk_table_declaring_more_chunks_than_bytes_is_refused_not_aborted(tmp_path, mzc):
+    """lazrs reserved room for 1.7e9 chunks (28 GB) of an 18 KB file and aborted the process
+    with a Rust backtrace of 125 lines."""
+    pytest.importorskip("laspy")
+    data = bytearray((LAS / "simple.laz").read_bytes())
+    table = struct.unpack_from("<q", data, struct.unpack_from("<I", data, 96)[0])[0]
+    struct.pack_into("<I", data, table + 4, 1_748_356_570)
+    path = tmp_path / "chunks.laz"
+    path.write_bytes(bytes(data))
+    result = mzc("slice", path)
+    assert result.returncode == 1 and result.stderr.decode().count("\n") == 1, result.stderr[-300:]
+    assert b"chunks.laz: the LAZ chunk table declares 1748356570 chunks" in result.stderr
+
+
+@pytest.mark.parametrize("name, data", [
+    ("m.off", b"OFF\n100000000 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n"),
+    ("m.off", b"OFF\n# a comment\n3 100000000 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n"),
+    ("m.vtk", b"# vtk DataFile Version 5.1\nm\nASCII\nDATASET UNSTRUCTURED_GRID\nPOINTS 100000000 double\n"
+              b"0 0 0 1 0 0 0 1 1\nCELLS 2 3\nOFFSETS vtktypeint64\n0\n3\nCONNECTIVITY vtktypeint64\n0\n1\n2\n"
+              b"CELL_TYPES 1\n5\n")], ids=["OFF vertices", "OFF faces", "VTK points"])
+def test_an_off_or_vtk_header_declaring_more_than_its_file_holds_is_refused_before_meshio(name, data):
+    """meshio allocated what the header declared first: 2.3 GB for a 50-byte file."""
+    with traced() as peak:
+        with pytest.raises(MzcError, match="header declares .* values, more than the file's .* bytes hold"):
+            mesh_from_bytes(data, name)
+    assert peak() < 10_000_000
+
+
+def test_a_geotiff_without_a_geotransform_reads_without_a_warning():
+    """rasterio warned (NotGeoreferencedWarning) as the dataset opened, before the reader's filter."""
+    pytest.importorskip("rasterio")
+    import warnings
+
+    from mzc.rasters import raster_or_mesh
+
+    data = bytearray((LAS / "rasterio_float.tif").read_bytes())
+    data[142] ^= 1   # the tag of the geotransform's pixel scale becomes another
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        grid = raster_or_mesh(bytes(data), "plain.tif")
+    assert grid.shape == (2, 3) and (grid.d1, grid.d2) == (1.0, 1.0)
+
+
+def test_a_signalling_nan_in_a_float32_cloud_is_a_point_dropped_without_a_warning():
+    import warnings
+
+    header = (b"VERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\nWIDTH 4\nHEIGHT 1\nPOINTS 4\n"
+              b"DATA binary\n")
+    points = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [9, 9, 9]], "<f4")
+    points.view("<u4")[3, 0] = 0x7FA00000   # a signalling NaN
+    ply = (b"ply\nformat binary_little_endian 1.0\nelement vertex 4\nproperty float x\nproperty float y\n"
+           b"property float z\nend_header\n")
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        assert len(mesh_from_bytes(header + points.tobytes(), "m.pcd").points) == 3
+        with pytest.raises(MzcError, match="vertex 4 has a NaN"):
+            mesh_from_bytes(ply + points.tobytes(), "m.ply")
+
+
+def test_a_transform_of_huge_entries_is_refused_without_an_overflow_warning():
+    import warnings
+
+    import mzc
+
+    data = (b"mzc-zgrid 1.0\nrows 1\ncols 2\nd1 1\nd2 1\ntransform 1e308 0 0 0 0 1e308 0 0 0 0 1 0\ndata\n1 2\n")
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        with pytest.raises(MzcError, match="not a rotation"):
+            mzc.decode(data)

@@ -10,7 +10,9 @@ chunks, so memory grows with the points the file really holds, whatever its head
 declares: a file with fewer points than it declares is refused as truncated, and one with
 fewer bytes than its declared variable-length records take is refused before laspy reads
 it (laspy reads records past the end of the file: a 34 KB file declaring 4e9 of them took
-68 s and 1.4 GB before it ran out of memory).
+68 s and 1.4 GB before it ran out of memory), and so is a LAZ file whose chunk table declares
+more chunks than it has bytes (lazrs reserves room for them all first: 28 GB for an 18 KB
+file, and the process aborted).
 """
 
 import io
@@ -30,6 +32,8 @@ MODEL_TYPE_KEY, MODEL_GEOGRAPHIC = 1024, 2   # GTModelTypeGeoKey: 2 = longitude 
 MISSING_EXTRA = "reading LAS/LAZ needs laspy and lazrs: pip install 'mzc[las]'"
 # the public header block's fields that place and count records: (struct format, offset)
 HEADER_SIZE, VLR_COUNT, EVLR_START, EVLR_COUNT = ("<H", 94), ("<I", 100), ("<Q", 235), ("<I", 243)
+POINTS_START, POINT_FORMAT = ("<I", 96), ("<B", 104)
+COMPRESSED = 0xC0   # the bits LAZ sets in the point format of compressed points
 VLR_HEADER, EVLR_HEADER, EVLR_HEADER_SIZE = 54, 60, 375   # bytes of a record's header; LAS 1.4's header size
 
 
@@ -91,6 +95,21 @@ def check_records(data, source):
             raise MzcError(f"truncated: the header declares {evlrs} extended variable length records from byte "
                            f"{start}, which take at least {EVLR_HEADER * evlrs} bytes, the file holds {len(data)}",
                            source=source)
+    check_chunk_table(data, source)
+
+
+def check_chunk_table(data, source):
+    """Refuse a LAZ file whose chunk table (found through the 8 bytes where its points start)
+    declares more chunks than the file has bytes: each takes at least one."""
+    start = header_field(data, POINTS_START)
+    if len(data) <= POINT_FORMAT[1] or not header_field(data, POINT_FORMAT) & COMPRESSED or start + 8 > len(data):
+        return
+    table = struct.unpack_from("<q", data, start)[0]
+    if 0 <= table <= len(data) - 8:
+        chunks = struct.unpack_from("<I", data, table + 4)[0]
+        if chunks > len(data):
+            raise MzcError(f"the LAZ chunk table declares {chunks} chunks, more than the file's {len(data)} bytes "
+                           "hold", source=source)
 
 
 def header_field(data, field):

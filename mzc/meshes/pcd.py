@@ -38,7 +38,7 @@ from mzc.errors import MzcError
 from mzc.limits import MAX_FIELD_VALUES
 from mzc.meshes import Mesh
 from mzc.meshes.common import decode_text
-from mzc.numbers import bad_token, is_count, to_floats
+from mzc.numbers import bad_token, is_count, real_array, to_floats
 
 NAME = "pcd"
 EXTENSIONS = (".pcd",)
@@ -253,7 +253,7 @@ def binary_columns(header, data, names, source):
                        f"binary data, the file holds {held}", source=source)
     records = np.frombuffer(data, dtype=dtype, count=header.points, offset=header.start)
     index = {field.name: i for i, field in enumerate(header.fields)}
-    return {name: records[f"f{index[name]}"][:, 0].astype(np.float64) for name in names}
+    return {name: real_array(records[f"f{index[name]}"][:, 0], name) for name in names}
 
 
 def compressed_columns(header, data, names, source):
@@ -285,8 +285,8 @@ def compressed_columns(header, data, names, source):
     sizes = {field.name: field.size for field, keep in zip(header.fields, kept) if keep}
     starts = dict(zip(sizes, np.cumsum([0] + list(sizes.values())[:-1]).tolist()))
     fields = {field.name: field for field in header.fields}
-    return {name: np.frombuffer(values, dtype=fields[name].dtype, count=header.points,
-                                offset=starts[name] * header.points).astype(np.float64) for name in names}
+    return {name: real_array(np.frombuffer(values, dtype=fields[name].dtype, count=header.points,
+                                           offset=starts[name] * header.points), name) for name in names}
 
 
 def cloud_or_lattice(header, points, normals):

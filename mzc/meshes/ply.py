@@ -19,7 +19,7 @@ import numpy as np
 from mzc.errors import MzcError
 from mzc.meshes import Mesh
 from mzc.meshes.common import as_indices, decode_text, fan_triangulate_ragged, flat_numbers
-from mzc.numbers import is_count
+from mzc.numbers import is_count, real_array
 
 NAME = "ply"
 EXTENSIONS = (".ply",)
@@ -321,7 +321,7 @@ def ply_mesh(elements, tables, source):
     vertex = tables.get("vertex", {})
     if not all(isinstance(vertex.get(axis), np.ndarray) for axis in "xyz"):
         raise MzcError("PLY file has no 'vertex' element with x, y, z", source=source)
-    points = np.column_stack([np.asarray(vertex[axis], dtype=np.float64) for axis in "xyz"])
+    points = np.column_stack([real_array(vertex[axis], axis) for axis in "xyz"])
     faces, strips = index_lists(tables, "face", source), index_lists(tables, "tristrips", source)
     triangles = ([ply_face_triangles(faces, source)] if faces is not None else []) + \
         ([strip_triangles(strips, source)] if strips is not None else [])
@@ -329,7 +329,7 @@ def ply_mesh(elements, tables, source):
         return Mesh(points, np.concatenate(triangles))
     normals = None
     if all(isinstance(vertex.get(axis), np.ndarray) for axis in ("nx", "ny", "nz")):
-        normals = np.column_stack([np.asarray(vertex[axis], dtype=np.float64) for axis in ("nx", "ny", "nz")])
+        normals = np.column_stack([real_array(vertex[axis], axis) for axis in ("nx", "ny", "nz")])
     return Mesh(points, normals=normals)
 
 

@@ -40,13 +40,14 @@ def read(data, source):
     from rasterio.errors import RasterioError
 
     try:
-        with warnings.catch_warnings(), module.MemoryFile(data) as memory, memory.open() as dataset:
-            warnings.simplefilter("ignore")   # NotGeoreferencedWarning: a plain TIFF is a grid of unit cells
-            check_readable(dataset, source)
-            values = dataset.read(1)
-            invalid = dataset.read_masks(1) == 0
-            layout = layout_from(dataset, source)
-            nodata, crs = dataset.nodata, dataset.crs.to_wkt() if dataset.crs else None
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")   # NotGeoreferencedWarning, from open: a plain TIFF has unit cells
+            with module.MemoryFile(data) as memory, memory.open() as dataset:
+                check_readable(dataset, source)
+                values = dataset.read(1)
+                invalid = dataset.read_masks(1) == 0
+                layout = layout_from(dataset, source)
+                nodata, crs = dataset.nodata, dataset.crs.to_wkt() if dataset.crs else None
     except RasterioError as error:
         raise MzcError(f"not a readable GeoTIFF: {one_line(error)}", source=source) from None
     if values.dtype.kind == "f":
