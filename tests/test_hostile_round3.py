@@ -539,3 +539,84 @@ def test_a_transform_of_huge_entries_is_refused_without_an_overflow_warning():
         warnings.simplefilter("error")
         with pytest.raises(MzcError, match="not a rotation"):
             mzc.decode(data)
+
+
+def test_a_geotiff_whose_crs_is_not_utf8_is_refused_in_one_line():
+    """rasterio raised a UnicodeDecodeError as it opened the file: an internal error."""
+    pytest.importorskip("rasterio")
+    from mzc.rasters import raster_or_mesh
+
+    data = (LAS / "rasterio_float_nodata.tif").read_bytes()
+    at = data.index(b"unknown|")   # the GeoTIFF's citation of its CRS
+    with pytest.raises(MzcError, match="crs.tif: not a readable GeoTIFF: 'utf-8' codec"):
+        raster_or_mesh(data[:at] + b"\xff" + data[at + 1:], "crs.tif")
+
+
+def test_a_geotiff_of_a_signalling_nan_reads_it_as_no_data_without_a_warning():
+    pytest.importorskip("rasterio")
+    import warnings
+
+    from affine import Affine
+    from rasterio.io import MemoryFile
+
+    from mzc.rasters import raster_or_mesh
+
+    values = np.ones((1, 2, 3), "float32")
+    values.view("<u4")[0, 0, 0] = 0x7FA00000
+    with MemoryFile() as memory:
+        with memory.open(driver="GTiff", width=3, height=2, count=1, dtype="float32",
+                         transform=Affine(1, 0, 0, 0, -1, 2)) as dataset:
+            dataset.write(values)
+        data = memory.read()
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        assert raster_or_mesh(data, "snan.tif").valid.sum() == 5
+
+
+@pytest.mark.parametrize("scale", [1e80, 1e99])
+def test_an_organised_cloud_far_out_is_triangulated_without_an_overflow(scale):
+    """The lattice's depth-jump test takes fourth powers of the coordinates: past 1e77 they
+    overflowed (a RuntimeWarning, and every edge a jump)."""
+    import warnings
+
+    y, x = np.mgrid[0:3, 0:4].astype(float)
+    points = np.stack([x, y, np.full_like(x, 5.0)], axis=-1) * scale
+    header = (b"VERSION 0.7\nFIELDS x y z\nSIZE 8 8 8\nTYPE F F F\nCOUNT 1 1 1\nWIDTH 4\nHEIGHT 3\nPOINTS 12\n"
+              b"DATA binary\n")
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        assert len(mesh_from_bytes(header + points.astype("<f8").tobytes(), "far.pcd").triangles) == 12
+        with pytest.raises(MzcError, match="far.pcd:8: VIEWPOINT: coordinates reach 1e"):
+            mesh_from_bytes(header.replace(b"POINTS", b"VIEWPOINT 0 1e308 0 1 0 0 0\nPOINTS")
+                            + points.astype("<f8").tobytes(), "far.pcd")
+
+
+def test_a_geotiff_whose_crs_gdal_cannot_parse_is_refused_in_one_line():
+    """rasterio's CRSError (a ValueError, not a RasterioError) was an internal error."""
+    pytest.importorskip("rasterio")
+    from mzc.rasters import raster_or_mesh
+
+    data = (LAS / "rasterio_float_nodata.tif").read_bytes()
+    data = (data[:502] + b"\xff" * 8 + data[510:]).replace(b"GRS80", b"GRS-1")   # a NaN in the CRS's numbers
+    with pytest.raises(MzcError, match="crs.tif: not a readable GeoTIFF: OGR Error"):
+        raster_or_mesh(data, "crs.tif")
+
+
+def test_a_laz_extended_record_of_2_to_the_63_bytes_is_refused_in_one_line():
+    """laspy asked its stream for 2^63 bytes: an OverflowError."""
+    pytest.importorskip("laspy")
+    data = bytearray((LAS / "1_4_w_evlr.laz").read_bytes())
+    struct.pack_into("<Q", data, struct.unpack_from("<Q", data, 235)[0] + 20, 2**63)
+    with pytest.raises(MzcError, match="evlr.laz: not a readable LAS/LAZ file"):
+        mesh_from_bytes(bytes(data), "evlr.laz")
+
+
+def test_a_blank_line_where_the_holes_section_starts_is_refused_in_one_line():
+    """A line of spaces after a row codec's rows was a ValueError (nothing to unpack)."""
+    import mzc
+
+    from codec_contract import rechecksummed
+
+    data = mzc.encode(np.arange(12.0).reshape(3, 4), "dft", quality=50)
+    with pytest.raises(MzcError, match="expected 'holes COUNT'"):
+        mzc.decode(rechecksummed(data + b"   \nholes 0\n"))

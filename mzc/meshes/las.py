@@ -133,11 +133,9 @@ def check_room(header, size, declared, source):
 
 def reading_errors():
     """The exceptions laspy and lazrs raise on a damaged file."""
-    import struct
-
     import laspy
 
-    errors = [laspy.errors.LaspyException, ValueError, EOFError, struct.error]
+    errors = [laspy.errors.LaspyException, ValueError, EOFError, OverflowError, struct.error]
     try:
         import lazrs
 

@@ -27,6 +27,7 @@ import numpy as np
 from mzc.errors import MzcError
 from mzc.grid import IDENTITY_TRANSFORM, SAMPLES, Raster, ZGrid
 from mzc.limits import check_grid_magnitudes
+from mzc.numbers import real_array
 
 FORMATS = ("tif", "asc")
 EXTENSIONS = {".tif": "tif", ".tiff": "tif", ".asc": "asc"}
@@ -115,7 +116,7 @@ def grid_of(values, invalid, layout, sample, nodata=None, crs=None):
             raise MzcError(f"its cells are {getattr(layout, name):g} wide along {'x' if name == 'd2' else 'y'}",
                            field="transform")
     rows = values.shape[0]
-    z = np.where(invalid, np.nan, values.astype(np.float64))
+    z = np.where(invalid, np.nan, real_array(values, "data"))
     dx, dy = layout.offsets(rows)
     origin = (node_coordinate(layout.x, dx), node_coordinate(layout.y, dy))
     raster = Raster(layout.cells, layout.rows, sample)
