@@ -34,9 +34,11 @@ class Choices:
         self.draw = draw
 
     def integer(self, low, high):
+        """A whole number from ``low`` to ``high``."""
         return self.draw(st.integers(low, high))
 
     def pick(self, options):
+        """One of ``options``."""
         return self.draw(st.sampled_from(options))
 
 

@@ -620,3 +620,18 @@ def test_a_blank_line_where_the_holes_section_starts_is_refused_in_one_line():
     data = mzc.encode(np.arange(12.0).reshape(3, 4), "dft", quality=50)
     with pytest.raises(MzcError, match="expected 'holes COUNT'"):
         mzc.decode(rechecksummed(data + b"   \nholes 0\n"))
+
+
+def test_a_laz_whose_chunk_table_makes_lazrs_panic_is_refused_in_one_line(tmp_path, mzc):
+    """One byte of the chunk table's coded entries changed: lazrs panicked in Rust (capacity
+    overflow), printed its message and backtrace on stderr, and the PanicException, a
+    BaseException, came out as a Python traceback."""
+    pytest.importorskip("laspy")
+    data = bytearray((LAS / "1_4_w_evlr.laz").read_bytes())
+    table = struct.unpack_from("<q", data, struct.unpack_from("<I", data, 96)[0])[0]
+    data[table + 8] = 243
+    path = tmp_path / "panic.laz"
+    path.write_bytes(bytes(data))
+    result = mzc("slice", path)
+    assert result.returncode == 1 and result.stderr.decode().count("\n") == 1, result.stderr[-500:]
+    assert b"panic.laz: truncated or damaged point data" in result.stderr

@@ -15,8 +15,11 @@ more chunks than it has bytes (lazrs reserves room for them all first: 28 GB for
 file, and the process aborted).
 """
 
+import contextlib
 import io
+import os
 import struct
+import sys
 
 import numpy as np
 
@@ -34,6 +37,7 @@ MISSING_EXTRA = "reading LAS/LAZ needs laspy and lazrs: pip install 'mzc[las]'"
 HEADER_SIZE, VLR_COUNT, EVLR_START, EVLR_COUNT = ("<H", 94), ("<I", 100), ("<Q", 235), ("<I", 243)
 POINTS_START, POINT_FORMAT = ("<I", 96), ("<B", 104)
 COMPRESSED = 0xC0   # the bits LAZ sets in the point format of compressed points
+PANIC_MODULE = "pyo3_runtime"   # where pyo3 makes PanicException, a BaseException no module exports
 VLR_HEADER, EVLR_HEADER, EVLR_HEADER_SIZE = 54, 60, 375   # bytes of a record's header; LAS 1.4's header size
 
 
@@ -52,7 +56,7 @@ def read(data: bytes, source: str) -> Mesh:
     chunks: list = []
     declared = None
     try:
-        with laspy.open(io.BytesIO(data)) as reader:
+        with panics_unprinted(), laspy.open(io.BytesIO(data)) as reader:
             declared = int(reader.header.point_count)
             check_room(reader.header, len(data), declared, source)
             for chunk in reader.chunk_iterator(min(CHUNK_POINTS, max(declared, 1))):
@@ -63,7 +67,9 @@ def read(data: bytes, source: str) -> Mesh:
             crs, geographic = header_crs(reader.header)
     except MzcError:
         raise
-    except reading_errors() as error:
+    except BaseException as error:   # a PanicException is one: lazrs's Rust panics on damaged points
+        if not isinstance(error, reading_errors()) and type(error).__module__ != PANIC_MODULE:
+            raise
         held = sum(len(chunk[0]) for chunk in chunks)
         raise MzcError(las_problem(error, held, declared), source=source) from None
     held = sum(len(chunk[0]) for chunk in chunks)
@@ -78,6 +84,22 @@ def read(data: bytes, source: str) -> Mesh:
     points = np.concatenate([chunk[0] for chunk in chunks] or [np.empty((0, 3))])
     classes = np.concatenate([chunk[1] for chunk in chunks] or [np.empty(0, dtype=np.uint8)])
     return Mesh(points, classification=classes, crs=crs)
+
+
+@contextlib.contextmanager
+def panics_unprinted():
+    """Standard error (file descriptor 2) to the null device inside: lazrs panics in Rust on
+    some damaged compressed points (a capacity overflow), which Rust prints there, message and
+    backtrace, before pyo3 raises it as a PanicException that ``read`` makes one MzcError."""
+    sys.stderr.flush()
+    saved = os.dup(2)
+    try:
+        with open(os.devnull, "wb") as null:
+            os.dup2(null.fileno(), 2)
+        yield
+    finally:
+        os.dup2(saved, 2)
+        os.close(saved)
 
 
 def check_records(data, source):
