@@ -2,8 +2,11 @@
 
 Every command is a thin wrapper over one of these; they take and return in-memory objects
 (``ZGrid``, ``Mesh``, ``bytes``) and raise ``MzcError`` (a ``ValueError``) for bad input,
-never a command-line message. Anything with ``vertices`` and ``faces`` (a trimesh mesh),
-a ``(points, triangles)`` pair, an (n, 3) array of points or a path is a surface.
+never a command-line message: each argument is checked here (``number``, ``vector``,
+``path_of``, ``as_grid``, ``as_mesh``) as the command line's options are by click, before
+any work, rather than failing inside it with a TypeError or a numpy warning. Anything with
+``vertices`` and ``faces`` (a trimesh mesh), a ``(points, triangles)`` pair, an (n, 3) array of
+points or a path is a surface.
 """
 
 from __future__ import annotations
@@ -23,29 +26,67 @@ if TYPE_CHECKING:
 
 PathLike = str | os.PathLike
 BYTES_SOURCE = "<bytes>"
+MESH_SOURCE = "<mesh>"   # a surface given in memory, in error messages
 
 
 def as_mesh(surface: Any) -> Mesh:
-    """A ``Mesh`` of a surface given as a Mesh, a ZGrid, a path, a trimesh-like object, a pair or an array."""
+    """A ``Mesh`` of a surface given as a Mesh, a ZGrid, a path, a trimesh-like object, a pair or an
+    array; one given in memory is held to what a mesh file is (``mzc.meshes.checked``: points,
+    finite coordinates, triangles that index them)."""
+    from mzc.grid import ZGrid
+    from mzc.meshes import checked
+
+    if isinstance(surface, ZGrid):
+        return triangulate(surface)   # a Mesh that keeps its grid: compared at the grid's own nodes
+    if isinstance(surface, (str, os.PathLike)):
+        return read_surface(path_of(surface, "surface"))
+    mesh = mesh_in_memory(surface)
+    return mesh if mesh.grid is not None else checked(mesh, MESH_SOURCE)
+
+
+def mesh_in_memory(surface: Any) -> Mesh:
+    """The ``Mesh`` of a Mesh, a trimesh-like object, a (points, triangles) pair or an array."""
+    import numpy as np
+
     from mzc.meshes import Mesh
+    from mzc.numbers import real_array
 
     if isinstance(surface, Mesh):
         return surface
-    if isinstance(surface, (str, os.PathLike)):
-        return read_surface(os.fspath(surface))
     if hasattr(surface, "vertices") and hasattr(surface, "faces"):
         return Mesh(surface.vertices, surface.faces)
     if isinstance(surface, tuple) and len(surface) == 2:
         return Mesh(*surface)
-    from mzc.grid import ZGrid
+    if isinstance(surface, (np.ndarray, list)):
+        return Mesh(real_array(surface, "points"))
+    raise MzcError(f"cannot read a surface from a {type(surface).__name__}: give a path, a Mesh, "
+                   "an object with vertices and faces, (points, triangles) or an (n, 3) array")
 
-    if isinstance(surface, ZGrid):
-        return triangulate(surface)   # a Mesh that keeps its grid: compared at the grid's own nodes
-    try:
-        return Mesh(surface)
-    except (TypeError, ValueError):
-        raise MzcError(f"cannot read a surface from a {type(surface).__name__}: give a path, a Mesh, "
-                       "an object with vertices and faces, (points, triangles) or an (n, 3) array") from None
+
+def number(value: Any, name: str, kind: type = float, low: float | None = None, high: float | None = None,
+           low_open: bool = False) -> Any:
+    """An argument as a number of ``kind`` (int or float) within ``low``..``high`` (None stays None),
+    as a codec's options are checked (``mzc.codecs.base.Option``): a string, a bool, a fraction
+    for a whole number or a NaN is an MzcError naming it."""
+    from mzc.codecs.base import Option
+
+    return None if value is None else Option(name, kind, None, low, high, low_open).check(value)
+
+
+def vector(value: Any, name: str) -> tuple[float, float, float] | None:
+    """An argument of three finite numbers (a centre, an axis), None staying None."""
+    from mzc.grid import finite
+
+    return None if value is None else tuple(finite(value, name, 3).tolist())
+
+
+def path_of(path: Any, name: str = "path") -> str:
+    """A path argument as a string: a str or an os.PathLike, else an MzcError naming it."""
+    if not isinstance(path, (str, os.PathLike)) or isinstance(os.fspath(path), bytes):
+        raise MzcError(f"must be a file name (a str or a path), not a {type(path).__name__}", field=name)
+    if "\0" in os.fspath(path):
+        raise MzcError("a file name holds no NUL character", field=name)
+    return os.fspath(path)
 
 
 def read_surface(path: PathLike | None) -> Mesh:
@@ -80,17 +121,11 @@ def read_item(path: PathLike | None) -> ZGrid | Mesh:
 
 
 def as_grid(grid: ZGrid | np.ndarray) -> ZGrid:
-    """``grid`` itself, or a 2D array as a planar z-grid of unit spacing (NaN = no value)."""
+    """``grid`` itself, or a 2D array as a planar z-grid of unit spacing (NaN = no value), its
+    shape and values checked as every ZGrid's are."""
     from mzc.grid import ZGrid
 
-    if isinstance(grid, ZGrid):
-        return grid
-    import numpy as np
-
-    values = np.asarray(grid, dtype=float)
-    if values.ndim != 2:
-        raise MzcError(f"a z-grid is 2D; this array has shape {values.shape}")
-    return ZGrid(z=values, d1=1.0, d2=1.0)
+    return grid if isinstance(grid, ZGrid) else ZGrid(z=grid, d1=1.0, d2=1.0)
 
 
 def slice(surface: Any, d1: float | None = None, d2: float | None = None, *, rows: int | None = None,
@@ -110,13 +145,33 @@ def slice(surface: Any, d1: float | None = None, d2: float | None = None, *, row
     from mzc.grid import ZGrid
     from mzc.ops.slicing import slice_surface
 
+    numbers = slicing_numbers({"d1": d1, "d2": d2, "rows": rows, "cols": cols, "center": center, "axis": axis,
+                               "classes": classes})
     if isinstance(surface, (str, os.PathLike)):
-        surface = read_item(os.fspath(surface))
+        surface = read_item(path_of(surface, "surface"))
     if not (isinstance(surface, ZGrid) and surface.raster is not None):
         surface = as_mesh(surface)
-    return slice_surface(surface, d1=d1, d2=d2, rows=rows, cols=cols, align=align, units=units,
-                         projection=projection, center=center, axis=axis, view=view, thesis_grid=thesis_grid,
-                         classes=None if classes is None else tuple(classes), cloud=cloud, charts=charts)
+    return slice_surface(surface, align=align, units=units, projection=projection, view=view,
+                         thesis_grid=thesis_grid, cloud=cloud, charts=charts, **numbers)
+
+
+def slicing_numbers(options: dict[str, Any]) -> dict[str, Any]:
+    """``options`` of :func:`slice` with its numbers checked and converted (spacings, counts, the
+    centre and axis, the ASPRS classes), for slice and for batch_encode's ``slice_options``; the
+    slicer itself says which spacings and counts make a grid (mzc.limits)."""
+    checked = dict(options)
+    for name, value in options.items():
+        if name in ("d1", "d2"):
+            checked[name] = number(value, name, float)
+        elif name in ("rows", "cols"):
+            checked[name] = number(value, name, int)
+        elif name in ("center", "axis"):
+            checked[name] = vector(value, name)
+        elif name == "classes" and value is not None:
+            if isinstance(value, (str, bytes)) or not hasattr(value, "__iter__"):
+                raise MzcError(f"must be ASPRS class codes (say [2, 9]), not {value!r}", field="classes")
+            checked[name] = tuple(number(code, "classes", int, 0, 255) for code in value)
+    return checked
 
 
 def encode(grid: ZGrid | np.ndarray, codec: str = "dwt2d", **options: Any) -> bytes:
@@ -130,36 +185,52 @@ def encode(grid: ZGrid | np.ndarray, codec: str = "dwt2d", **options: Any) -> by
 def decode(data: bytes, legacy: str | None = None) -> ZGrid:
     """The z-grid of any mzc file's bytes (``mzc decode``); ``legacy`` names the kind of a thesis
     file (poly, dft, dct, dwt), which has no magic line."""
+    try:
+        contents = bytes(memoryview(data).cast("B"))
+    except TypeError:
+        raise MzcError(f"must be the bytes of an mzc file, not a {type(data).__name__}", field="data") from None
     if legacy is not None:
         from mzc.codecs.rows.legacy import read_legacy
 
-        return read_legacy(bytes(data), BYTES_SOURCE, legacy)
+        return read_legacy(contents, BYTES_SOURCE, legacy)
     from mzc.formats import read_any
 
-    return read_any(bytes(data), BYTES_SOURCE)   # a file without a magic line is refused there
+    return read_any(contents, BYTES_SOURCE)   # a file without a magic line is refused there
 
 
-def densify(grid: ZGrid, n: int, method: str = "biharmonic", *, iterations: int = 100,
+def densify(grid: ZGrid | np.ndarray, n: int, method: str = "biharmonic", *, iterations: int = 100,
             tol: float | None = None, jump_angle: float | None = None) -> ZGrid:
-    """``grid`` with ``n`` rows inserted between each pair of rows (``mzc densify``, the PDE step)."""
+    """``grid`` (or a 2D array) with ``n`` rows inserted between each pair of rows (``mzc densify``,
+    the PDE step)."""
+    from mzc.limits import MAX_INSERTED, MAX_ITERATIONS
     from mzc.ops.densify import densify_grid
 
-    return densify_grid(grid, n, method, iterations=iterations, tol=tol, jump_angle=jump_angle)
+    return densify_grid(as_grid(grid), number(n, "n", int, 0, MAX_INSERTED), method,
+                        iterations=number(iterations, "iterations", int, 0, MAX_ITERATIONS),
+                        tol=number(tol, "tol", float, 0, low_open=True), jump_angle=angle(jump_angle))
 
 
-def triangulate(grid: ZGrid, jump_angle: float | None = None) -> Mesh:
-    """The triangle mesh of a z-grid in its input surface's frame (``mzc triangulate``)."""
+def triangulate(grid: ZGrid | np.ndarray, jump_angle: float | None = None) -> Mesh:
+    """The triangle mesh of a z-grid (or a 2D array) in its input surface's frame (``mzc triangulate``)."""
     from mzc.ops.triangulation import grid_to_mesh
 
-    return grid_to_mesh(grid, jump_angle)
+    return grid_to_mesh(as_grid(grid), angle(jump_angle))
+
+
+def angle(jump_angle: float | None) -> float | None:
+    """A ``jump_angle`` argument: degrees, 0..90, as ``--jump-angle`` takes them."""
+    return number(jump_angle, "jump_angle", float, 0, 90)
 
 
 def compare(a: Any, b: Any, *, surface: bool = False, heightfield: bool = False, samples: int = 100_000,
             seed: int = 0, d1: float | None = None, d2: float | None = None) -> dict[str, Any]:
     """How far surface ``b`` is from ``a`` (``mzc diff``): the statistics of B - A along A's node
     lines, and with ``surface`` the symmetric point-to-surface distance; a dict of name -> value."""
+    from mzc.limits import MAX_SAMPLES
     from mzc.measure import compare_surfaces
 
+    samples, seed = number(samples, "samples", int, 100, MAX_SAMPLES), number(seed, "seed", int, 0, 2**63 - 1)
+    d1, d2 = (number(value, name, float, 0, low_open=True) for value, name in ((d1, "d1"), (d2, "d2")))
     return compare_surfaces(as_mesh(a), as_mesh(b), surface=surface, heightfield=heightfield,
                             samples=samples, seed=seed, d1=d1, d2=d2).report
 
@@ -168,7 +239,7 @@ def sample(name: str = "bump") -> Mesh:
     """A built-in sample surface (``mzc sample``): jacksboro, topobathy, bump, blob or tube."""
     from mzc.samples import SAMPLES, sample_mesh
 
-    if name not in SAMPLES:
+    if not isinstance(name, str) or name not in SAMPLES:
         raise MzcError(f"no sample named {name!r} (known: {', '.join(SAMPLES)})")
     return sample_mesh(name)
 
@@ -176,7 +247,7 @@ def sample(name: str = "bump") -> Mesh:
 def read(path: PathLike) -> ZGrid | Mesh:
     """Read a file: an mzc file (z-grid or compressed) or a raster (GeoTIFF, ESRI ASCII grid) as
     its ZGrid, a mesh or cloud as a Mesh."""
-    return read_item(os.fspath(path))
+    return read_item(path_of(path))
 
 
 def write(path: PathLike, item: ZGrid | Mesh | bytes, file_format: str | None = None,
@@ -189,10 +260,11 @@ def write(path: PathLike, item: ZGrid | Mesh | bytes, file_format: str | None = 
     A z-grid's heights are written raw by default (``mzc-zgrid 3.0``: exact little-endian
     float64, or float32 with ``float32``); ``plain`` writes them as text rows (1.0, 2.0), which
     ``precision`` (decimals) rounds. ``precision`` without ``plain`` is an MzcError."""
+    from mzc.codecs.rows import MAX_PRECISION
     from mzc.grid import ZGrid
     from mzc.streams import write_output
 
-    path = os.fspath(path)
+    path, precision = path_of(path), number(precision, "precision", int, 0, MAX_PRECISION)
     if isinstance(item, (bytes, bytearray)):
         write_output(path, bytes(item))
         return
@@ -234,7 +306,8 @@ def batch_encode(sources: Any, dest: PathLike, codec: str = "dwt2d", *, slice_op
         raise MzcError(f"slice takes no option {unknown[0]!r} (it takes: {', '.join(sorted(defaults))})",
                        field=unknown[0])
     # the options that differ from slice's defaults: the same settings however they were spelled
-    slicing = {k: v for k, v in (slice_options or {}).items() if v not in (None, ()) and v != defaults[k]}
+    given = slicing_numbers(slice_options or {})
+    slicing = {k: v for k, v in given.items() if v not in (None, ()) and v != defaults[k]}
     settings = {"codec": chosen.name, "codec_options": chosen.checked(codec_options), "slice_options": slicing}
     return run_batch_job("encode", sources, dest, settings, sliceable_extensions(), chosen.extension, verify=verify,
                          scheduler=scheduler, workers=workers, chunk_size=chunk_size, listener=listener)
@@ -263,9 +336,8 @@ def batch_decode(sources: Any, dest: PathLike, *, densify: int = 0, method: str 
     known = (*registry.writable(), *rasters.FORMATS)
     if file_format not in known:
         raise MzcError(f"cannot write format {file_format!r} (known: {', '.join(known)})", field="file_format")
-    if not 0 <= int(densify) <= MAX_INSERTED:
-        raise MzcError(f"{densify} is not in 0..{MAX_INSERTED}", field="densify")
-    settings = {"densify": int(densify), "method": method, "format": file_format, "jump_angle": jump_angle}
+    densify = number(densify, "densify", int, 0, MAX_INSERTED)
+    settings = {"densify": densify, "method": method, "format": file_format, "jump_angle": jump_angle}
     extensions = [".zg", *(get_codec(name).extension for name in codec_names())]
     return run_batch_job("decode", sources, dest, settings, extensions, "." + file_format, scheduler=scheduler,
                          workers=workers, chunk_size=chunk_size, listener=listener)
@@ -277,7 +349,11 @@ def run_batch_job(action: str, sources: Any, dest: PathLike, settings: dict[str,
     from mzc.batch import Job, run_batch
     from mzc.batch.items import collect
 
-    sources = [os.fspath(sources)] if isinstance(sources, (str, os.PathLike)) else [os.fspath(s) for s in sources]
-    dest = os.path.abspath(os.fspath(dest))
+    if isinstance(sources, (str, os.PathLike)):
+        sources = [sources]
+    if isinstance(sources, (bytes, dict)) or not hasattr(sources, "__iter__"):
+        raise MzcError(f"must be paths, folders or globs, not a {type(sources).__name__}", field="sources")
+    sources = [path_of(source, "sources") for source in sources]
+    dest = os.path.abspath(path_of(dest, "dest"))
     items = collect(sources, extensions, output_extension, dest)
     return run_batch(Job(action, dest, settings, verify), items, **engine)

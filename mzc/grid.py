@@ -13,6 +13,7 @@ whole: every chart is a piece of the surface that its own node lines meet within
 degrees (``mzc.ops.charts``), and triangulation zips the charts together.
 """
 
+import math
 import re
 from dataclasses import dataclass, field, replace
 
@@ -20,7 +21,8 @@ import numpy as np
 
 from mzc import projections
 from mzc.errors import MzcError
-from mzc.limits import length_problem
+from mzc.limits import check_grid_size, length_problem
+from mzc.numbers import real_array
 from mzc.vectors import matrix_product, rotated
 
 IDENTITY_TRANSFORM = np.hstack([np.eye(3), np.zeros((3, 1))])
@@ -112,6 +114,27 @@ def check_charts(charts, shape):
     return covered.astype(bool)
 
 
+def check_shape(shape):
+    """Refuse the shape of heights that make no z-grid: 2D, within mzc.limits' sizes (a file
+    has at least one row and column), checked before they are converted."""
+    if len(shape) != 2:
+        raise MzcError(f"a z-grid's heights are a 2D array, not one of shape {shape}", field="z")
+    check_grid_size(*shape, field="z")
+
+
+def finite(values, name, count):
+    """``count`` finite real numbers of the field ``name`` as a flat float64 array."""
+    def check_count(shape):
+        if math.prod(shape) != count:
+            raise MzcError(f"must be {count} number{'s' if count > 1 else ''}, not an array of shape {shape}",
+                           field=name)
+
+    array = real_array(values, name, check_count).reshape(-1)
+    if not np.isfinite(array).all():
+        raise MzcError("must be finite", field=name)
+    return array
+
+
 def check_crs(value):
     """Refuse a ``crs`` that the header cannot hold as its one line of WKT."""
     if value is None:
@@ -167,13 +190,10 @@ class ZGrid:
     charts: tuple[Chart, ...] | None = None
 
     def __post_init__(self) -> None:
-        self.z = np.asarray(self.z, dtype=float)
-        if self.z.ndim != 2:
-            raise MzcError("z must be a 2D array")
-        self.transform = np.asarray(self.transform, dtype=float).reshape(3, 4)
-        self.origin = (float(self.origin[0]), float(self.origin[1]))
-        self.d1 = float(self.d1)
-        self.d2 = float(self.d2)
+        self.z = real_array(self.z, "heights", check_shape)
+        self.transform = finite(self.transform, "transform", 12).reshape(3, 4)
+        self.origin = tuple(finite(self.origin, "origin", 2).tolist())
+        self.d1, self.d2 = (float(finite(getattr(self, name), name, 1)[0]) for name in ("d1", "d2"))
         for name in ("units", "nodata"):
             check_token(getattr(self, name), name)
         for name in ("d1", "d2"):
@@ -184,16 +204,18 @@ class ZGrid:
             raise MzcError(f"unknown projection {self.projection!r}")
         if self.projection == "planar":
             self.radius = None
-        elif not (self.radius is not None and np.isfinite(self.radius) and self.radius > 0):
+        elif self.radius is None or not finite(self.radius, "radius", 1)[0] > 0:
             raise MzcError(f"a {self.projection} grid needs a positive radius")
         else:
-            self.radius = float(self.radius)
+            self.radius = float(finite(self.radius, "radius", 1)[0])
             rows, cols = self.z.shape
             problem = projections.extent_problem(self.projection, self.radius, rows, cols, self.d1, self.d2,
                                                  self.origin[1])
             if problem:
                 raise MzcError(f"{problem[0]}: {problem[1]}")
         check_crs(self.crs)
+        if self.raster is not None and not isinstance(self.raster, Raster):
+            raise MzcError(f"must be a mzc.grid.Raster, not a {type(self.raster).__name__}", field="raster")
         if self.projection != "planar" and self.georeferenced:
             raise MzcError(f"a {self.projection} grid has no raster or CRS: they belong to planar grids",
                            field="crs" if self.crs else "raster")

@@ -19,6 +19,7 @@ MAX_LENGTH = 1e50             # spacings and radii within 1/MAX_LENGTH..MAX_LENG
 MAX_INSERTED = 20             # densify's n: rows 21 times denser (a biharmonic -n 50 took 78 s on a thesis grid)
 MAX_ITERATIONS = 100_000      # sweeps of the thesis's Jacobi densify (100 by default)
 MAX_SAMPLES = 2_000_000       # diff --surface samples per surface (10^7 ran out of 8 GB)
+LOSSY_GROWTH = 1e6            # a lossy codec's decoded heights stay within this factor of its input's
 MAX_FIELD_VALUES = 1_000_000  # values of one PCD field a point (COUNT; descriptors hold a few hundred)
 
 
@@ -27,18 +28,37 @@ def check_grid_size(rows: int, cols: int, advice: str = "", **where) -> None:
     (source, line, field) and ``advice`` says what to do instead."""
     if 1 <= rows <= MAX_DIMENSION and 1 <= cols <= MAX_DIMENSION and rows * cols <= MAX_NODES:
         return
+    if min(rows, cols) < 1:
+        raise MzcError(f"{rows} x {cols} nodes is empty: a grid has at least 1 row and 1 column", **where)
     raise MzcError(f"{rows} x {cols} nodes is too large: this mzc accepts 1..{MAX_DIMENSION} per side and "
                    f"at most {MAX_NODES} nodes{'; ' + advice if advice else ''}", **where)
 
 
-def check_magnitude(values, what: str, **where) -> None:
-    """Refuse ``values`` (a numpy array; NaN ignored) holding a magnitude above MAX_MAGNITUDE."""
+def check_magnitude(values, what: str, **where) -> float:
+    """Refuse ``values`` (a numpy array; NaN ignored) holding a magnitude above MAX_MAGNITUDE;
+    return the largest magnitude. Two reductions, no temporary array: a grid read from a
+    file is checked whole, and a copy of its absolute values would double its memory."""
     import numpy as np
 
-    largest = float(np.nanmax(np.abs(values), initial=0.0))
-    if largest > MAX_MAGNITUDE or math.isinf(largest):
+    values = np.asarray(values, dtype=float)
+    largest = max(float(np.fmax.reduce(values, axis=None, initial=-math.inf)),
+                  -float(np.fmin.reduce(values, axis=None, initial=math.inf)), 0.0)
+    if largest > MAX_MAGNITUDE:
         raise MzcError(f"{what} reach {largest:.3g}: mzc computes with {what} up to {MAX_MAGNITUDE:.0e} in "
                        f"magnitude (beyond that its transforms overflow); rescale or change the unit", **where)
+    return largest
+
+
+def check_grid_magnitudes(grid, **where) -> float:
+    """Refuse a ZGrid whose heights or coordinates (its origin, the translation of its transform)
+    are beyond MAX_MAGNITUDE; return its largest height's magnitude. Every grid mzc reads or
+    writes is checked here, so none that overflows its computations (a diff's ``rmse inf``)
+    is taken in or given out."""
+    import numpy as np
+
+    check_magnitude(np.array(grid.origin), "coordinates", **{"field": "origin", **where})
+    check_magnitude(grid.transform[:, 3], "coordinates", **{"field": "transform", **where})
+    return check_magnitude(grid.z, "heights", **{"field": "data", **where})
 
 
 def length_problem(value: float) -> str | None:

@@ -7,6 +7,9 @@ refused everywhere rather than read by some readers only (and ``'²'``, which
 
 numpy converts a whole row of tokens at once; only when that fails is the row searched for
 the first token that is not a number, so the common case stays vectorised.
+
+Text files may end in NUL bytes (a copy padded to a block: LeePerrySmith.obj, a head scan,
+ends with one), which every text reader reads past, as other mesh tools do (``unpadded``).
 """
 
 import re
@@ -18,6 +21,33 @@ from mzc.errors import MzcError
 
 WHOLE_NUMBER = re.compile(r"[0-9]+")
 INTEGER = re.compile(r"[+-]?[0-9]{1,18}")
+
+
+def unpadded(data: bytes) -> bytes:
+    """Text ``data`` without the NUL bytes that pad its end; a NUL anywhere else is still there
+    to say the data is binary. Copies only a padded file."""
+    return data.rstrip(b"\0") if data.endswith(b"\0") else data
+
+
+def real_array(values, what: str, check_shape=None) -> np.ndarray:
+    """``values`` as a float64 array (a float64 array itself, not a copy), or an MzcError naming
+    ``what``: complex numbers (a cast would drop their imaginary parts), text, objects and
+    ragged lists are no numbers mzc computes with. ``check_shape(shape)`` may refuse the shape
+    before anything is converted. A signalling NaN of a float32 file (a depth camera's pixel
+    that saw nothing, in any bits) becomes a quiet one without numpy's 'invalid value' warning."""
+    try:
+        array = np.asarray(values)
+    except (TypeError, ValueError):   # a ragged list
+        raise MzcError(f"must be an array of numbers, not a {type(values).__name__} of rows of different lengths",
+                       field=what) from None
+    if array.dtype.kind == "c":
+        raise MzcError("complex numbers: mzc computes with real ones", field=what)
+    if array.dtype.kind not in "biuf":
+        raise MzcError(f"must be numbers, not {array.dtype} values", field=what)
+    if check_shape is not None:
+        check_shape(array.shape)
+    with np.errstate(invalid="ignore"):
+        return array.astype(np.float64, copy=False)
 
 
 def is_number(token: str) -> bool:

@@ -10,7 +10,12 @@ installed.
 
 Why a dtype byte and not a config field: the mzc-dwt2d header already holds the rows and
 columns, so the chunk's shape comes back from the file; the byte makes every chunk decode
-on its own, whatever codec configuration reads it. Values are coded as float64, so the
+on its own, whatever codec configuration reads it. A chunk is refused where it would land
+in memory of another shape or type: ``decode(buf, out)`` into an ``out`` of other bytes,
+another float type or another 2D shape (a flat buffer of its size is zarr's own), and
+``Dwt2dV3`` into a chunk of the array's that is not its shape and type. Zarr's version-2
+path hands a compressor no ``out`` and no shape, and reshapes what it returns itself: there
+only the size is checked (by zarr), so a 32 x 128 chunk would land in a 64 x 64 one. Values are coded as float64, so the
 bound holds exactly for float64 chunks and, for float32 ones, up to the rounding of the
 decoded values to float32 (half a float32 unit in the last place of each value).
 
@@ -34,7 +39,7 @@ from typing import Any
 
 import numpy as np
 from numcodecs.abc import Codec
-from numcodecs.compat import ensure_bytes, ndarray_copy
+from numcodecs.compat import ensure_bytes, ensure_ndarray_like, ndarray_copy
 
 from mzc.errors import MzcError
 
@@ -55,11 +60,14 @@ class Dwt2d(Codec):
 
     codec_id = "mzc_dwt2d"
 
-    def __init__(self, max_error: float, wavelet: str = "bior4.4", level: int | None = None) -> None:
+    def __init__(self, max_error: float | None = None, wavelet: str = "bior4.4", level: int | None = None) -> None:
         from mzc.codecs import get_codec
 
-        self.max_error, self.wavelet, self.level = float(max_error), wavelet, level
-        get_codec("dwt2d").checked(self.options())   # refuse a bad configuration now, not at the first chunk
+        if max_error is None:   # a config without it: numcodecs.get_codec({"id": "mzc_dwt2d"})
+            raise MzcError("mzc_dwt2d needs max_error, the bound on every value's error", field="max_error")
+        codec = get_codec("dwt2d")
+        self.max_error, self.wavelet, self.level = codec.option("max_error").check(max_error), wavelet, level
+        codec.checked(self.options())   # refuse a bad configuration now, not at the first chunk
 
     def options(self) -> dict[str, Any]:
         """The options of ``mzc.encode`` for this configuration."""
@@ -77,14 +85,29 @@ class Dwt2d(Codec):
         return CODES[array.dtype] + mzc.encode(array.astype(np.float64), "dwt2d", **self.options())
 
     def decode(self, buf: Any, out: Any = None) -> np.ndarray:
-        """The chunk back, in its dtype, into ``out`` when given."""
+        """The chunk back, in its dtype, into ``out`` when given: an array of its shape and type,
+        a flat one of its type and size, or bytes of its size."""
         import mzc
 
         data = ensure_bytes(buf)
         if data[:1] not in DTYPES:
             raise MzcError("not an mzc_dwt2d chunk (no dtype code)")
         values = mzc.decode(data[1:]).z.astype(DTYPES[data[:1]], order="C")   # zarr flattens in memory order
+        if out is not None:
+            out = ensure_ndarray_like(out)
+            check_fits(values, out.shape, out.dtype)
         return ndarray_copy(values, out)
+
+
+def check_fits(values: np.ndarray, shape: tuple[int, ...], dtype: np.dtype) -> None:
+    """Refuse to put a decoded chunk ``values`` where an array of ``shape`` and ``dtype`` goes when
+    it has another size, float type or 2D shape: numcodecs' copy and zarr's reshape would
+    silently lay it out as another grid or read its bytes as other numbers."""
+    same_type = dtype.kind not in "fc" or dtype.newbyteorder("=") == values.dtype.newbyteorder("=")
+    size = int(np.prod(shape)) * dtype.itemsize
+    if size != values.nbytes or not same_type or (len(shape) > 1 and tuple(shape) != values.shape):
+        raise MzcError(f"the chunk is {values.shape[0]} x {values.shape[1]} {values.dtype}, not the "
+                       f"{' x '.join(map(str, shape))} {dtype} it is decoded into")
 
 
 def _zarr3_codec() -> type:
@@ -101,6 +124,12 @@ def _zarr3_codec() -> type:
         def __init__(self, **codec_config: Any) -> None:
             codec_config.pop("id", None)
             super().__init__(**Dwt2d(**codec_config).get_config())
+
+        async def _decode_single(self, chunk_data: Any, chunk_spec: Any) -> Any:
+            """The chunk decoded into the array's chunk, which must be its shape and type."""
+            values = self._codec.decode(chunk_data.to_bytes())
+            check_fits(values, chunk_spec.shape, chunk_spec.dtype.to_native_dtype())
+            return chunk_spec.prototype.nd_buffer.from_ndarray_like(values)
 
     Dwt2dV3.__module__, Dwt2dV3.__qualname__ = __name__, "Dwt2dV3"   # pickled as mzc.zarr.Dwt2dV3 (dask)
     return Dwt2dV3

@@ -318,7 +318,7 @@ HOSTILE = {
     "OBJ index past the vertices": ("m.obj", obj().replace(b"f 1 3 4", b"f 1 3 5"), "does not exist"),
     "OBJ negative index before the first": ("m.obj", obj().replace(b"f 1 3 4", b"f 1 3 -5"), "does not exist"),
     "OBJ index 0": ("m.obj", obj().replace(b"f 1 3 4", b"f 1 3 0"), "does not exist"),
-    "OBJ binary": ("m.obj", obj() + b"\0", "binary data"),
+    "OBJ binary": ("m.obj", obj() + b"\0\x01\x02\n", "binary data"),   # NUL padding at the end is read past
     "OBJ NUL in a vertex": ("m.obj", obj().replace(b"v 1 0 0", b"v 1 0\x00 0"), "2: binary data (a NUL byte)"),
     "OBJ without v": ("m.obj", b"f 1 2 3\n", "no 'v' lines"),
     "xyz two columns": ("m.xyz", b"1 2\n", "at least 3 numbers"),

@@ -30,6 +30,10 @@ registered: dict[str, Codec] = {}
 
 def register_codec(codec: Codec) -> Codec:
     """Make ``codec`` known to ``mzc encode``, ``mzc decode``, ``mzc info`` and ``mzc.encode``."""
+    from mzc.codecs.base import Codec
+
+    if not isinstance(codec, Codec):
+        raise MzcError(f"a codec is a mzc.Codec, not a {type(codec).__name__}", field="codec")
     registered[codec.name] = codec
     return codec
 

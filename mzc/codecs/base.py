@@ -128,25 +128,33 @@ class Codec:
         return {name: value for name, value in values.items() if value is not None}
 
     def encode(self, grid: ZGrid, **options: Any) -> bytes:
-        """The bytes of ``grid`` coded with ``options`` (checked; defaults filled in)."""
-        return self.writer(grid, **self.options_for(grid, options))
+        """The bytes of ``grid`` coded with ``options`` (checked; defaults filled in).
+
+        Heights and coordinates too large to code (mzc.limits) are refused rather than written as
+        numbers no reader takes back; and since a lossy codec's decoded heights may exceed its
+        input's (a DCT's dropped coefficients, by up to LOSSY_GROWTH times), an input that near
+        the limit has its file decoded and refused if a reader would refuse it."""
+        from mzc.limits import LOSSY_GROWTH, MAX_MAGNITUDE, check_grid_magnitudes, check_magnitude
+
+        largest = check_grid_magnitudes(grid)
+        data = self.writer(grid, **self.checked(options))
+        if largest > MAX_MAGNITUDE / LOSSY_GROWTH:
+            check_magnitude(self.decode(data).z, "decoded heights", field="z")
+        return data
 
     def encode_with_decoded(self, grid: ZGrid, **options: Any) -> tuple[bytes, np.ndarray]:
         """The bytes of ``grid`` and the heights a decoder gets from them (NaN off the valid nodes),
-        so a caller can report the errors of what it wrote: from the writer where it knows them,
-        else by decoding the bytes."""
+        so a caller can report the errors of what it wrote: from the writer where it knows them
+        (checked as ``encode`` checks them), else by decoding the bytes."""
+        from mzc.limits import check_grid_magnitudes, check_magnitude
+
         if self.writer_with_decoded is None:
             data = self.encode(grid, **options)
             return data, self.decode(data).z
-        return self.writer_with_decoded(grid, **self.options_for(grid, options))
-
-    def options_for(self, grid: ZGrid, options: dict[str, Any]) -> dict[str, Any]:
-        """``options`` checked for coding ``grid``, whose heights must not be too large to code
-        (mzc.limits) rather than written as numbers no reader takes back."""
-        from mzc.limits import check_magnitude
-
-        check_magnitude(grid.z, "heights", field="z")
-        return self.checked(options)
+        check_grid_magnitudes(grid)
+        data, decoded = self.writer_with_decoded(grid, **self.checked(options))
+        check_magnitude(decoded, "decoded heights", field="z")
+        return data, decoded
 
     def decode(self, data: bytes, source: str = "<bytes>") -> ZGrid:
         """The z-grid of a file of this codec; ``source`` names it in error messages."""

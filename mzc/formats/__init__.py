@@ -11,6 +11,7 @@ import importlib
 from mzc.codecs import BUILT_IN, codec_for_kind
 from mzc.errors import MzcError
 from mzc.formats.header import split_magic
+from mzc.limits import check_grid_magnitudes
 
 # kind -> module of the built-in formats (the z-grid and the built-in codecs), imported on first use
 REGISTRY = {"zgrid": "mzc.formats.zgrid", **BUILT_IN}
@@ -57,5 +58,9 @@ def is_mzc(data):
 
 
 def read_any(data, source):
-    """Read any mzc file into the ZGrid it holds."""
-    return reader_for(data, source)(data, source)
+    """Read any mzc file into the ZGrid it holds; one whose heights or coordinates are beyond
+    mzc.limits' (a damaged header or payload that still passes its checksum) is refused, as the
+    writers refuse them."""
+    grid = reader_for(data, source)(data, source)
+    check_grid_magnitudes(grid, source=source)
+    return grid

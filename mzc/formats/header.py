@@ -279,7 +279,8 @@ def read_grid_fields(header):
     else:
         transform = np.array(transform).reshape(3, 4)
         rotation = transform[:, :3]
-        if (np.abs(matrix_product(rotation.T, rotation) - np.eye(3)).max() > RIGID_TOLERANCE
+        if (np.abs(rotation).max() > 1 + RIGID_TOLERANCE   # no rotation has such entries, whose products overflow
+                or np.abs(matrix_product(rotation.T, rotation) - np.eye(3)).max() > RIGID_TOLERANCE
                 or determinant(rotation) < 0):
             raise header.error("transform", "the 3x3 part is not a rotation (orthonormal, det +1)")
     projected = read_projection(header, rows, cols)

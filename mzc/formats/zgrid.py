@@ -28,7 +28,8 @@ from mzc.formats.header import (
     split_magic,
 )
 from mzc.grid import ZGrid
-from mzc.numbers import floats
+from mzc.limits import check_grid_magnitudes
+from mzc.numbers import floats, unpadded
 
 KIND = "zgrid"
 VERSION = (1, 0)             # planar grids, byte for byte as before projections
@@ -55,9 +56,10 @@ def parse_values(tokens, nodata, source, line):
 
 
 def body_lines(body, first_line, source):
-    """Split a text body into (line number, text) pairs, skipping blank trailing lines."""
+    """Split a text body into (line number, text) pairs, skipping blank trailing lines and the NUL
+    bytes that may pad its end."""
     try:
-        text = body.decode("utf-8")
+        text = unpadded(body).decode("utf-8")
     except UnicodeDecodeError:
         raise MzcError("data is not UTF-8 text", source=source, line=first_line) from None
     lines = text.splitlines()
@@ -137,7 +139,9 @@ def check_marker_unused(z, nodata):
 
 def write(grid, precision=None, raw=None):
     """Serialise a ZGrid to z-grid bytes: plain text (``raw`` None; ``precision`` decimals round
-    the heights), or a raw body of ``raw`` samples, "float64" (exact) or "float32"."""
+    the heights), or a raw body of ``raw`` samples, "float64" (exact) or "float32". Heights or
+    coordinates beyond mzc.limits' are refused: no reader would take them back."""
+    check_grid_magnitudes(grid)
     if raw is None:
         if grid.charts is not None:
             raise MzcError("a multi-chart grid is written with a raw body (mzc-zgrid 4.0), not as text rows",

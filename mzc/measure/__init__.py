@@ -12,7 +12,7 @@ from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
 from mzc.errors import MzcError
-from mzc.limits import MAX_SAMPLES
+from mzc.limits import MAX_SAMPLES, check_magnitude
 
 if TYPE_CHECKING:
     from mzc.grid import ZGrid
@@ -39,12 +39,16 @@ def compare_surfaces(first: Mesh, second: Mesh, chosen: tuple[str, ...] | list[s
                      d2: float | None = None, names: tuple[str, str] = ("A", "B")) -> Comparison:
     """Compare Meshes ``first`` (A) and ``second`` (B): the ``chosen`` statistics (all when none)
     of B - A along the common grid's node lines, and with ``surface`` or ``heightfield`` the
-    point-to-surface distances; ``names`` name the sides in a point cloud's direction line."""
+    point-to-surface distances; ``names`` name the sides in a point cloud's direction line.
+    Coordinates beyond mzc.limits' are refused, as ``slice`` refuses them: their squared
+    distances overflow (the nearest-triangle search had no bound left to prune with)."""
     from mzc.measure.metrics import grid_error_stats
     from mzc.measure.sampling import error_grid
 
     if not 100 <= samples <= MAX_SAMPLES:
         raise MzcError(f"must be 100..{MAX_SAMPLES}, not {samples}", field="samples")
+    for side, name in zip((first, second), names):
+        check_magnitude(side.points, "coordinates", source=name)
     if first.is_point_cloud or second.is_point_cloud:
         return Comparison(cloud_report(first, second, names, chosen))
     reference, errors = error_grid(first, second, d1, d2)

@@ -20,7 +20,12 @@
  * they are all equal, down to leaves of at most LEAF_SIZE triangles. Each split by a bit
  * lengthens the common prefix of both halves, so a path has at most 63 of them, then at
  * most log2(MAX_TRIANGLES) = 30 halvings: the depth stays under 95, which bounds the
- * search's stack (MAX_DEPTH). Nodes are stored depth first, a node's left child right after
+ * search's stack (MAX_DEPTH). Boxes are floats: a mesh whose coordinates reach past
+ * FLOAT_REACH (2^100) has them stored scaled by a power of two (exactly, so still rounded
+ * outwards), the box distances scaled back; in float's range they would be infinite, every
+ * box as near as the next, and the search would measure every triangle for every sample
+ * (a mesh at heights of 1e99: 30 s for one diff of 2 million triangles, unfinished).
+ * Nodes are stored depth first, a node's left child right after
  * it; a node's box is the union of its children's, a leaf's that of its corners, in float
  * rounded outwards. A leaf holds a range of the leaf order, in which the triangles' vertex
  * indices are copied (int32): the tree takes about 50 bytes a triangle, the search 32 a
@@ -31,7 +36,11 @@
  * searches walk the same part of the tree, each starting from the bound of the triangle
  * nearest to the sample before. A search keeps the best squared distance so far, visits
  * the nearer child first and skips a node whose box is farther than that best (raised by a
- * billionth, the slack for the rounding of the box distance). Each triangle is measured by
+ * billionth, the slack for the rounding of the box distance). That slack would make a search
+ * measure every triangle when a sample is a billion times farther from the mesh than the
+ * mesh is deep (a flat mesh 1e10 above a unit one: every triangle within a billionth), so
+ * once a search has measured BUDGET triangles it skips the boxes no nearer than its best
+ * (without slack): a search that long has its answer to round-off. Each triangle is measured by
  * the point-triangle formula (triangle_distance2) whose numpy form tests/test_mesh_distance.py
  * keeps as its reference: the same operations in the same order, -ffp-contract=off keeping
  * them unfused, give the same bits. The GIL is released while it runs, on one thread.
@@ -53,8 +62,12 @@
 #define MAX_TRIANGLES (INT32_MAX / 2) /* so that the 2m - 1 nodes are counted in int32 */
 #define MAX_POINTS INT32_MAX           /* vertex indices in int32 */
 #define MAX_DEPTH 128 /* above the depth of any tree, under 95 */
+#define FLOAT_REACH 100 /* boxes of coordinates up to 2^100 are stored as they are, well inside float's 2^128 */
 /* (1 + 1e-9)^2: a box within a billionth of the best distance is still searched */
 #define WIDEN2 (1.0 + 2e-9 + 1e-18)
+/* triangles a search measures with that slack: searches of real meshes measure tens to hundreds
+ * (f18 against its rebuild at most 134, two unrelated objects of shared/data at most 633) */
+#define BUDGET 1024
 
 typedef struct {
     float lo[3], hi[3]; /* the box, rounded outwards */
@@ -74,7 +87,9 @@ typedef struct {
     const double *points;
     const int32_t *vertices; /* the vertex indices of each triangle, 3 a triangle, in leaf order */
     Node *nodes;
-    int64_t used; /* nodes, while they are being made */
+    int64_t used;  /* nodes, while they are being made */
+    double shrink; /* boxes hold coordinates times this power of two (1 within FLOAT_REACH) */
+    double grow2;  /* 1 / shrink^2: box distances back to the coordinates' scale */
 } Tree;
 
 static double dot(const double u[3], const double v[3]) { return u[0] * v[0] + u[1] * v[1] + u[2] * v[2]; }
@@ -136,14 +151,14 @@ static double triangle_distance2(const double p[3], const double *c) {
 }
 
 /* Squared distance from p to a node's box (0 inside it). */
-static double box_distance2(const double p[3], const Node *node) {
+static double box_distance2(const double p[3], const Node *node, const Tree *tree) {
     double sum = 0.0;
     for (int i = 0; i < 3; i++) {
-        double below = node->lo[i] - p[i], above = p[i] - node->hi[i];
+        double x = p[i] * tree->shrink, below = node->lo[i] - x, above = x - node->hi[i];
         double gap = below > above ? below : above;
         if (gap > 0) sum += gap * gap;
     }
-    return sum;
+    return sum * tree->grow2;
 }
 
 /* The float nearest to x on the side of -inf (``down``) or +inf: a box rounded outwards. */
@@ -174,8 +189,8 @@ static void make_leaf(const Tree *tree, Node *node, int64_t lo, int64_t hi) {
         }
     }
     for (int i = 0; i < 3; i++) {
-        node->lo[i] = outwards(low[i], 1);
-        node->hi[i] = outwards(high[i], 0);
+        node->lo[i] = outwards(low[i] * tree->shrink, 1);
+        node->hi[i] = outwards(high[i] * tree->shrink, 0);
     }
     node->first = (int32_t)lo;
     node->count = (int32_t)(hi - lo);
@@ -228,15 +243,17 @@ static double nearest2(const double p[3], const Tree *tree, int64_t *which) {
     int64_t stack[MAX_DEPTH];
     double reach[MAX_DEPTH], corners[9];
     int top = 0;
+    int64_t measured = 0;
     corners_of(tree, *which, corners);
     double best = triangle_distance2(p, corners);
     stack[top] = 0;
-    reach[top++] = box_distance2(p, &nodes[0]);
+    reach[top++] = box_distance2(p, &nodes[0], tree);
     while (top) {
         top--;
-        if (reach[top] > best * WIDEN2) continue;
+        if (reach[top] > best * WIDEN2 || (measured > BUDGET && reach[top] >= best)) continue;
         const Node *node = &nodes[stack[top]];
         if (node->count) {
+            measured += node->count;
             for (int64_t t = node->first; t < node->first + node->count; t++) {
                 corners_of(tree, t, corners);
                 double distance2 = triangle_distance2(p, corners);
@@ -248,7 +265,7 @@ static double nearest2(const double p[3], const Tree *tree, int64_t *which) {
             continue;
         }
         int64_t near = stack[top] + 1, far = node->first;
-        double near_reach = box_distance2(p, &nodes[near]), far_reach = box_distance2(p, &nodes[far]);
+        double near_reach = box_distance2(p, &nodes[near], tree), far_reach = box_distance2(p, &nodes[far], tree);
         if (far_reach < near_reach) {
             int64_t swap = near;
             double swap_reach = near_reach;
@@ -354,7 +371,17 @@ static int measure(const double *points, int64_t n, const int64_t *triangles, in
     for (int64_t t = 0; t < m; t++)
         for (int corner = 0; corner < 3; corner++)
             vertices[3 * t + corner] = (int32_t)triangles[3 * order[t].index + corner];
-    Tree tree = {points, vertices, nodes, 0};
+    Tree tree = {points, vertices, nodes, 0, 1.0, 1.0};
+    int exponent = 0;
+    for (int i = 0; i < 3; i++) {
+        int e;
+        frexp(fmax(fabs(lo[i]), fabs(hi[i])), &e);
+        exponent = e > exponent ? e : exponent;
+    }
+    if (exponent > FLOAT_REACH) {
+        tree.shrink = ldexp(1.0, FLOAT_REACH - exponent);
+        tree.grow2 = ldexp(1.0, 2 * (exponent - FLOAT_REACH));
+    }
     build_node(&tree, order, 0, m);
     int64_t which = 0;
     for (int64_t s = 0; s < k; s++) {

@@ -44,9 +44,19 @@ def triangle_areas(points, triangles):
 
 
 def sample_surface(points, triangles, count, rng):
-    """``count`` points drawn uniformly by area on the mesh; returns (samples, triangle index)."""
+    """``count`` points drawn uniformly by area on the mesh; returns (samples, triangle index).
+
+    Past about 1e75 the squared cross products overflow: the areas are then those of the mesh
+    scaled by a power of two, exactly, which draws by the same shares. A mesh without area
+    (every triangle's corners coincide or lie on a line) has no surface to draw from."""
     areas = triangle_areas(points, triangles)
-    chosen = rng.choice(len(triangles), size=count, p=areas / areas.sum())
+    total = areas.sum()
+    if not np.isfinite(total):
+        areas = triangle_areas(np.ldexp(points, -np.frexp(np.abs(points).max())[1]), triangles)
+        total = areas.sum()
+    if not total > 0:
+        raise MzcError("the mesh has no area: each triangle's corners coincide or lie on a line", field="surface")
+    chosen = rng.choice(len(triangles), size=count, p=areas / total)
     u, v = rng.random(count), rng.random(count)
     flip = u + v > 1
     u[flip], v[flip] = 1 - u[flip], 1 - v[flip]

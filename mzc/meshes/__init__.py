@@ -24,6 +24,8 @@ import numpy as np
 
 from mzc.errors import MzcError
 from mzc.meshes import registry
+from mzc.meshes.common import as_indices
+from mzc.numbers import real_array
 from mzc.streams import display_name, is_stdio, is_stream, read_input, write_output
 
 if TYPE_CHECKING:
@@ -48,10 +50,11 @@ class Mesh:
     crs: str | None = None
 
     def __post_init__(self):
-        self.points = np.asarray(self.points, dtype=np.float64).reshape(-1, 3)
-        self.triangles = np.asarray(self.triangles, dtype=np.int64).reshape(-1, 3)
+        self.points = real_array(self.points, "points", in_threes("points")).reshape(-1, 3)
+        self.triangles = vertex_indices(self.triangles)
         if self.normals is not None:
-            self.normals = np.asarray(self.normals, dtype=np.float64).reshape(self.points.shape)
+            self.normals = real_array(self.normals, "normals", in_threes("normals", len(self.points)))
+            self.normals = self.normals.reshape(self.points.shape)
         if self.classification is not None:
             self.classification = np.asarray(self.classification).reshape(len(self.points))
 
@@ -79,6 +82,34 @@ class Mesh:
         writer that streams a mesh reads (one chunk each here; a grid's mesh,
         ``mzc.ops.triangulation.GridMesh``, makes them a strip of rows at a time)."""
         return len(self.points), len(self.triangles), [self.points], [self.triangles]
+
+
+def in_threes(field, rows=None):
+    """A shape check for ``real_array``: (n, 3) values, or as many as (``rows``, 3)."""
+    def check(shape):
+        size = int(np.prod(shape))
+        if size % 3 or (rows is not None and size != 3 * rows):
+            raise MzcError(f"must be {'an (n' if rows is None else f'a ({rows}'}, 3) array, not one of shape {shape}",
+                           field=field)
+    return check
+
+
+def vertex_indices(values):
+    """(m, 3) int64 triangles of ``values``: integers, or floats that are whole numbers (a
+    fraction, NaN or a huge index is refused, not cast)."""
+    array = np.asarray(values) if isinstance(values, np.ndarray) else real_or_integers(values)
+    if array.dtype.kind in "iu":
+        in_threes("triangles")(array.shape)
+        return array.astype(np.int64, copy=False).reshape(-1, 3)
+    return as_indices(real_array(array, "triangles", in_threes("triangles")), "a triangle's", None).reshape(-1, 3)
+
+
+def real_or_integers(values):
+    """``values`` as an array: whole numbers as integers, as numpy makes them."""
+    try:
+        return np.asarray(values)
+    except (TypeError, ValueError, OverflowError):   # ragged lists: real_array says so
+        return real_array(values, "triangles")
 
 
 def read_mesh(path: str | os.PathLike | None) -> Mesh:

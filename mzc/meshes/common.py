@@ -6,19 +6,21 @@ from itertools import chain
 import numpy as np
 
 from mzc.errors import MzcError
-from mzc.numbers import bad_token, to_floats
+from mzc.numbers import bad_token, to_floats, unpadded
 
 # Indices beyond this are no vertex of any mesh (and would not survive a cast to int64).
 LARGEST_INDEX = 2.0 ** 53
 
 
 def is_text(data: bytes) -> bool:
-    """True when ``data`` looks like text rather than binary (it holds no NUL byte)."""
-    return b"\0" not in data
+    """True when ``data`` looks like text rather than binary (it holds no NUL byte but the
+    padding at its end)."""
+    return b"\0" not in unpadded(data)
 
 
 def decode_text(data: bytes, source: str) -> str:
-    """Text of ``data``; binary garbage is refused."""
+    """Text of ``data`` without the NUL padding at its end; binary garbage is refused."""
+    data = unpadded(data)
     if not is_text(data[:65536]):
         raise MzcError("binary data where text was expected", source=source)
     return data.decode("utf-8", "replace")

@@ -7,10 +7,19 @@ cloud, so ``mzc slice --classes 2`` keeps the ground alone (as PDAL's filters.ra
 Classification does); the coordinate reference system the header names, if any, is kept
 as ``Mesh.crs`` (a WKT string, or ``EPSG:code`` from GeoTIFF keys). Points are read in
 chunks, so memory grows with the points the file really holds, whatever its header
-declares: a file with fewer points than it declares is refused as truncated.
+declares: a file with fewer points than it declares is refused as truncated, and one with
+fewer bytes than its declared variable-length records take is refused before laspy reads
+it (laspy reads records past the end of the file: a 34 KB file declaring 4e9 of them took
+68 s and 1.4 GB before it ran out of memory), and so is a LAZ file whose chunk table declares
+more chunks than it has bytes (lazrs reserves room for them all first: 28 GB for an 18 KB
+file, and the process aborted).
 """
 
+import contextlib
 import io
+import os
+import struct
+import sys
 
 import numpy as np
 
@@ -24,6 +33,12 @@ CHUNK_POINTS = 1_000_000
 GEO_KEYS_CRS = (3072, 2048)   # ProjectedCSTypeGeoKey, then GeographicTypeGeoKey
 MODEL_TYPE_KEY, MODEL_GEOGRAPHIC = 1024, 2   # GTModelTypeGeoKey: 2 = longitude and latitude
 MISSING_EXTRA = "reading LAS/LAZ needs laspy and lazrs: pip install 'mzc[las]'"
+# the public header block's fields that place and count records: (struct format, offset)
+HEADER_SIZE, VLR_COUNT, EVLR_START, EVLR_COUNT = ("<H", 94), ("<I", 100), ("<Q", 235), ("<I", 243)
+POINTS_START, POINT_FORMAT = ("<I", 96), ("<B", 104)
+COMPRESSED = 0xC0   # the bits LAZ sets in the point format of compressed points
+PANIC_MODULE = "pyo3_runtime"   # where pyo3 makes PanicException, a BaseException no module exports
+VLR_HEADER, EVLR_HEADER, EVLR_HEADER_SIZE = 54, 60, 375   # bytes of a record's header; LAS 1.4's header size
 
 
 def sniff(data: bytes) -> bool:
@@ -37,10 +52,11 @@ def read(data: bytes, source: str) -> Mesh:
         import laspy
     except ImportError:
         raise MzcError(MISSING_EXTRA, source=source) from None
+    check_records(data, source)
     chunks: list = []
     declared = None
     try:
-        with laspy.open(io.BytesIO(data)) as reader:
+        with panics_unprinted(), laspy.open(io.BytesIO(data)) as reader:
             declared = int(reader.header.point_count)
             check_room(reader.header, len(data), declared, source)
             for chunk in reader.chunk_iterator(min(CHUNK_POINTS, max(declared, 1))):
@@ -51,7 +67,9 @@ def read(data: bytes, source: str) -> Mesh:
             crs, geographic = header_crs(reader.header)
     except MzcError:
         raise
-    except reading_errors() as error:
+    except BaseException as error:   # a PanicException is one: lazrs's Rust panics on damaged points
+        if not isinstance(error, reading_errors()) and type(error).__module__ != PANIC_MODULE:
+            raise
         held = sum(len(chunk[0]) for chunk in chunks)
         raise MzcError(las_problem(error, held, declared), source=source) from None
     held = sum(len(chunk[0]) for chunk in chunks)
@@ -66,6 +84,59 @@ def read(data: bytes, source: str) -> Mesh:
     points = np.concatenate([chunk[0] for chunk in chunks] or [np.empty((0, 3))])
     classes = np.concatenate([chunk[1] for chunk in chunks] or [np.empty(0, dtype=np.uint8)])
     return Mesh(points, classification=classes, crs=crs)
+
+
+@contextlib.contextmanager
+def panics_unprinted():
+    """Standard error (file descriptor 2) to the null device inside: lazrs panics in Rust on
+    some damaged compressed points (a capacity overflow), which Rust prints there, message and
+    backtrace, before pyo3 raises it as a PanicException that ``read`` makes one MzcError."""
+    sys.stderr.flush()
+    saved = os.dup(2)
+    try:
+        with open(os.devnull, "wb") as null:
+            os.dup2(null.fileno(), 2)
+        yield
+    finally:
+        os.dup2(saved, 2)
+        os.close(saved)
+
+
+def check_records(data, source):
+    """Refuse a file too short for the variable-length records (and LAS 1.4's extended ones)
+    its header declares, each at least its record header long, before laspy reads them."""
+    if len(data) < VLR_COUNT[1] + 4:
+        raise MzcError(f"not a LAS file: {len(data)} bytes, shorter than its public header block", source=source)
+    header_size, vlrs = header_field(data, HEADER_SIZE), header_field(data, VLR_COUNT)
+    if header_size + VLR_HEADER * vlrs > len(data):
+        raise MzcError(f"truncated: the header declares {vlrs} variable length records, which take at least "
+                       f"{VLR_HEADER * vlrs} bytes after its {header_size}, the file holds {len(data)}", source=source)
+    if header_size >= EVLR_HEADER_SIZE and len(data) >= EVLR_HEADER_SIZE:
+        start, evlrs = header_field(data, EVLR_START), header_field(data, EVLR_COUNT)
+        if evlrs and start + EVLR_HEADER * evlrs > len(data):
+            raise MzcError(f"truncated: the header declares {evlrs} extended variable length records from byte "
+                           f"{start}, which take at least {EVLR_HEADER * evlrs} bytes, the file holds {len(data)}",
+                           source=source)
+    check_chunk_table(data, source)
+
+
+def check_chunk_table(data, source):
+    """Refuse a LAZ file whose chunk table (found through the 8 bytes where its points start)
+    declares more chunks than the file has bytes: each takes at least one."""
+    start = header_field(data, POINTS_START)
+    if len(data) <= POINT_FORMAT[1] or not header_field(data, POINT_FORMAT) & COMPRESSED or start + 8 > len(data):
+        return
+    table = struct.unpack_from("<q", data, start)[0]
+    if 0 <= table <= len(data) - 8:
+        chunks = struct.unpack_from("<I", data, table + 4)[0]
+        if chunks > len(data):
+            raise MzcError(f"the LAZ chunk table declares {chunks} chunks, more than the file's {len(data)} bytes "
+                           "hold", source=source)
+
+
+def header_field(data, field):
+    """The value of a field of the public header block, (struct format, offset)."""
+    return struct.unpack_from(field[0], data, field[1])[0]
 
 
 def check_room(header, size, declared, source):
@@ -84,11 +155,9 @@ def check_room(header, size, declared, source):
 
 def reading_errors():
     """The exceptions laspy and lazrs raise on a damaged file."""
-    import struct
-
     import laspy
 
-    errors = [laspy.errors.LaspyException, ValueError, EOFError, struct.error]
+    errors = [laspy.errors.LaspyException, ValueError, EOFError, OverflowError, struct.error]
     try:
         import lazrs
 

@@ -4,7 +4,9 @@ meshio wants file names, so bytes go through an in-memory file (a memfd on Linux
 not even SIGKILL leaves on disk; a temporary file elsewhere); meshio is imported only when
 one of these formats is read or written (it takes 0.2 s). Its warnings, log messages and
 prints are silenced (stdout carries data only, stderr mzc's own messages), and any failure
-becomes an MzcError naming the file.
+becomes an MzcError naming the file. meshio allocates what a header declares before it reads
+(a 50-byte OFF declaring 10^8 vertices: 2.3 GB), so each count a header declares is first held
+to the file's size, every value taking at least a byte (``declared_values``).
 """
 
 import contextlib
@@ -21,27 +23,53 @@ import numpy as np
 from mzc.errors import MzcError, first_line
 from mzc.meshes import Mesh
 from mzc.meshes.common import fan_triangulate
+from mzc.numbers import unpadded
 
 
 class MeshioFormat:
     """One format meshio reads and writes, declared like a format module."""
 
-    def __init__(self, name: str, extensions: tuple[str, ...], sniff: Callable[[bytes], bool]):
+    def __init__(self, name: str, extensions: tuple[str, ...], sniff: Callable[[bytes], bool],
+                 is_text: Callable[[bytes], bool], counts: re.Pattern):
         self.NAME = name
         self.EXTENSIONS = extensions
         self.sniff = sniff
+        self.is_text = is_text
+        self.counts = counts
 
     def read(self, data: bytes, source: str) -> Mesh:
-        """The mesh in ``data``, read by meshio."""
-        return read_as(self.NAME, data, source)
+        """The mesh in ``data``, read by meshio once its header's counts fit the file; a text file
+        without the NUL bytes that pad its end."""
+        values = declared_values(self.counts, data)
+        if values > len(data):
+            raise MzcError(f"the {self.NAME.upper()} header declares {values} values, more than the file's "
+                           f"{len(data)} bytes hold", source=source)
+        return read_as(self.NAME, unpadded(data) if self.is_text(data) else data, source)
 
     def write(self, mesh: Mesh) -> bytes:
         """The bytes meshio writes for ``mesh``."""
         return write_as(self.NAME, mesh)
 
 
-VTK = MeshioFormat("vtk", (".vtk",), lambda data: data.startswith(b"# vtk DataFile"))
-OFF = MeshioFormat("off", (".off",), lambda data: bool(re.match(rb"\s*[NCST4]*OFF\b", data[:4096])))
+# the counts a header declares: of points (3 values each), or of values (a section's, its size):
+# VTK's section lines (POINTS n, CELLS n size, ...), OFF's vertex and face counts after its keyword
+VTK_COUNTS = re.compile(rb"^(?:POINTS[ \t]+(?P<points>\d+)|(?:CELLS|POLYGONS|TRIANGLE_STRIPS|LINES|VERTICES|"
+                        rb"CELL_TYPES|OFFSETS|CONNECTIVITY)[ \t]+(?P<values>\d+)(?:[ \t]+(?P<size>\d+))?)",
+                        re.MULTILINE)
+OFF_COUNTS = re.compile(rb"\A\s*[NCST4]*OFF\b(?:\s*#[^\n]*)*(?:\s*BINARY)?(?:\s*#[^\n]*)*"
+                        rb"\s*(?P<points>\d+)\s+(?P<values>\d+)")
+VTK = MeshioFormat("vtk", (".vtk",), lambda data: data.startswith(b"# vtk DataFile"),
+                   lambda data: data[:1024].split(b"\n", 3)[2:3] == [b"ASCII"], VTK_COUNTS)   # the third line
+OFF = MeshioFormat("off", (".off",), lambda data: bool(re.match(rb"\s*[NCST4]*OFF\b", data[:4096])),
+                   lambda data: b"BINARY" not in data[:64], OFF_COUNTS)
+
+
+def declared_values(counts, data):
+    """The largest count of values a header declares (``counts``' matches: points, 3 values
+    each, or values)."""
+    found = [3 * int(match["points"] or 0) + int(match["values"] or 0) + int(match.groupdict().get("size") or 0)
+             for match in counts.finditer(data)]
+    return max(found, default=0)
 
 
 @contextlib.contextmanager

@@ -19,7 +19,7 @@ import numpy as np
 from mzc.errors import MzcError
 from mzc.meshes import Mesh
 from mzc.meshes.common import fan_triangulate_ragged
-from mzc.numbers import is_number
+from mzc.numbers import is_number, unpadded
 
 NAME = "obj"
 EXTENSIONS = (".obj",)
@@ -36,7 +36,7 @@ def read(data: bytes, source: str) -> Mesh:
     """Read Wavefront OBJ: ``v`` and ``f`` lines in any dialect (v/vt/vn, negative indices,
     polygons, CRLF or CR line ends, continued lines, trailing comments); every other statement (vt, vn, o, g, s,
     usemtl, l, ...) is ignored. Works on whole byte arrays: no Python loop per vertex or face."""
-    tokens = ObjTokens(data)
+    tokens = ObjTokens(unpadded(data))
     binary = tokens.first_nul_line()
     if binary is not None:
         raise MzcError("binary data (a NUL byte) where OBJ text was expected", source=source, line=binary)

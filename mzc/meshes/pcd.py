@@ -35,10 +35,10 @@ from dataclasses import dataclass
 import numpy as np
 
 from mzc.errors import MzcError
-from mzc.limits import MAX_FIELD_VALUES
+from mzc.limits import MAX_FIELD_VALUES, check_magnitude
 from mzc.meshes import Mesh
 from mzc.meshes.common import decode_text
-from mzc.numbers import bad_token, is_count, to_floats
+from mzc.numbers import bad_token, is_count, real_array, to_floats
 
 NAME = "pcd"
 EXTENSIONS = (".pcd",)
@@ -107,7 +107,7 @@ def read(data: bytes, source: str) -> Mesh:
         columns = compressed_columns(header, data, names, source)
     points = np.column_stack([columns[name] for name in ("x", "y", "z")])
     normals = np.column_stack([columns[name] for name in NORMALS]) if NORMALS[0] in columns else None
-    return cloud_or_lattice(header, points, normals)
+    return cloud_or_lattice(header, points, normals, source)
 
 
 def field_names(header):
@@ -155,6 +155,7 @@ def parse_header(data, source):
         origin = to_floats(viewpoint[:3])
         if not np.isfinite(origin).all():
             raise problem("VIEWPOINT", "the sensor's position must be finite")
+        check_magnitude(origin, "coordinates", source=source, line=lines["VIEWPOINT"], field="VIEWPOINT")
     if values["DATA"] not in ([body] for body in BODIES):
         raise problem("DATA", f"{' '.join(values['DATA'])[:30]!r} is not one of {', '.join(BODIES)}")
     return Header(fields, width, height, origin, values["DATA"][0], position, number + 1)
@@ -253,7 +254,7 @@ def binary_columns(header, data, names, source):
                        f"binary data, the file holds {held}", source=source)
     records = np.frombuffer(data, dtype=dtype, count=header.points, offset=header.start)
     index = {field.name: i for i, field in enumerate(header.fields)}
-    return {name: records[f"f{index[name]}"][:, 0].astype(np.float64) for name in names}
+    return {name: real_array(records[f"f{index[name]}"][:, 0], name) for name in names}
 
 
 def compressed_columns(header, data, names, source):
@@ -285,17 +286,19 @@ def compressed_columns(header, data, names, source):
     sizes = {field.name: field.size for field, keep in zip(header.fields, kept) if keep}
     starts = dict(zip(sizes, np.cumsum([0] + list(sizes.values())[:-1]).tolist()))
     fields = {field.name: field for field in header.fields}
-    return {name: np.frombuffer(values, dtype=fields[name].dtype, count=header.points,
-                                offset=starts[name] * header.points).astype(np.float64) for name in names}
+    return {name: real_array(np.frombuffer(values, dtype=fields[name].dtype, count=header.points,
+                                           offset=starts[name] * header.points), name) for name in names}
 
 
-def cloud_or_lattice(header, points, normals):
+def cloud_or_lattice(header, points, normals, source):
     """The Mesh of the points: an organised cloud (HEIGHT and WIDTH above 1) triangulated along
-    its lattice (``lattice_triangles``), any other a cloud; points with a NaN or infinite
+    its lattice (``lattice_triangles``, whose sight lines square and multiply the coordinates:
+    they must be within mzc.limits'), any other a cloud; points with a NaN or infinite
     coordinate dropped either way."""
     valid = np.isfinite(points).all(axis=1)
     new_index = np.cumsum(valid) - 1
     if header.height > 1 and header.width > 1:
+        check_magnitude(points[valid], "coordinates", source=source)
         triangles = lattice_triangles(points.reshape(header.height, header.width, 3),
                                       valid.reshape(header.height, header.width), header.origin)
         if len(triangles):   # a surface: its triangles say which way it faces

@@ -155,8 +155,13 @@ def sight_jumps(points, angle=JUMP_ANGLE):
     """The Jumps of the edges between the (rows, cols, 3) ``points`` of an organised cloud,
     whose node lines are the lines of sight from the origin (a spherical grid's rays, but not
     on a regular grid of angles): the spec's test on the points themselves, with ``is_jump``'s
-    algebra (2 e . m = |end|^2 - |start|^2, 2m = start + end)."""
+    algebra (2 e . m = |end|^2 - |start|^2, 2m = start + end). The test is of the fourth power
+    of the coordinates on both sides, so points past 2^200 (whose fourth powers overflow) are
+    scaled by a power of two first, exactly: the same answers."""
     cosine2 = squared_cosine(angle)
+    largest = float(np.fmax.reduce(np.abs(points[np.isfinite(points)]), initial=0.0))
+    if largest > 2.0 ** 200:
+        points = np.ldexp(points, -np.frexp(largest)[1])
 
     def jump(start, end):
         squared = lambda vectors: np.sum(vectors * vectors, axis=-1)  # noqa: E731

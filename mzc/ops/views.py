@@ -128,7 +128,9 @@ class Facets:
 
     @classmethod
     def of_mesh(cls, mesh):
-        """The Facets of a Mesh: a seeded sample of SCORE_TRIANGLES triangles (or points)."""
+        """The Facets of a Mesh: a seeded sample of SCORE_TRIANGLES triangles (or points). A mesh
+        none of whose (sampled) triangles has area (corners that coincide or lie on a line) has
+        no surface to see, and is refused."""
         points = np.asarray(mesh.points, dtype=float)
         rng = np.random.default_rng(0)   # a seeded draw: a stride can follow the mesh's own order
         if mesh.is_point_cloud:
@@ -140,6 +142,10 @@ class Facets:
         normal = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
         doubled = lengths(normal)
         keep = doubled > 0
+        if not keep.any():
+            drawn = f" (of {len(triangles)} drawn at random)" if len(triangles) < len(mesh.triangles) else ""
+            raise MzcError(f"the mesh has no area: the corners of each of its triangles{drawn} coincide or lie on "
+                           "a line")
         return cls(corners[keep].mean(axis=1), normal[keep] / doubled[keep, None], doubled[keep], points)
 
     @classmethod

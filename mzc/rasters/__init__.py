@@ -26,7 +26,8 @@ import numpy as np
 
 from mzc.errors import MzcError
 from mzc.grid import IDENTITY_TRANSFORM, SAMPLES, Raster, ZGrid
-from mzc.limits import check_magnitude
+from mzc.limits import check_grid_magnitudes
+from mzc.numbers import real_array
 
 FORMATS = ("tif", "asc")
 EXTENSIONS = {".tif": "tif", ".tiff": "tif", ".asc": "asc"}
@@ -115,13 +116,14 @@ def grid_of(values, invalid, layout, sample, nodata=None, crs=None):
             raise MzcError(f"its cells are {getattr(layout, name):g} wide along {'x' if name == 'd2' else 'y'}",
                            field="transform")
     rows = values.shape[0]
-    z = np.where(invalid, np.nan, values.astype(np.float64))
-    check_magnitude(z, "heights", field="data")
+    z = np.where(invalid, np.nan, real_array(values, "data"))
     dx, dy = layout.offsets(rows)
     origin = (node_coordinate(layout.x, dx), node_coordinate(layout.y, dy))
     raster = Raster(layout.cells, layout.rows, sample)
-    return ZGrid(z[::-1] if layout.rows == "down" else z, d1=layout.d1, d2=layout.d2, origin=origin,
+    grid = ZGrid(z[::-1] if layout.rows == "down" else z, d1=layout.d1, d2=layout.d2, origin=origin,
                  nodata=nodata_token(nodata), crs=crs, raster=raster)
+    check_grid_magnitudes(grid)
+    return grid
 
 
 def node_coordinate(reference, offset):
@@ -172,7 +174,9 @@ def nodata_token(value):
 
 
 def check_writable(grid):
-    """Refuse a grid that no raster holds: a raster is a planar grid in its CRS's own frame."""
+    """Refuse a grid that no raster holds: a raster is a planar grid in its CRS's own frame, with
+    heights and coordinates mzc reads back (mzc.limits)."""
+    check_grid_magnitudes(grid)
     if grid.projection != "planar":
         raise MzcError(f"a raster holds planar grids; this one is {grid.projection}: triangulate it, or slice "
                        "with --projection planar", field="projection")

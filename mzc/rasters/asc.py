@@ -22,7 +22,7 @@ from mzc.errors import MzcError
 from mzc.formats.header import format_number
 from mzc.formats.zgrid import format_rows
 from mzc.limits import MAX_DIMENSION, check_grid_size, length_problem
-from mzc.numbers import bad_token, parse_int, to_floats
+from mzc.numbers import bad_token, parse_int, to_floats, unpadded
 from mzc.rasters import Layout, grid_of, holds, layout_of, no_data_marker
 
 KEYWORDS = ("ncols", "nrows", "xllcorner", "yllcorner", "xllcenter", "yllcenter", "cellsize", "dx", "dy",
@@ -40,7 +40,7 @@ def read(data, source, crs=None):
     """The ZGrid of an ESRI ASCII grid's bytes, with the CRS ``crs`` (a ``.prj``'s WKT) when given;
     a bad header or value is an MzcError naming the line and the keyword."""
     try:
-        text = data.decode("utf-8")
+        text = unpadded(data).decode("utf-8")
     except UnicodeDecodeError:
         raise MzcError("an ESRI ASCII grid is text, and this is not UTF-8", source=source) from None
     header, body, first_line = read_header(text, source)

@@ -37,17 +37,18 @@ def rasterio():
 def read(data, source):
     """The ZGrid of GeoTIFF bytes: band 1, its cells, no-data and mask, geotransform and CRS."""
     module = rasterio()
-    from rasterio.errors import RasterioError
+    from rasterio.errors import CRSError, RasterioError
 
     try:
-        with warnings.catch_warnings(), module.MemoryFile(data) as memory, memory.open() as dataset:
-            warnings.simplefilter("ignore")   # NotGeoreferencedWarning: a plain TIFF is a grid of unit cells
-            check_readable(dataset, source)
-            values = dataset.read(1)
-            invalid = dataset.read_masks(1) == 0
-            layout = layout_from(dataset, source)
-            nodata, crs = dataset.nodata, dataset.crs.to_wkt() if dataset.crs else None
-    except RasterioError as error:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")   # NotGeoreferencedWarning, from open: a plain TIFF has unit cells
+            with module.MemoryFile(data) as memory, memory.open() as dataset:
+                check_readable(dataset, source)
+                values = dataset.read(1)
+                invalid = dataset.read_masks(1) == 0
+                layout = layout_from(dataset, source)
+                nodata, crs = dataset.nodata, dataset.crs.to_wkt() if dataset.crs else None
+    except (RasterioError, CRSError, UnicodeError) as error:   # a CRS that GDAL cannot parse, or not UTF-8
         raise MzcError(f"not a readable GeoTIFF: {one_line(error)}", source=source) from None
     if values.dtype.kind == "f":
         invalid |= np.isnan(values)

@@ -230,11 +230,11 @@ def apply_holes(z, lines, source):
     if not lines:
         return
     number, text = lines[0]
-    keyword, *count = text.split()
-    if keyword != "holes" or len(count) != 1 or parse_int(count[0]) is None:
+    words = text.split()
+    if words[:1] != ["holes"] or len(words) != 2 or parse_int(words[1]) is None:
         raise MzcError("expected 'holes COUNT' after the row lines", source=source, line=number, field="holes")
-    if parse_int(count[0]) != len(lines) - 1:
-        raise MzcError(f"says {count[0]} hole line(s) but {len(lines) - 1} follow", source=source,
+    if parse_int(words[1]) != len(lines) - 1:
+        raise MzcError(f"says {words[1]} hole line(s) but {len(lines) - 1} follow", source=source,
                        line=number, field="holes")
     for number, text in lines[1:]:
         _apply_hole_line(z, text.split(), source, number)

@@ -20,7 +20,7 @@ from mzc.errors import MzcError
 from mzc.formats.header import format_number
 from mzc.formats.zgrid import body_lines
 from mzc.grid import ZGrid
-from mzc.limits import MAX_DIMENSION, check_grid_size
+from mzc.limits import MAX_DIMENSION, check_grid_magnitudes, check_grid_size
 
 KINDS = ("poly", "dft", "dct", "dwt")
 LEGACY_WAVELET = "db1"
@@ -212,4 +212,6 @@ def read_legacy(data, source, kind):
                    for r, (number, text) in enumerate(body)]
         decode, options = ROW_READERS[kind][1], {}
     z = rows.decode_records([rec for rec in records if rec is not None], k1, k2, d2, decode, options, source)
-    return ZGrid(z=z, d1=d1, d2=d2)
+    grid = ZGrid(z=z, d1=d1, d2=d2)
+    check_grid_magnitudes(grid, source=source)
+    return grid
