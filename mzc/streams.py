@@ -14,7 +14,8 @@ output name gets:
   link stays a link. A dangling link makes the file it names, when that file's directory
   exists.
 - An existing regular file is replaced by a new file with its mode (and owner and group,
-  where we may set them). A file we may not write is refused, as ``>`` would refuse it.
+  where we may set them). A file we may not write is refused, as ``>`` would refuse it, and
+  so is a file without any write permission bit (0444), for root too, which ``>`` lets write.
 - A file with several hard links, or one in a directory we may not write, is written in
   place, so every link sees the new content: space for the data is reserved first
   (posix_fallocate), so a full disk leaves the file untouched, then the data is written
@@ -124,13 +125,20 @@ def destination(path):
     directory = os.path.dirname(target)
     if not os.path.isdir(directory):
         raise MzcError("directory does not exist", source=name)
-    if info is not None and not os.access(target, os.W_OK):
+    if info is not None and not writable(target, info):
         raise MzcError("permission denied (the file is read-only)", source=name)
     if info is not None and (info.st_nlink > 1 or not os.access(directory, os.W_OK | os.X_OK)):
         return "in place", target, info
     if not os.access(directory, os.W_OK | os.X_OK):
         raise MzcError("permission denied (cannot create a file in its directory)", source=name)
     return "replace", target, info
+
+
+def writable(path, info):
+    """True when we may write the file at ``path`` (its os.stat ``info``): access() allows it and
+    its mode has a write bit. access() allows root any file, so a file made read-only (0444) is
+    refused by its mode bits, as it is for everyone else."""
+    return bool(info.st_mode & (stat.S_IWUSR | stat.S_IWGRP | stat.S_IWOTH)) and os.access(path, os.W_OK)
 
 
 def is_stream(path):
