@@ -19,7 +19,8 @@ from mzc.batch import manifest
 from mzc.errors import MzcError
 from mzc.meshes import mesh_to_bytes
 
-from conftest import run_mzc
+from conftest import FACES, run_mzc
+from test_cli import assert_one_line_error
 
 pytest.importorskip("distributed")
 
@@ -137,3 +138,31 @@ def test_a_manifest_csv_cannot_read_is_refused_in_one_line(tmp_path):
     assert result.returncode == 1 and result.stderr.decode().count("\n") == 1
     assert "manifest.csv:2: cannot read the manifest" in result.stderr.decode()
     assert sorted(p.name for p in tmp_path.iterdir()) == ["in", manifest.NAME]
+
+
+def rows_of(dest):
+    """The manifest's rows in ``dest``, output -> row."""
+    return manifest.read(manifest.path_in(str(dest)))
+
+
+def test_a_second_batch_into_a_folder_in_use_is_refused(tmp_path):
+    """A batch holds its destination: a second one started into it meanwhile is refused in one
+    line before any work, and the first one's outputs and rows are all its own (the audit: two
+    runs at once gave 24 outputs and 12 rows, both exit 0). The lock goes with the run."""
+    faces = sorted(FACES.glob("*.ply")) if FACES.is_dir() else []
+    if len(faces) < 12:
+        pytest.skip("shared face data not available")
+    source, dest = tmp_path / "in", tmp_path / "out"
+    source.mkdir()
+    for face in faces:
+        (source / face.name).symlink_to(face)
+    first = mzc_process("batch", "encode", source, "-o", dest, "--dwt2d", "--rmse", "0.05", "--workers", "1")
+    assert until(lambda: first.poll() is not None or len(rows_of(dest)) >= 1)
+    second = run_mzc("batch", "encode", source, "-o", dest, "--dwt2d", "--rmse", "0.1", "--workers", "1")
+    assert first.poll() is None, "the first batch ended before the second one was tried"
+    assert_one_line_error(second, f"{dest}: another mzc batch is writing into this folder")
+    _, stderr = first.communicate(timeout=300)
+    assert first.returncode == 0, stderr
+    settings = {row["settings"] for row in rows_of(dest).values()}
+    assert len(settings) == 1 and '"rmse":0.05' in settings.pop()
+    assert sorted(os.listdir(dest)) == sorted([manifest.NAME, *(face.stem + ".mzw2" for face in faces)])

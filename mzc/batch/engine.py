@@ -1,4 +1,5 @@
-"""Running a batch on Dask: chunks of items as tasks, faults, resuming, the summary.
+"""Running a batch on Dask: chunks of items as tasks, faults, resuming, the summary, and one
+run at a time in a destination folder.
 
 By default a local cluster is started for the run, one worker process per core with one
 thread each (the work is numpy's and holds the GIL between calls); ``scheduler`` sends the
@@ -16,13 +17,14 @@ items whose rows still hold, so a batch killed at any moment resumes where it st
 
 from __future__ import annotations
 
+import fcntl
 import logging
 import math
 import os
 import sys
 import time
 import uuid
-from contextlib import contextmanager
+from contextlib import contextmanager, suppress
 from dataclasses import dataclass, field
 
 from mzc.batch import manifest
@@ -30,6 +32,7 @@ from mzc.batch.work import run_chunk
 from mzc.errors import MzcError
 
 CHUNKS_PER_WORKER = 32
+LOCK_NAME = ".manifest.lock"   # in DEST, while a run holds it
 CONNECT_SECONDS = 10   # to reach a scheduler given by --scheduler
 MAX_CHUNK = 64
 # Dask's nannies set MALLOC_TRIM_THRESHOLD_ in their workers' environment (None unsets it). That turns
@@ -84,32 +87,84 @@ def human_bytes(count):
 def run_batch(job, items, scheduler=None, workers=None, chunk_size=None, listener=None):
     """Do ``job`` to every item on Dask and return the Summary; the manifest in ``job.dest`` holds
     the rows. ``listener`` (a Listener) is told of the start and of each row as it comes.
-    Nothing is made in ``job.dest`` until the cluster is there."""
+    ``job.dest`` is held by this run alone (``locked``), and a run that cannot start leaves
+    nothing there."""
     started = time.perf_counter()
     listener = listener or Listener()
     if os.path.exists(job.dest) and not os.path.isdir(job.dest):
         raise MzcError("the destination is not a folder", source=job.dest)
     path = manifest.path_in(job.dest)
-    previous = manifest.read(path)
-    tasks = [(item, matching(previous.get(item.output), item)) for item in items]
     summary = Summary(job.action)
-    with dask_client(scheduler, workers) as client:
-        make_folder(job.dest)
-        appender = manifest.Appender(path)
-        listener.started(len(tasks))
-        try:
-            size = chunk_size or default_chunk_size(len(tasks), worker_count(client))
-            for rows in finished_chunks(client, job, [tasks[i:i + size] for i in range(0, len(tasks), size)]):
-                appender.append([row for row in rows if not row.get("skipped")])
-                summary.rows += rows
-                for row in rows:
-                    listener.row(row)
-        finally:
-            appender.close()
-            done = {row["output"]: {k: v for k, v in row.items() if k != "skipped"} for row in summary.rows}
-            manifest.rewrite(path, list({**previous, **done}.values()))
-            summary.seconds = time.perf_counter() - started
+    with locked(job.dest):
+        previous = manifest.read(path)
+        tasks = [(item, matching(previous.get(item.output), item)) for item in items]
+        with dask_client(scheduler, workers) as client:
+            appender = manifest.Appender(path)
+            listener.started(len(tasks))
+            try:
+                size = chunk_size or default_chunk_size(len(tasks), worker_count(client))
+                for rows in finished_chunks(client, job, [tasks[i:i + size] for i in range(0, len(tasks), size)]):
+                    appender.append([row for row in rows if not row.get("skipped")])
+                    summary.rows += rows
+                    for row in rows:
+                        listener.row(row)
+            finally:
+                appender.close()
+                done = {row["output"]: {k: v for k, v in row.items() if k != "skipped"} for row in summary.rows}
+                manifest.rewrite(path, list({**previous, **done}.values()))
+                summary.seconds = time.perf_counter() - started
     return summary
+
+
+@contextmanager
+def locked(folder):
+    """Hold ``folder`` (made if need be) for this run alone: a second batch into it at the same
+    time is refused in one line, where its outputs and rows would mix with ours. The lock is an
+    flock on LOCK_NAME in the folder, which the system releases when the run ends in any way
+    (SIGKILL too); the file is removed, and so is a folder the run made and left empty."""
+    made = not os.path.isdir(folder)
+    make_folder(folder)
+    path = os.path.join(folder, LOCK_NAME)
+    fd = lock_file(path, folder)
+    try:
+        yield
+    finally:
+        os.unlink(path)   # while still locked: a batch that opened it sees it gone and takes a new one
+        os.close(fd)
+        if made:
+            with suppress(OSError):   # not empty: the run wrote something
+                os.rmdir(folder)
+
+
+def lock_file(path, folder):
+    """A descriptor of the file ``path`` (made if need be) that holds its exclusive flock, or an
+    MzcError naming ``folder`` when another process holds it."""
+    while True:
+        try:
+            fd = os.open(path, os.O_RDWR | os.O_CREAT | os.O_CLOEXEC, 0o644)
+        except OSError as error:
+            raise MzcError(f"cannot lock the destination folder: {error.strerror or error}", source=folder) from None
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except OSError as error:
+            os.close(fd)
+            if isinstance(error, BlockingIOError):
+                raise MzcError("another mzc batch is writing into this folder: wait for it to end, or give another "
+                               "-o", source=folder) from None
+            raise MzcError(f"cannot lock the destination folder: {error.strerror or error}", source=folder) from None
+        if still_named(fd, path):
+            return fd
+        os.close(fd)   # the batch that held it removed it as it ended: lock the one there now
+
+
+def still_named(fd, path):
+    """True when the open file ``fd`` is the file named ``path``."""
+    try:
+        here = os.stat(path)
+    except FileNotFoundError:
+        return False
+    mine = os.fstat(fd)
+    return (here.st_dev, here.st_ino) == (mine.st_dev, mine.st_ino)
 
 
 def make_folder(folder):
