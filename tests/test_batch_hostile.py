@@ -166,3 +166,49 @@ def test_a_second_batch_into_a_folder_in_use_is_refused(tmp_path):
     settings = {row["settings"] for row in rows_of(dest).values()}
     assert len(settings) == 1 and '"rmse":0.05' in settings.pop()
     assert sorted(os.listdir(dest)) == sorted([manifest.NAME, *(face.stem + ".mzw2" for face in faces)])
+
+
+def esri_grids(folder, count):
+    """``folder`` made, with ``count`` small ESRI ASCII grids (g00.asc, ...), each a moment's work."""
+    folder.mkdir()
+    for index in range(count):
+        heights = "\n".join(" ".join(str((row * col + index) % 7) for col in range(16)) for row in range(16))
+        (folder / f"g{index:02d}.asc").write_text("ncols 16\nnrows 16\nxllcorner 0\nyllcorner 0\ncellsize 1\n"
+                                                  f"NODATA_value -9999\n{heights}\n")
+    return folder
+
+
+def fill(folder):
+    """Fill the file system of ``folder`` to its last byte."""
+    with open(folder / "filler", "wb", buffering=0) as filler:
+        try:
+            while True:
+                filler.write(bytes(1 << 16))
+        except OSError:
+            pass
+
+
+def test_a_full_disk_while_appending_the_manifest_ends_in_one_line_and_loses_no_row(tmp_path, small_disk):
+    """When the disk fills up under a batch, each item that cannot be written is a failed row,
+    and the manifest that cannot grow stops the run with one line naming it (the audit: an
+    internal error). Every output keeps a row (its earlier one, or its failure) and its file;
+    with space again, the rerun does them all."""
+    source, dest = esri_grids(tmp_path / "in", 24), small_disk / "out"
+    coarse = ("--dwt2d", "--max-error", "0.5", "--workers", "1")
+    assert run_mzc("batch", "encode", source, "-o", dest, *coarse).returncode == 0
+    before = rows_of(dest)
+    files = {output: (dest / output).read_bytes() for output in before}
+    fill(small_disk)
+    full = run_mzc("batch", "encode", source, "-o", dest, *ENCODE)
+    lines = full.stderr.decode().splitlines()
+    assert full.returncode == 1, lines
+    assert lines[-1] == f"mzc: {dest / manifest.NAME}: no space left on device"
+    assert all(line.startswith("mzc: ") and line.endswith("no space left on device") for line in lines), lines
+    after = rows_of(dest)
+    assert after.keys() == before.keys() and after != before
+    assert all(after[o] == before[o] or after[o]["error"].endswith("no space left on device") for o in after)
+    assert {output: (dest / output).read_bytes() for output in before} == files
+    (small_disk / "filler").unlink()
+    again = run_mzc("batch", "encode", source, "-o", dest, *ENCODE)
+    assert again.returncode == 0 and again.stderr.decode().endswith("0 skipped, 0 failed\n"), again.stderr
+    assert len(rows_of(dest)) == 24 and sorted(os.listdir(dest)) == sorted([manifest.NAME, *before])

@@ -19,7 +19,6 @@ from test_cli import assert_one_line_error
 
 GRID = b"mzc-zgrid 1.0\nrows 2\ncols 2\nd1 1\nd2 1\ndata\n1 2\n3 4\n"
 OTHER = b"mzc-zgrid 1.0\nrows 2\ncols 2\nd1 1\nd2 1\ndata\n1.5 2\n3 nan\n"
-IS_ROOT = hasattr(os, "geteuid") and os.geteuid() == 0
 
 
 @pytest.fixture
@@ -194,20 +193,6 @@ def test_diff_with_a_failing_plot_writes_no_error_grid(mzc, tmp_path):
     assert_one_line_error(mzc("diff", a, b, "--error-grid", errors, "--plot", tmp_path / "no" / "p.png"),
                           "directory does not exist")
     assert sorted(p.name for p in tmp_path.iterdir()) == ["a.zg", "b.zg"]
-
-
-@pytest.fixture
-def small_disk(tmp_path):
-    """A 1 MiB tmpfs (root only; skipped otherwise), unmounted afterwards."""
-    if not IS_ROOT:
-        pytest.skip("mounting a small tmpfs needs root")
-    disk = tmp_path / "disk"
-    disk.mkdir()
-    if subprocess.run(["mount", "-t", "tmpfs", "-o", "size=1m", "tmpfs", str(disk)],
-                      capture_output=True).returncode != 0:
-        pytest.skip("cannot mount a tmpfs here")
-    yield disk
-    subprocess.run(["umount", str(disk)], check=True)
 
 
 def test_a_full_disk_leaves_the_target_untouched_and_no_temporary(mzc, small_disk):

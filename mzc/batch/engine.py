@@ -110,9 +110,10 @@ def run_batch(job, items, scheduler=None, workers=None, chunk_size=None, listene
                         listener.row(row)
             finally:
                 appender.close()
-                done = {row["output"]: {k: v for k, v in row.items() if k != "skipped"} for row in summary.rows}
-                manifest.rewrite(path, list({**previous, **done}.values()))
-                summary.seconds = time.perf_counter() - started
+        # a run that stops early leaves the rows appended so far, which a rerun reads as they are
+        done = {row["output"]: {k: v for k, v in row.items() if k != "skipped"} for row in summary.rows}
+        manifest.rewrite(path, list({**previous, **done}.values()))
+    summary.seconds = time.perf_counter() - started
     return summary
 
 

@@ -119,26 +119,38 @@ def read(path):
 
 
 class Appender:
-    """Rows appended to the manifest as they come, each batch of them flushed to disk."""
+    """Rows appended to the manifest as they come, each batch of them synced to disk."""
 
     def __init__(self, path):
+        from mzc.streams import destination, failure
+
         self.path = path
+        destination(path)   # refuses a manifest we may not write (read-only, for root too), as its rewrite would
         try:
-            self.file = open(path, "a+b")
+            self.file = open(path, "a+b", buffering=0)
             cut_partial_line(self.file)
         except OSError as error:
-            raise MzcError(f"cannot write the manifest: {error.strerror or error}", source=path) from None
-        self.file = io.TextIOWrapper(self.file, encoding="utf-8", newline="")
+            raise failure(error, path) from None
         if self.file.tell() == 0:
-            self.file.write(",".join(COLUMNS) + "\n")
+            self.write(",".join(COLUMNS) + "\n")
 
     def append(self, rows):
         """Write ``rows`` and make them durable."""
-        self.file.write("".join(line_of(row) for row in rows))
-        self.file.flush()
-        os.fsync(self.file.fileno())
+        self.write("".join(line_of(row) for row in rows))
+
+    def write(self, text):
+        """Append ``text`` and sync it, or an MzcError naming the manifest (a full disk): the rows
+        before it stay whole, and a row cut short is dropped when the manifest is read."""
+        from mzc.streams import failure, write_all
+
+        try:
+            write_all(self.file.fileno(), text.encode("utf-8"))
+            os.fsync(self.file.fileno())
+        except OSError as error:
+            raise failure(error, self.path) from None
 
     def close(self):
+        """Close the file (nothing is left to write: each append was written whole or failed)."""
         self.file.close()
 
 
