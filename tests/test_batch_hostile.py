@@ -212,3 +212,52 @@ def test_a_full_disk_while_appending_the_manifest_ends_in_one_line_and_loses_no_
     again = run_mzc("batch", "encode", source, "-o", dest, *ENCODE)
     assert again.returncode == 0 and again.stderr.decode().endswith("0 skipped, 0 failed\n"), again.stderr
     assert len(rows_of(dest)) == 24 and sorted(os.listdir(dest)) == sorted([manifest.NAME, *before])
+
+
+def test_a_batch_never_writes_over_a_file_it_did_not_write(tmp_path):
+    """An output that is there and that no row of the manifest says the batch wrote, or that
+    is one of the batch's inputs (here through a symlink), is a failed row saying so, and the
+    file is kept (the audit: 'batch encode io -o io; batch decode io -o io' replaced the scan
+    io/scan.ply by the decoded mesh, exit 0)."""
+    io = tmp_path / "io"
+    io.mkdir()
+    scan = mesh_to_bytes(mzc.sample("bump"), "ply")
+    (io / "scan.ply").write_bytes(scan)
+    assert run_mzc("batch", "encode", io, "-o", io, *ENCODE).returncode == 0
+    coded = (io / "scan.mzw2").read_bytes()
+    decoded = run_mzc("batch", "decode", io, "-o", io, "--workers", "1")
+    lines = decoded.stderr.decode().splitlines()
+    assert decoded.returncode == 1 and lines[-1].endswith("0 skipped, 1 failed"), lines
+    assert lines[:-1] == [f"mzc: {io / 'scan.ply'}: is there already and was not written by this batch (no row of "
+                          "its manifest says so): move it away or give another -o"]
+    assert (io / "scan.ply").read_bytes() == scan and rows_of(io)["scan.ply"]["status"] == "failed"
+    (io / "scan.ply").unlink()
+    (io / "alias.mzw2").symlink_to("scan.mzw2")
+    (io / "alias.ply").symlink_to("alias.mzw2")   # alias.mzw2's output: that input itself
+    linked = run_mzc("batch", "decode", io / "alias.mzw2", "-o", io, "--workers", "1")
+    assert linked.returncode == 1 and f"mzc: {io / 'alias.ply'}: is an input of this batch" in linked.stderr.decode()
+    assert (io / "scan.mzw2").read_bytes() == coded
+
+
+def test_a_batch_writes_over_its_own_outputs_unless_they_are_read_only(tmp_path):
+    """A file there that the batch would write byte for byte (a worker died after writing it,
+    before its row was recorded) is kept as it is and recorded; an output the manifest says the
+    batch wrote is written again with new settings, unless it was made read-only (0444): that
+    one is refused, for root too."""
+    source, dest = bump_folder(tmp_path / "in", ["a", "b", "c"]), tmp_path / "out"
+    assert run_mzc("batch", "encode", source, "-o", dest, *ENCODE).returncode == 0
+    stamp = (dest / "c.mzw2").stat().st_mtime_ns
+    (dest / manifest.NAME).write_text(manifest.text_of([row for output, row in rows_of(dest).items()
+                                                        if output != "c.mzw2"]))
+    resumed = run_mzc("batch", "encode", source, "-o", dest, *ENCODE)
+    assert resumed.returncode == 0 and resumed.stderr.decode().endswith("2 skipped, 0 failed\n"), resumed.stderr
+    assert rows_of(dest)["c.mzw2"]["status"] == "ok" and (dest / "c.mzw2").stat().st_mtime_ns == stamp
+    coded = {output: (dest / output).read_bytes() for output in rows_of(dest)}
+    (dest / "b.mzw2").chmod(0o444)
+    again = run_mzc("batch", "encode", source, "-o", dest, "--dwt2d", "--max-error", "0.02", "--workers", "1")
+    lines = again.stderr.decode().splitlines()
+    assert again.returncode == 1 and lines[-1].endswith("0 skipped, 1 failed"), lines
+    assert lines[:-1] == [f"mzc: {dest / 'b.mzw2'}: permission denied (the file is read-only)"]
+    rows = rows_of(dest)
+    assert [rows[o]["status"] for o in ("a.mzw2", "b.mzw2", "c.mzw2")] == ["ok", "failed", "ok"]
+    assert [(dest / o).read_bytes() == coded[o] for o in ("a.mzw2", "b.mzw2", "c.mzw2")] == [False, True, False]

@@ -28,7 +28,7 @@ from contextlib import contextmanager, suppress
 from dataclasses import dataclass, field
 
 from mzc.batch import manifest
-from mzc.batch.work import run_chunk
+from mzc.batch.work import failed_row, run_chunk
 from mzc.errors import MzcError
 
 CHUNKS_PER_WORKER = 32
@@ -97,13 +97,11 @@ def run_batch(job, items, scheduler=None, workers=None, chunk_size=None, listene
     summary = Summary(job.action)
     with locked(job.dest):
         previous = manifest.read(path)
-        tasks = [(item, matching(previous.get(item.output), item)) for item in items]
         with dask_client(scheduler, workers) as client:
             appender = manifest.Appender(path)
-            listener.started(len(tasks))
+            listener.started(len(items))
             try:
-                size = chunk_size or default_chunk_size(len(tasks), worker_count(client))
-                for rows in finished_chunks(client, job, [tasks[i:i + size] for i in range(0, len(tasks), size)]):
+                for rows in item_rows(client, job, items, previous, chunk_size):
                     appender.append([row for row in rows if not row.get("skipped")])
                     summary.rows += rows
                     for row in rows:
@@ -176,9 +174,32 @@ def make_folder(folder):
         raise MzcError(f"cannot make the destination folder: {error.strerror or error}", source=folder) from None
 
 
-def matching(row, item):
-    """An earlier run's row for ``item``'s output, when it was made from the same input path."""
-    return row if row is not None and row.get("input") == item.source else None
+def item_rows(client, job, items, previous, chunk_size=None):
+    """The rows of ``items``, some at a time as they come: first those whose output is one of
+    the batch's inputs (failed: never written), then each chunk's as its task finishes, the
+    tasks given each item's row in ``previous`` (output -> row of an earlier run)."""
+    clashing = outputs_over_inputs(job.dest, items)
+    if clashing:
+        yield [failed_row(job, item, f"{os.path.join(job.dest, item.output)}: is an input of this batch: give "
+                                     "another -o") for item in clashing]
+    tasks = [(item, previous.get(item.output)) for item in items if item not in clashing]
+    size = chunk_size or default_chunk_size(len(tasks), worker_count(client))
+    yield from finished_chunks(client, job, [tasks[i:i + size] for i in range(0, len(tasks), size)])
+
+
+def outputs_over_inputs(dest, items):
+    """The items whose output, under ``dest``, is the file of one of the items' inputs (by any name)."""
+    inputs = {file_id(item.source) for item in items} - {None}
+    return [item for item in items if file_id(os.path.join(dest, item.output)) in inputs]
+
+
+def file_id(path):
+    """(device, inode) of the file at ``path`` (followed, if a link), None when there is none."""
+    try:
+        info = os.stat(path)
+    except OSError:
+        return None
+    return info.st_dev, info.st_ino
 
 
 def default_chunk_size(count, workers):
@@ -216,15 +237,11 @@ def finished_chunks(client, job, chunks, task=run_chunk):
                 for i, single in enumerate(chunk):
                     pending.add(submit([single], f"{future.key}-{i}"))
             else:
-                yield [killed_row(job, chunk[0][0])]
+                item, previous = chunk[0]
+                yield [failed_row(job, item, f"{item.source}: a worker died each time it ran this file (out of "
+                                             "memory, or a crash)", previous)]
         finally:
             future.release()
-
-
-def killed_row(job, item):
-    """The failed row of an item whose task killed every worker that ran it."""
-    return {"input": item.source, "output": item.output, "settings": job.settings_text, "status": "failed",
-            "error": f"{item.source}: a worker died each time it ran this file (out of memory, or a crash)"}
 
 
 @contextmanager
