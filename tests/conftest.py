@@ -27,10 +27,11 @@ def f18():
     return face_path("f18.ply")
 
 
-def run_mzc(*args, input=None, check=False, cwd=None):
-    """Run ``python -m mzc ARGS`` as a subprocess; ``input`` is bytes for stdin."""
+def run_mzc(*args, input=None, check=False, cwd=None, env=None):
+    """Run ``python -m mzc ARGS`` as a subprocess; ``input`` is bytes for stdin, ``env`` variables
+    to add to the environment."""
     result = subprocess.run([sys.executable, "-m", "mzc", *map(str, args)], input=input,
-                            capture_output=True, cwd=cwd, env={**os.environ, "MZC_DEBUG": ""})
+                            capture_output=True, cwd=cwd, env={**os.environ, **(env or {}), "MZC_DEBUG": ""})
     if check and result.returncode != 0:
         raise AssertionError(f"mzc {' '.join(map(str, args))} failed: {result.stderr.decode()}")
     return result

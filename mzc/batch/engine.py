@@ -10,9 +10,11 @@ worker's queue stays full and the last chunks even out), each chunk one task.
 Faults: an item that fails is a failed row and the batch goes on. A worker that dies has
 its chunks run again elsewhere by the scheduler (a local cluster's nanny restarts it); a
 chunk that killed workers the scheduler's allowed number of times is split into single
-items, and an item that still kills a worker becomes a failed row. Each finished chunk's
-rows are appended to the manifest before the next is waited for, and a rerun skips the
-items whose rows still hold, so a batch killed at any moment resumes where it stopped.
+items, and an item that still kills a worker becomes a failed row. A cluster left without
+any worker for LOST_SECONDS, or whose scheduler went away, ends the run with an MzcError:
+nothing would finish. Each finished chunk's rows are appended to the manifest before the
+next is waited for, and a rerun skips the items whose rows still hold, so a batch killed
+at any moment resumes where it stopped.
 """
 
 from __future__ import annotations
@@ -29,11 +31,13 @@ from dataclasses import dataclass, field
 
 from mzc.batch import manifest
 from mzc.batch.work import failed_row, run_chunk
-from mzc.errors import MzcError
+from mzc.errors import MzcError, first_line
 
 CHUNKS_PER_WORKER = 32
 LOCK_NAME = ".manifest.lock"   # in DEST, while a run holds it
 CONNECT_SECONDS = 10   # to reach a scheduler given by --scheduler
+LOST_SECONDS = 10   # without a worker this long, a cluster has lost them for good (a restart takes 1-3 s)
+POLL_SECONDS = 0.1   # how often a run waiting for its tasks looks at the cluster
 MAX_CHUNK = 64
 # Dask's nannies set MALLOC_TRIM_THRESHOLD_ in their workers' environment (None unsets it). That turns
 # off glibc's adaptive mmap threshold, so every array above 128 KB is mapped and unmapped afresh:
@@ -43,6 +47,7 @@ MALLOC_TRIM = "distributed.nanny.pre-spawn-environ.MALLOC_TRIM_THRESHOLD_"
 # One task at a time per worker thread (Dask's default queues 1.1): when a worker dies, only the
 # chunk it was running is charged with its death, so a bad file cannot take its neighbours along.
 SATURATION = "distributed.scheduler.worker-saturation"
+RESUME = "the manifest keeps the items done; run again to resume"
 DASK_MISSING = "mzc batch runs on Dask, which is not installed: pip install 'mzc[batch]'"
 
 
@@ -208,15 +213,24 @@ def default_chunk_size(count, workers):
 
 
 def worker_count(client):
-    """The workers the scheduler has now."""
-    return len(client.scheduler_info().get("workers", {}))
+    """The workers the scheduler has now, or an MzcError when it cannot be reached."""
+    try:
+        return len(client.nthreads())
+    except OSError as error:
+        raise scheduler_lost(first_line(error)) from None
+
+
+def scheduler_lost(reason):
+    """The MzcError of a run whose scheduler went away, for ``reason``."""
+    return MzcError(f"lost the Dask scheduler ({reason}): {RESUME}")
 
 
 def finished_chunks(client, job, chunks, task=run_chunk):
     """The rows of each chunk, ``task(job, chunk)``, as its task finishes (in the order they
     finish). A chunk whose task kept killing workers is split into single items; an item that
-    does is a failed row."""
+    does is a failed row. An MzcError when the cluster can finish no more (``completed``)."""
     from distributed import as_completed
+    from distributed.client import CancelledError
     from distributed.scheduler import KilledWorker
 
     run = uuid.uuid4().hex[:8]
@@ -227,21 +241,46 @@ def finished_chunks(client, job, chunks, task=run_chunk):
         submitted[future.key] = chunk
         return future
 
-    pending = as_completed([submit(chunk, str(i)) for i, chunk in enumerate(chunks)])
-    for future in pending:
+    # with the results, fetched as each task finishes: a result asked for later, once the worker
+    # that held it has died, waits for its task to run again, on no worker if none is left
+    pending = as_completed([submit(chunk, str(i)) for i, chunk in enumerate(chunks)], with_results=True,
+                           raise_errors=False)
+    for future, result in completed(client, pending, job.dest):
         chunk = submitted.pop(future.key)
-        try:
-            yield future.result()
-        except KilledWorker:
-            if len(chunk) > 1:
-                for i, single in enumerate(chunk):
-                    pending.add(submit([single], f"{future.key}-{i}"))
-            else:
-                item, previous = chunk[0]
-                yield [failed_row(job, item, f"{item.source}: a worker died each time it ran this file (out of "
-                                             "memory, or a crash)", previous)]
-        finally:
-            future.release()
+        future.release()
+        if isinstance(result, list):   # the rows (the future may be 'lost' or 'cancelled' since)
+            yield result
+            continue
+        error = result[1] if isinstance(result, tuple) else result   # (type, error, traceback), or CancelledError
+        if isinstance(error, CancelledError):
+            raise scheduler_lost("it cancelled the run's tasks")
+        if not isinstance(error, KilledWorker):
+            raise error
+        if len(chunk) > 1:
+            for i, single in enumerate(chunk):
+                pending.add(submit([single], f"{future.key}-{i}"))
+        else:
+            item, previous = chunk[0]
+            yield [failed_row(job, item, f"{item.source}: a worker died each time it ran this file (out of memory, "
+                                         "or a crash)", previous)]
+
+
+def completed(client, pending, dest):
+    """The (future, result) pairs of ``pending`` (a distributed.as_completed with results) as
+    they finish, or an MzcError naming ``dest`` once the cluster has had no worker for
+    LOST_SECONDS, when nothing would finish: a nanny starts a worker that died again, but
+    gives up on one that dies as it starts, and a scheduler's workers may all be gone."""
+    alone_since = None
+    while not pending.is_empty():
+        if pending.has_ready():
+            yield next(pending)
+            continue
+        now = time.monotonic()
+        alone_since = None if worker_count(client) else (alone_since or now)
+        if alone_since is not None and now - alone_since > LOST_SECONDS:
+            raise MzcError(f"the Dask cluster has had no worker for {LOST_SECONDS} s (they died and none came back): "
+                           f"{RESUME}", source=dest)
+        time.sleep(POLL_SECONDS)
 
 
 @contextmanager
@@ -254,7 +293,7 @@ def dask_client(scheduler=None, workers=None):
     except ImportError:
         raise MzcError(DASK_MISSING) from None
     quiet = logging.CRITICAL
-    for name in ("distributed", "tornado", "asyncio"):
+    for name in ("distributed", "distributed.client", "tornado", "tornado.application", "asyncio"):
         logging.getLogger(name).setLevel(quiet)
     if scheduler is not None:
         try:
@@ -264,10 +303,14 @@ def dask_client(scheduler=None, workers=None):
         with client:
             yield client
         return
-    with dask.config.set({MALLOC_TRIM: None, SATURATION: 1.0}), \
-            LocalCluster(n_workers=workers or os.cpu_count() or 1, threads_per_worker=1, processes=True,
-                         dashboard_address=None, silence_logs=quiet) as cluster, Client(cluster) as client:
-        yield client
+    with dask.config.set({MALLOC_TRIM: None, SATURATION: 1.0}):
+        try:
+            cluster = LocalCluster(n_workers=workers or os.cpu_count() or 1, threads_per_worker=1, processes=True,
+                                   dashboard_address=None, silence_logs=quiet)
+        except (RuntimeError, OSError, TimeoutError) as error:   # a worker process that died as it started
+            raise MzcError(f"the local Dask cluster did not start: {first_line(error)}") from None
+        with cluster, Client(cluster) as client:
+            yield client
 
 
 class Listener:
