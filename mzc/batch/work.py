@@ -229,7 +229,7 @@ def already_there(path, data, owned):
     file is refused (an MzcError): a batch never writes over a file it did not write."""
     try:
         info = os.lstat(path)
-    except FileNotFoundError:
+    except OSError:   # nothing there, or a path the write will refuse in its words
         return False
     if owned and stat.S_ISREG(info.st_mode):
         return False
