@@ -133,7 +133,8 @@ def locked(folder):
     try:
         yield
     finally:
-        os.unlink(path)   # while still locked: a batch that opened it sees it gone and takes a new one
+        with suppress(OSError):   # while still locked: a batch that opened it sees it gone and takes a new one
+            os.unlink(path)
         os.close(fd)
         if made:
             with suppress(OSError):   # not empty: the run wrote something
@@ -186,16 +187,17 @@ def item_rows(client, job, items, previous, chunk_size=None):
     clashing = outputs_over_inputs(job.dest, items)
     if clashing:
         yield [failed_row(job, item, f"{os.path.join(job.dest, item.output)}: is an input of this batch: give "
-                                     "another -o") for item in clashing]
+                                     "another -o") for item in items if item in clashing]
     tasks = [(item, previous.get(item.output)) for item in items if item not in clashing]
     size = chunk_size or default_chunk_size(len(tasks), worker_count(client))
     yield from finished_chunks(client, job, [tasks[i:i + size] for i in range(0, len(tasks), size)])
 
 
 def outputs_over_inputs(dest, items):
-    """The items whose output, under ``dest``, is the file of one of the items' inputs (by any name)."""
+    """The set of the items whose output, under ``dest``, is the file of one of the items' inputs
+    (by any name)."""
     inputs = {file_id(item.source) for item in items} - {None}
-    return [item for item in items if file_id(os.path.join(dest, item.output)) in inputs]
+    return {item for item in items if file_id(os.path.join(dest, item.output)) in inputs}
 
 
 def file_id(path):
