@@ -14,11 +14,14 @@ output name gets:
   link stays a link. A dangling link makes the file it names, when that file's directory
   exists.
 - An existing regular file is replaced by a new file with its mode (and owner and group,
-  where we may set them). A file we may not write is refused, as ``>`` would refuse it.
+  where we may set them). A file we may not write is refused, as ``>`` would refuse it, and
+  so is a file without any write permission bit (0444), for root too, which ``>`` lets write.
 - A file with several hard links, or one in a directory we may not write, is written in
-  place, so every link sees the new content: space for the data is reserved first
-  (posix_fallocate), so a full disk leaves the file untouched, then the data is written
-  and the file cut to its length. A crash during that write leaves mixed content.
+  place, so every link sees the new content, under an exclusive lock (flock), so that two
+  mzc commands writing it at once take turns and it ends as one of them wrote it: space for
+  the data is reserved first (posix_fallocate), so a full disk leaves the file untouched,
+  then the data is written and the file cut to its length. A crash during that write
+  leaves mixed content.
 - Any other file is written and synced as an unnamed O_TMPFILE in the target's directory
   (Linux), then linked to a hidden ``.mzc-*`` name there and renamed over the target; a
   SIGTERM, SIGHUP, SIGINT or SIGPIPE in that short step removes the hidden name, and a
@@ -32,6 +35,7 @@ output name gets:
 """
 
 import errno
+import fcntl
 import os
 import signal
 import stat
@@ -124,13 +128,20 @@ def destination(path):
     directory = os.path.dirname(target)
     if not os.path.isdir(directory):
         raise MzcError("directory does not exist", source=name)
-    if info is not None and not os.access(target, os.W_OK):
+    if info is not None and not writable(target, info):
         raise MzcError("permission denied (the file is read-only)", source=name)
     if info is not None and (info.st_nlink > 1 or not os.access(directory, os.W_OK | os.X_OK)):
         return "in place", target, info
     if not os.access(directory, os.W_OK | os.X_OK):
         raise MzcError("permission denied (cannot create a file in its directory)", source=name)
     return "replace", target, info
+
+
+def writable(path, info):
+    """True when we may write the file at ``path`` (its os.stat ``info``): access() allows it and
+    its mode has a write bit. access() allows root any file, so a file made read-only (0444) is
+    refused by its mode bits, as it is for everyone else."""
+    return bool(info.st_mode & (stat.S_IWUSR | stat.S_IWGRP | stat.S_IWOTH)) and os.access(path, os.W_OK)
 
 
 def is_stream(path):
@@ -206,7 +217,9 @@ def write_output(path, data):
 
 def write_outputs(*outputs):
     """Write each (path, data) of ``outputs``: every one is checked and staged before any is
-    published, so a failure writes none of them (short of one while publishing the last)."""
+    published, so a failure writes none of them (short of one while publishing: a full disk
+    met by a file written in place, whose space is reserved under its lock, leaves that file
+    as it was and those published before it written)."""
     staged = []
     try:
         for path, data in outputs:
@@ -284,26 +297,23 @@ class Through:
 
 
 class InPlace:
-    """An existing file written in its own inode (hard links, a read-only directory): space is
-    reserved now, the data written when published."""
+    """An existing file written in its own inode (hard links, a read-only directory): opened now,
+    written when published."""
 
     ORDER = 1
 
     def __init__(self, path, target, info, data):
         self.path, self.data = path, data
         self.fd = os.open(target, os.O_WRONLY | os.O_CLOEXEC)
-        size = os.fstat(self.fd).st_size
-        if data:
-            try:
-                os.posix_fallocate(self.fd, 0, len(data))
-            except OSError:
-                os.ftruncate(self.fd, size)   # a failed reservation may have made the file longer
-                os.close(self.fd)
-                raise
 
     def publish(self):
-        """Overwrite the file with the data, cut it to the data's length and sync it."""
+        """Overwrite the file with the data, cut it to the data's length and sync it, holding an
+        exclusive lock on it: another mzc writing it at once waits, so it cannot cut this data
+        short or leave its own tail after it. The space is reserved under the lock (another
+        writer's cut would free space reserved before it); the lock goes when the file is closed."""
         try:
+            fcntl.flock(self.fd, fcntl.LOCK_EX)
+            reserve(self.fd, len(self.data))
             write_all(self.fd, self.data, offset=0)
             os.ftruncate(self.fd, len(self.data))
             os.fsync(self.fd)
@@ -415,6 +425,19 @@ def keep_mode_and_owner(fd, info):
     except OSError:
         pass
     os.fchmod(fd, info.st_mode & 0o7777)
+
+
+def reserve(fd, size):
+    """Reserve disk space for the first ``size`` bytes of the file ``fd`` (posix_fallocate), so
+    that writing them cannot fail for want of space; a failure leaves the file as it was."""
+    if not size:
+        return
+    length = os.fstat(fd).st_size
+    try:
+        os.posix_fallocate(fd, 0, size)
+    except OSError:
+        os.ftruncate(fd, length)   # a failed reservation may have made the file longer
+        raise
 
 
 def write_all(fd, data, offset=None):

@@ -27,10 +27,11 @@ def f18():
     return face_path("f18.ply")
 
 
-def run_mzc(*args, input=None, check=False, cwd=None):
-    """Run ``python -m mzc ARGS`` as a subprocess; ``input`` is bytes for stdin."""
+def run_mzc(*args, input=None, check=False, cwd=None, env=None):
+    """Run ``python -m mzc ARGS`` as a subprocess; ``input`` is bytes for stdin, ``env`` variables
+    to add to the environment."""
     result = subprocess.run([sys.executable, "-m", "mzc", *map(str, args)], input=input,
-                            capture_output=True, cwd=cwd, env={**os.environ, "MZC_DEBUG": ""})
+                            capture_output=True, cwd=cwd, env={**os.environ, **(env or {}), "MZC_DEBUG": ""})
     if check and result.returncode != 0:
         raise AssertionError(f"mzc {' '.join(map(str, args))} failed: {result.stderr.decode()}")
     return result
@@ -40,6 +41,20 @@ def run_mzc(*args, input=None, check=False, cwd=None):
 def mzc():
     """The run_mzc helper as a fixture."""
     return run_mzc
+
+
+@pytest.fixture
+def small_disk(tmp_path):
+    """A 1 MiB tmpfs (root only; skipped otherwise), unmounted afterwards."""
+    if not (hasattr(os, "geteuid") and os.geteuid() == 0):
+        pytest.skip("mounting a small tmpfs needs root")
+    disk = tmp_path / "disk"
+    disk.mkdir()
+    if subprocess.run(["mount", "-t", "tmpfs", "-o", "size=1m", "tmpfs", str(disk)],
+                      capture_output=True).returncode != 0:
+        pytest.skip("cannot mount a tmpfs here")
+    yield disk
+    subprocess.run(["umount", str(disk)], check=True)
 
 
 def edge_counts(triangles):

@@ -1,4 +1,5 @@
-"""Running a batch on Dask: chunks of items as tasks, faults, resuming, the summary.
+"""Running a batch on Dask: chunks of items as tasks, faults, resuming, the summary, and one
+run at a time in a destination folder.
 
 By default a local cluster is started for the run, one worker process per core with one
 thread each (the work is numpy's and holds the GIL between calls); ``scheduler`` sends the
@@ -9,28 +10,34 @@ worker's queue stays full and the last chunks even out), each chunk one task.
 Faults: an item that fails is a failed row and the batch goes on. A worker that dies has
 its chunks run again elsewhere by the scheduler (a local cluster's nanny restarts it); a
 chunk that killed workers the scheduler's allowed number of times is split into single
-items, and an item that still kills a worker becomes a failed row. Each finished chunk's
-rows are appended to the manifest before the next is waited for, and a rerun skips the
-items whose rows still hold, so a batch killed at any moment resumes where it stopped.
+items, and an item that still kills a worker becomes a failed row. A cluster left without
+any worker for LOST_SECONDS, or whose scheduler went away, ends the run with an MzcError:
+nothing would finish. Each finished chunk's rows are appended to the manifest before the
+next is waited for, and a rerun skips the items whose rows still hold, so a batch killed
+at any moment resumes where it stopped.
 """
 
 from __future__ import annotations
 
+import fcntl
 import logging
 import math
 import os
 import sys
 import time
 import uuid
-from contextlib import contextmanager
+from contextlib import contextmanager, suppress
 from dataclasses import dataclass, field
 
 from mzc.batch import manifest
-from mzc.batch.work import run_chunk
-from mzc.errors import MzcError
+from mzc.batch.work import failed_row, run_chunk
+from mzc.errors import MzcError, first_line
 
 CHUNKS_PER_WORKER = 32
+LOCK_NAME = ".manifest.lock"   # in DEST, while a run holds it
 CONNECT_SECONDS = 10   # to reach a scheduler given by --scheduler
+LOST_SECONDS = 10   # without a worker this long, a cluster has lost them for good (a restart takes 1-3 s)
+POLL_SECONDS = 0.1   # how often a run waiting for its tasks looks at the cluster
 MAX_CHUNK = 64
 # Dask's nannies set MALLOC_TRIM_THRESHOLD_ in their workers' environment (None unsets it). That turns
 # off glibc's adaptive mmap threshold, so every array above 128 KB is mapped and unmapped afresh:
@@ -40,6 +47,7 @@ MALLOC_TRIM = "distributed.nanny.pre-spawn-environ.MALLOC_TRIM_THRESHOLD_"
 # One task at a time per worker thread (Dask's default queues 1.1): when a worker dies, only the
 # chunk it was running is charged with its death, so a bad file cannot take its neighbours along.
 SATURATION = "distributed.scheduler.worker-saturation"
+RESUME = "the manifest keeps the items done; run again to resume"
 DASK_MISSING = "mzc batch runs on Dask, which is not installed: pip install 'mzc[batch]'"
 
 
@@ -84,32 +92,84 @@ def human_bytes(count):
 def run_batch(job, items, scheduler=None, workers=None, chunk_size=None, listener=None):
     """Do ``job`` to every item on Dask and return the Summary; the manifest in ``job.dest`` holds
     the rows. ``listener`` (a Listener) is told of the start and of each row as it comes.
-    Nothing is made in ``job.dest`` until the cluster is there."""
+    ``job.dest`` is held by this run alone (``locked``), and a run that cannot start leaves
+    nothing there."""
     started = time.perf_counter()
     listener = listener or Listener()
     if os.path.exists(job.dest) and not os.path.isdir(job.dest):
         raise MzcError("the destination is not a folder", source=job.dest)
     path = manifest.path_in(job.dest)
-    previous = manifest.read(path)
-    tasks = [(item, matching(previous.get(item.output), item)) for item in items]
     summary = Summary(job.action)
-    with dask_client(scheduler, workers) as client:
-        make_folder(job.dest)
-        appender = manifest.Appender(path)
-        listener.started(len(tasks))
-        try:
-            size = chunk_size or default_chunk_size(len(tasks), worker_count(client))
-            for rows in finished_chunks(client, job, [tasks[i:i + size] for i in range(0, len(tasks), size)]):
-                appender.append([row for row in rows if not row.get("skipped")])
-                summary.rows += rows
-                for row in rows:
-                    listener.row(row)
-        finally:
-            appender.close()
-            done = {row["output"]: {k: v for k, v in row.items() if k != "skipped"} for row in summary.rows}
-            manifest.rewrite(path, list({**previous, **done}.values()))
-            summary.seconds = time.perf_counter() - started
+    with locked(job.dest):
+        previous = manifest.read(path)
+        with dask_client(scheduler, workers) as client:
+            appender = manifest.Appender(path)
+            listener.started(len(items))
+            try:
+                for rows in item_rows(client, job, items, previous, chunk_size):
+                    appender.append([row for row in rows if not row.get("skipped")])
+                    summary.rows += rows
+                    for row in rows:
+                        listener.row(row)
+            finally:
+                appender.close()
+        # a run that stops early leaves the rows appended so far, which a rerun reads as they are
+        done = {row["output"]: {k: v for k, v in row.items() if k != "skipped"} for row in summary.rows}
+        manifest.rewrite(path, list({**previous, **done}.values()))
+    summary.seconds = time.perf_counter() - started
     return summary
+
+
+@contextmanager
+def locked(folder):
+    """Hold ``folder`` (made if need be) for this run alone: a second batch into it at the same
+    time is refused in one line, where its outputs and rows would mix with ours. The lock is an
+    flock on LOCK_NAME in the folder, which the system releases when the run ends in any way
+    (SIGKILL too); the file is removed, and so is a folder the run made and left empty."""
+    made = not os.path.isdir(folder)
+    make_folder(folder)
+    path = os.path.join(folder, LOCK_NAME)
+    fd = lock_file(path, folder)
+    try:
+        yield
+    finally:
+        with suppress(OSError):   # while still locked: a batch that opened it sees it gone and takes a new one
+            os.unlink(path)
+        os.close(fd)
+        if made:
+            with suppress(OSError):   # not empty: the run wrote something
+                os.rmdir(folder)
+
+
+def lock_file(path, folder):
+    """A descriptor of the file ``path`` (made if need be) that holds its exclusive flock, or an
+    MzcError naming ``folder`` when another process holds it."""
+    while True:
+        try:
+            fd = os.open(path, os.O_RDWR | os.O_CREAT | os.O_CLOEXEC, 0o644)
+        except OSError as error:
+            raise MzcError(f"cannot lock the destination folder: {error.strerror or error}", source=folder) from None
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except OSError as error:
+            os.close(fd)
+            if isinstance(error, BlockingIOError):
+                raise MzcError("another mzc batch is writing into this folder: wait for it to end, or give another "
+                               "-o", source=folder) from None
+            raise MzcError(f"cannot lock the destination folder: {error.strerror or error}", source=folder) from None
+        if still_named(fd, path):
+            return fd
+        os.close(fd)   # the batch that held it removed it as it ended: lock the one there now
+
+
+def still_named(fd, path):
+    """True when the open file ``fd`` is the file named ``path``."""
+    try:
+        here = os.stat(path)
+    except FileNotFoundError:
+        return False
+    mine = os.fstat(fd)
+    return (here.st_dev, here.st_ino) == (mine.st_dev, mine.st_ino)
 
 
 def make_folder(folder):
@@ -120,9 +180,33 @@ def make_folder(folder):
         raise MzcError(f"cannot make the destination folder: {error.strerror or error}", source=folder) from None
 
 
-def matching(row, item):
-    """An earlier run's row for ``item``'s output, when it was made from the same input path."""
-    return row if row is not None and row.get("input") == item.source else None
+def item_rows(client, job, items, previous, chunk_size=None):
+    """The rows of ``items``, some at a time as they come: first those whose output is one of
+    the batch's inputs (failed: never written), then each chunk's as its task finishes, the
+    tasks given each item's row in ``previous`` (output -> row of an earlier run)."""
+    clashing = outputs_over_inputs(job.dest, items)
+    if clashing:
+        yield [failed_row(job, item, f"{os.path.join(job.dest, item.output)}: is an input of this batch: give "
+                                     "another -o") for item in items if item in clashing]
+    tasks = [(item, previous.get(item.output)) for item in items if item not in clashing]
+    size = chunk_size or default_chunk_size(len(tasks), worker_count(client))
+    yield from finished_chunks(client, job, [tasks[i:i + size] for i in range(0, len(tasks), size)])
+
+
+def outputs_over_inputs(dest, items):
+    """The set of the items whose output, under ``dest``, is the file of one of the items' inputs
+    (by any name)."""
+    inputs = {file_id(item.source) for item in items} - {None}
+    return {item for item in items if file_id(os.path.join(dest, item.output)) in inputs}
+
+
+def file_id(path):
+    """(device, inode) of the file at ``path`` (followed, if a link), None when there is none."""
+    try:
+        info = os.stat(path)
+    except OSError:
+        return None
+    return info.st_dev, info.st_ino
 
 
 def default_chunk_size(count, workers):
@@ -131,15 +215,24 @@ def default_chunk_size(count, workers):
 
 
 def worker_count(client):
-    """The workers the scheduler has now."""
-    return len(client.scheduler_info().get("workers", {}))
+    """The workers the scheduler has now, or an MzcError when it cannot be reached."""
+    try:
+        return len(client.nthreads())
+    except OSError as error:
+        raise scheduler_lost(first_line(error)) from None
+
+
+def scheduler_lost(reason):
+    """The MzcError of a run whose scheduler went away, for ``reason``."""
+    return MzcError(f"lost the Dask scheduler ({reason}): {RESUME}")
 
 
 def finished_chunks(client, job, chunks, task=run_chunk):
     """The rows of each chunk, ``task(job, chunk)``, as its task finishes (in the order they
     finish). A chunk whose task kept killing workers is split into single items; an item that
-    does is a failed row."""
+    does is a failed row. An MzcError when the cluster can finish no more (``completed``)."""
     from distributed import as_completed
+    from distributed.client import CancelledError
     from distributed.scheduler import KilledWorker
 
     run = uuid.uuid4().hex[:8]
@@ -150,25 +243,46 @@ def finished_chunks(client, job, chunks, task=run_chunk):
         submitted[future.key] = chunk
         return future
 
-    pending = as_completed([submit(chunk, str(i)) for i, chunk in enumerate(chunks)])
-    for future in pending:
+    # with the results, fetched as each task finishes: a result asked for later, once the worker
+    # that held it has died, waits for its task to run again, on no worker if none is left
+    pending = as_completed([submit(chunk, str(i)) for i, chunk in enumerate(chunks)], with_results=True,
+                           raise_errors=False)
+    for future, result in completed(client, pending, job.dest):
         chunk = submitted.pop(future.key)
-        try:
-            yield future.result()
-        except KilledWorker:
-            if len(chunk) > 1:
-                for i, single in enumerate(chunk):
-                    pending.add(submit([single], f"{future.key}-{i}"))
-            else:
-                yield [killed_row(job, chunk[0][0])]
-        finally:
-            future.release()
+        future.release()
+        if isinstance(result, list):   # the rows (the future may be 'lost' or 'cancelled' since)
+            yield result
+            continue
+        error = result[1] if isinstance(result, tuple) else result   # (type, error, traceback), or CancelledError
+        if isinstance(error, CancelledError):
+            raise scheduler_lost("it cancelled the run's tasks")
+        if not isinstance(error, KilledWorker):
+            raise error
+        if len(chunk) > 1:
+            for i, single in enumerate(chunk):
+                pending.add(submit([single], f"{future.key}-{i}"))
+        else:
+            item, previous = chunk[0]
+            yield [failed_row(job, item, f"{item.source}: a worker died each time it ran this file (out of memory, "
+                                         "or a crash)", previous)]
 
 
-def killed_row(job, item):
-    """The failed row of an item whose task killed every worker that ran it."""
-    return {"input": item.source, "output": item.output, "settings": job.settings_text, "status": "failed",
-            "error": f"{item.source}: a worker died each time it ran this file (out of memory, or a crash)"}
+def completed(client, pending, dest):
+    """The (future, result) pairs of ``pending`` (a distributed.as_completed with results) as
+    they finish, or an MzcError naming ``dest`` once the cluster has had no worker for
+    LOST_SECONDS, when nothing would finish: a nanny starts a worker that died again, but
+    gives up on one that dies as it starts, and a scheduler's workers may all be gone."""
+    alone_since = None
+    while not pending.is_empty():
+        if pending.has_ready():
+            yield next(pending)
+            continue
+        now = time.monotonic()
+        alone_since = None if worker_count(client) else (alone_since or now)
+        if alone_since is not None and now - alone_since > LOST_SECONDS:
+            raise MzcError(f"the Dask cluster has had no worker for {LOST_SECONDS} s (they died and none came back): "
+                           f"{RESUME}", source=dest)
+        time.sleep(POLL_SECONDS)
 
 
 @contextmanager
@@ -181,7 +295,7 @@ def dask_client(scheduler=None, workers=None):
     except ImportError:
         raise MzcError(DASK_MISSING) from None
     quiet = logging.CRITICAL
-    for name in ("distributed", "tornado", "asyncio"):
+    for name in ("distributed", "distributed.client", "tornado", "tornado.application", "asyncio"):
         logging.getLogger(name).setLevel(quiet)
     if scheduler is not None:
         try:
@@ -191,10 +305,14 @@ def dask_client(scheduler=None, workers=None):
         with client:
             yield client
         return
-    with dask.config.set({MALLOC_TRIM: None, SATURATION: 1.0}), \
-            LocalCluster(n_workers=workers or os.cpu_count() or 1, threads_per_worker=1, processes=True,
-                         dashboard_address=None, silence_logs=quiet) as cluster, Client(cluster) as client:
-        yield client
+    with dask.config.set({MALLOC_TRIM: None, SATURATION: 1.0}):
+        try:
+            cluster = LocalCluster(n_workers=workers or os.cpu_count() or 1, threads_per_worker=1, processes=True,
+                                   dashboard_address=None, silence_logs=quiet)
+        except (RuntimeError, OSError, TimeoutError) as error:   # a worker process that died as it started
+            raise MzcError(f"the local Dask cluster did not start: {first_line(error)}") from None
+        with cluster, Client(cluster) as client:
+            yield client
 
 
 class Listener:

@@ -73,15 +73,19 @@ def relative_paths(source, extensions, dest):
 
 def listed_paths(name):
     """The paths of a list file (or stdin for ``-``): one per line, blank lines and ``#`` comments
-    skipped, relative ones taken from the list's folder."""
+    skipped, relative ones taken from the list's folder; read as the file system's names are
+    (os.fsdecode), so a name that is not UTF-8 names its file."""
     try:
-        text = sys.stdin.read() if name == "-" else open(name, encoding="utf-8").read()
-    except (OSError, UnicodeDecodeError) as error:
-        raise MzcError(f"cannot read the list of inputs: {getattr(error, 'strerror', None) or error}",
-                       source=name) from None
+        if name == "-":
+            data = sys.stdin.buffer.read()
+        else:
+            with open(name, "rb") as file:
+                data = file.read()
+    except OSError as error:
+        raise MzcError(f"cannot read the list of inputs: {error.strerror or error}", source=name) from None
     folder = "" if name == "-" else os.path.dirname(name)
     paths = []
-    for number, line in enumerate(text.splitlines(), 1):
+    for number, line in enumerate(os.fsdecode(data).splitlines(), 1):
         path = line.strip()
         if not path or path.startswith("#"):
             continue

@@ -14,6 +14,7 @@ from __future__ import annotations
 import hashlib
 import json
 import os
+import stat
 import time
 import warnings
 from contextlib import contextmanager
@@ -73,8 +74,27 @@ def run_chunk(job, tasks):
     return [run_item(job, item, previous) for item, previous in tasks]
 
 
+def failed_row(job, item, error, previous=None):
+    """The row of an item that failed with ``error`` (one line). When ``previous``, its row from
+    an earlier run, says this batch wrote its output and the file is still there, the row keeps
+    that output's size: the batch still owns the file, to write it again on a later run."""
+    row = {"input": item.source, "output": item.output, "settings": job.settings_text, "status": "failed",
+           "error": error}
+    if wrote(previous) and os.path.lexists(os.path.join(job.dest, item.output)):
+        row["output_bytes"] = previous["output_bytes"]
+    return row
+
+
+def wrote(previous):
+    """True when ``previous``, a row from an earlier run, says this batch wrote the item's output:
+    it records the output's size (an ok row, or a failed one that kept it)."""
+    return bool(previous and previous.get("output_bytes"))
+
+
 def run_item(job, item, previous=None):
-    """The manifest row of one item, done (or found done) now; never raises for a bad input."""
+    """The manifest row of one item, done (or found done) now; never raises for a bad input.
+    ``previous`` is the manifest's row for the item's output from an earlier run, if any: it
+    may say the item is done already, and whether this batch wrote the files there."""
     started = time.perf_counter()
     timings = Timings()
     row = {"input": item.source, "output": item.output, "settings": job.settings_text}
@@ -89,14 +109,15 @@ def run_item(job, item, previous=None):
                 return {**previous, "skipped": True}
             files = (encode_item if job.action == "encode" else decode_item)(job, item, data, row, timings)
             with timings.stage("write"):
-                write_files(job, files)
+                write_files(job, files, owned=wrote(previous))
             row.update(output_bytes=len(files[0][1]), status="ok")
         except MzcError as error:
-            row.update(status="failed", error=str(error))
+            row.update(failed_row(job, item, str(error), previous))
         except MemoryError:
-            row.update(status="failed", error=f"{item.source}: out of memory")
+            row.update(failed_row(job, item, f"{item.source}: out of memory", previous))
         except Exception as error:  # noqa: BLE001 - one bad item must not stop the batch
-            row.update(status="failed", error=f"{item.source}: internal error: {type(error).__name__}: {error}")
+            row.update(failed_row(job, item, f"{item.source}: internal error: {type(error).__name__}: {error}",
+                                  previous))
     warned = "; ".join(dict.fromkeys(str(w.message) for w in caught if issubclass(w.category, MzcWarning)))
     row.update(warning=warned, seconds=time.perf_counter() - started, timings=timings.text())
     return row
@@ -104,8 +125,11 @@ def run_item(job, item, previous=None):
 
 def still_done(job, row, previous):
     """True when ``previous``, the item's row from an earlier run, holds for the input read now:
-    done with the same settings from the same bytes, its output of the recorded size in place."""
+    done with the same settings from the same file and bytes, its output of the recorded size
+    in place."""
     if not previous or previous.get("status") != "ok" or previous.get("settings") != row["settings"]:
+        return False
+    if previous.get("input") != row["input"]:
         return False
     if previous.get("input_sha256") != row["input_sha256"]:
         return False
@@ -184,13 +208,41 @@ def decode_item(job, item, data, row, timings):
         return [(item.output, mesh_to_bytes(grid_to_mesh(grid, settings["jump_angle"]), settings["format"]))]
 
 
-def write_files(job, files):
+def write_files(job, files, owned):
     """Write an item's [(name, bytes)] under the destination, atomically (none of them on a
-    failure), folders made as needed."""
-    paths = [os.path.join(job.dest, name) for name, _data in files]
-    for folder in dict.fromkeys(os.path.dirname(path) for path in paths):
+    failure), folders made as needed. A file there is written over only when ``owned`` (the
+    manifest says this batch wrote the item's output); see ``already_there``."""
+    outputs = [(os.path.join(job.dest, name), data) for name, data in files]
+    outputs = [(path, data) for path, data in outputs if not already_there(path, data, owned)]
+    for folder in dict.fromkeys(os.path.dirname(path) for path, _data in outputs):
         try:
             os.makedirs(folder, exist_ok=True)
         except OSError as error:
             raise MzcError(f"cannot make the folder: {error.strerror or error}", source=folder) from None
-    write_outputs(*[(path, data) for path, (_name, data) in zip(paths, files)])
+    write_outputs(*outputs)
+
+
+def already_there(path, data, owned):
+    """True when the file at ``path`` holds ``data`` already, so there is nothing to write (a
+    worker that died after writing it left it, and its chunk ran again); False when ``path``
+    may be written: nothing is there, or a regular file this batch wrote (``owned``). Any other
+    file is refused (an MzcError): a batch never writes over a file it did not write."""
+    try:
+        info = os.lstat(path)
+    except OSError:   # nothing there, or a path the write will refuse in its words
+        return False
+    if owned and stat.S_ISREG(info.st_mode):
+        return False
+    if holds(path, data):
+        return True
+    raise MzcError("is there already and was not written by this batch (no row of its manifest says so): move "
+                   "it away or give another -o", source=path)
+
+
+def holds(path, data):
+    """True when the file at ``path`` (followed, if a link) has exactly the bytes ``data``."""
+    try:
+        with open(path, "rb") as file:
+            return os.fstat(file.fileno()).st_size == len(data) and file.read() == data
+    except OSError:
+        return False

@@ -12,9 +12,11 @@ patterns ('scans/**/*.ply', quoted) and lists of paths (@LIST, one per line; @- 
 stdin). Outputs keep the inputs' layout under DEST, and DEST/manifest.csv gets a row per
 item: input bytes and SHA-256, output bytes, grid, settings, errors, seconds, status and
 the error of a failed item. A rerun skips the items whose row still holds (same input
-bytes and settings, the output in place), so a stopped batch resumes. The work runs on a
-local Dask cluster (one worker process per core) unless --scheduler names one; a failed
-item is recorded and the rest go on; the exit status is 1 when any item failed."""
+bytes and settings, the output in place), so a stopped batch resumes. A batch writes over
+only the files it wrote (any other file at an output is kept, and its item fails), and
+holds DEST alone: a second batch into it meanwhile is refused. The work runs on a local
+Dask cluster (one worker process per core) unless --scheduler names one; a failed item is
+recorded and the rest go on; the exit status is 1 when any item failed."""
 
 batch_options = [
     click.argument("sources", nargs=-1, required=True, metavar="SOURCES..."),
