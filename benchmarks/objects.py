@@ -843,13 +843,14 @@ def plot(path, results):
 
 
 def git_commit():
-    """The short commit of the repository, '+' when its tree has changes."""
+    """The short commit of the repository, "+" when its tracked files have changes."""
     import subprocess
 
     def git(*words):
         return subprocess.run(["git", *words], cwd=HERE, capture_output=True, text=True).stdout.strip()
 
-    return (git("rev-parse", "--short", "HEAD") or "unknown") + ("+" if git("status", "--porcelain", "--", ".") else "")
+    changed = git("status", "--porcelain", "--untracked-files=no", "--", ".")
+    return (git("rev-parse", "--short", "HEAD") or "unknown") + ("+" if changed else "")
 
 
 def run_all(specs, samples, quick, workers, progress):
