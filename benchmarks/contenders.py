@@ -142,8 +142,7 @@ def peer_contenders(missing):
     table = [Contender("xz OBJ", "peer", "mesh", "decimals", (0, 1, 2), xz_obj_encode, xz_obj_decode)]
     draco = load("DracoPy", missing, "Draco (DracoPy)")
     if draco:
-        table.append(Contender("Draco", "peer", "mesh", "bits", DRACO_BITS,
-                               lambda mesh, q, u: draco_encode(draco, mesh, q), lambda b: draco_decode(draco, b)))
+        table.append(draco_contender(draco))
     for label, package, build in [("SZ3", "pysz", sz3_contender), ("zfp", "zfpy", zfp_contender),
                                   ("LERC", "lerc", lerc_contender), ("SPERR", "imagecodecs", sperr_contenders),
                                   ("JPEG family", "imagecodecs", image_contenders)]:
@@ -153,16 +152,26 @@ def peer_contenders(missing):
     return table
 
 
+def draco_contender(draco, ladder=DRACO_BITS):
+    """Draco on the original (points, triangles) at a ladder of position quantisation bits."""
+    return Contender("Draco", "peer", "mesh", "bits", ladder, lambda mesh, q, u: draco_encode(draco, mesh, q),
+                     lambda data: draco_decode(draco, data))
+
+
 def draco_encode(draco, mesh, bits):
-    """Draco at ``bits`` position quantisation, compression level 10 (the slowest, smallest)."""
+    """Draco at ``bits`` position quantisation, compression level 10 (the slowest, smallest); a
+    mesh without triangles is coded as Draco's point cloud."""
     points, triangles = mesh
-    return bytes(draco.encode(points.astype(np.float32), triangles.astype(np.uint32),
-                              quantization_bits=bits, compression_level=10))
+    faces = triangles.astype(np.uint32) if len(triangles) else None
+    return bytes(draco.encode(points.astype(np.float32), faces, quantization_bits=bits, compression_level=10))
 
 
 def draco_decode(draco, data):
+    """(points, triangles) of Draco's bytes; no triangles, shape (0, 3), for a point cloud."""
     mesh = draco.decode(data)
-    return np.asarray(mesh.points, dtype=float), np.asarray(mesh.faces, dtype=np.int64).reshape(-1, 3)
+    faces = getattr(mesh, "faces", None)
+    triangles = np.asarray([] if faces is None else faces, dtype=np.int64).reshape(-1, 3)
+    return np.asarray(mesh.points, dtype=float), triangles
 
 
 def xz_obj_encode(mesh, decimals, unit):

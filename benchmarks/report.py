@@ -200,19 +200,25 @@ def plot_corpus(path, results, corpus, units, measures):
 
     figure, axes = plt.subplots(1, len(measures), figsize=(7.5 * len(measures), 6.5), squeeze=False)
     for axis, measure in zip(axes[0], measures):
-        curves = curves_of(results, corpus, measure)
-        for name, colour in curve_colours(curves, plt).items():
-            if curves[name]:
-                errors, sizes = zip(*curves[name])
-                style = "-" if name.startswith("mzc") else "--"
-                axis.plot(errors, sizes, style, marker="o", markersize=3, label=name, color=colour)
-        axis.set(xscale="log", yscale="log", xlabel=f"{measure_label(measure)} point-to-surface distance ({units})",
-                 ylabel="bytes", title=f"{corpus}: {measure_label(measure)}")
-        axis.grid(True, which="both", alpha=0.3)
+        label = measure_label(measure)
+        draw_curves(axis, curves_of(results, corpus, measure), plt, f"{label} point-to-surface distance ({units})",
+                    f"{corpus}: {label}")
     figure.legend(*axes[0][0].get_legend_handles_labels(), loc="center right", fontsize=8)
     figure.tight_layout(rect=(0, 0, 0.86, 1))
     figure.savefig(path, dpi=110)
     plt.close(figure)
+
+
+def draw_curves(axis, curves, plt, xlabel, title):
+    """One panel of bytes against error (log-log): a curve per contender of ``curves`` (``curves_of``),
+    mzc's solid and the peers' dashed."""
+    for name, colour in curve_colours(curves, plt).items():
+        if curves[name]:
+            errors, sizes = zip(*curves[name])
+            style = "-" if name.startswith("mzc") else "--"
+            axis.plot(errors, sizes, style, marker="o", markersize=3, label=name, color=colour)
+    axis.set(xscale="log", yscale="log", xlabel=xlabel, ylabel="bytes", title=title)
+    axis.grid(True, which="both", alpha=0.3)
 
 
 def curve_colours(curves, plt):
