@@ -233,3 +233,26 @@ def test_the_shared_whole_objects_are_cut_into_charts(name):
     grid = slice_surface(mesh)
     assert grid.charts is not None and len(grid.charts) > 6
     assert read_any(zgrid.write(grid, raw="float64"), name).charts == grid.charts
+
+
+def test_a_dwt2d_file_keeps_its_chart_records_in_the_payload_and_refuses_a_wrong_count():
+    data = dwt2d.write(two_charts(), max_error=0.05)
+    assert b"\nchart_count 2\n" in data and b"\ncharts " not in data
+    from mzc.formats.header import with_checksum
+
+    header, payload = data.split(b"\ndata\n", 1)
+    header = b"\n".join(line for line in header.split(b"\n") if not line.startswith(b"crc32 "))
+    for count in (b"1", b"3"):
+        damaged = with_checksum(header.replace(b"chart_count 2", b"chart_count " + count) + b"\ndata\n" + payload)
+        with pytest.raises(MzcError) as error:
+            read_any(damaged, "t.mzw2")
+        assert error.value.field == "data"
+
+
+def test_info_lists_the_charts(tmp_path, mzc):
+    path = tmp_path / "t.mzw2"
+    path.write_bytes(dwt2d.write(two_charts(), max_error=0.05))
+    header_only = mzc("info", path, check=True).stdout.decode()
+    assert "charts    2 (records in the payload" in header_only and "cut by    charts" in header_only
+    decoded = mzc("info", "--decode", path, check=True).stdout.decode()
+    assert "charts    2 (1 +z, 1 -x)" in decoded and "-x 4 x 4 at row 0, column 5; lattice 4 -1" in decoded

@@ -30,8 +30,8 @@ def command(input, decode):
         f"format    mzc-{kind} {major}.{minor}",
         f"bytes     {len(data)}",
         f"grid      {rows} rows x {cols} cols, d1 {grid.d1:g} d2 {grid.d2:g}{' ' + grid.units if grid.units else ''}",
-        f"cut by    {cutting_surfaces(grid)}",
-        *chart_lines(grid),
+        f"cut by    {cutting_surfaces(grid, header.has('chart_count'))}",
+        *chart_lines(grid, header),
     ]
     if decode:
         lines += decoded_lines(grid, len(data))
@@ -40,10 +40,12 @@ def command(input, decode):
     click.echo("\n".join(lines))
 
 
-def chart_lines(grid):
-    """A multi-chart grid's charts: how many, and each one's view, block and nodes' lattice place."""
+def chart_lines(grid, header):
+    """A multi-chart grid's charts: how many, and each one's view, block and nodes' lattice place
+    (a dwt2d file's records are in its payload: their count without --decode)."""
     if grid.charts is None:
-        return []
+        return [f"charts    {' '.join(header.tokens('chart_count'))} (records in the payload: --decode lists them)"] \
+            if header.charted and header.has("chart_count") else []
     from collections import Counter
 
     views = Counter(chart.view for chart in grid.charts)
@@ -62,9 +64,10 @@ def decoded_lines(grid, size):
     return lines
 
 
-def cutting_surfaces(grid):
-    """What cut the grid: the thesis's planes, or a central projection about its centre and axis."""
-    if grid.charts is not None:
+def cutting_surfaces(grid, charted=False):
+    """What cut the grid: charts (``charted``: a dwt2d file's, whose records are in its payload),
+    the thesis's planes, or a central projection about its centre and axis."""
+    if grid.charts is not None or charted:
         return "charts (planar grids along the frame's axes, each its own piece of the surface)"
     if grid.projection == "planar":
         return "planar (parallel planes; values along the grid's z)"

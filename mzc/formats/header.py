@@ -385,9 +385,10 @@ def format_number(value):
     return text[:-2] if text.endswith(".0") else text
 
 
-def grid_header_lines(grid, write_defaults=True):
+def grid_header_lines(grid, write_defaults=True, chart_records=True):
     """Header lines for the grid fields of ``grid`` (rows and cols come from z's shape);
-    without ``write_defaults``, ``nodata`` is left out when it holds its default, nan."""
+    without ``write_defaults``, ``nodata`` is left out when it holds its default, nan; without
+    ``chart_records`` a multi-chart grid's charts are left to the format (dwt2d codes them)."""
     rows, cols = grid.shape
     lines = [
         f"rows {rows}",
@@ -408,7 +409,7 @@ def grid_header_lines(grid, write_defaults=True):
         lines.append(f"crs {grid.crs}")
     if grid.raster is not None:
         lines.append(f"raster {grid.raster.words()}")
-    if grid.charts is not None:
+    if grid.charts is not None and chart_records:
         lines.append("charts " + " ".join(word for chart in grid.charts for word in chart.words()))
     return lines
 

@@ -27,7 +27,7 @@ from mzc.formats.header import (
     read_grid_fields,
     read_header,
 )
-from mzc.grid import ZGrid
+from mzc.grid import MAX_CHARTS, ZGrid
 from mzc.limits import MAX_MAGNITUDE
 
 KIND = "dwt2d"
@@ -88,6 +88,11 @@ def sign_model(context):
 def correction_model(context=0):
     """Model id of the correction layer's context (after the sign models)."""
     return FIRST_DETAIL + CONTEXTS + 2 * SIGN_CONTEXTS + context
+
+
+def chart_model(field):
+    """Model id of a chart record's field 0..6 (4.0; after the correction models)."""
+    return correction_model(4) + field
 
 
 # the detail, sign and correction contexts are each mixed within a row: one class count each
@@ -251,6 +256,33 @@ def stable_order(keys):
     return np.argsort(keys, kind="stable")
 
 
+CHART_VIEWS = ("+z", "-z", "+x", "-x", "+y", "-y")   # a chart record's view, by number
+
+
+def encode_charts(encoder, charts):
+    """A multi-chart grid's chart records (4.0), field by field: each chart's view number, then
+    ROW0, COL0 (each the change from the chart before), ROWS, COLS, I0, J0."""
+    records = np.array([[CHART_VIEWS.index(c.view), c.row0, c.col0, c.rows, c.cols, c.i0, c.j0] for c in charts],
+                       dtype=np.int64)
+    records[1:, 1:3] -= records[:-1, 1:3].copy()
+    for field in range(7):
+        encoder.add(chart_model(field), records[:, field])
+
+
+def decode_charts(decoder, count):
+    """The ``count`` Charts of ``encode_charts``' records (the ZGrid checks where they lie)."""
+    from mzc.grid import Chart
+
+    records = np.stack([decoder.read(chart_model(field), count) for field in range(7)], axis=1)
+    if (records[:, 0] >= len(CHART_VIEWS)).any():
+        raise decoder.error("a chart's view number is not 0..5")
+    records[:, 1:3] = np.cumsum(records[:, 1:3], axis=0)
+    try:
+        return tuple(Chart(CHART_VIEWS[record[0]], *(int(v) for v in record[1:])) for record in records)
+    except MzcError as error:
+        raise decoder.error(error.message) from None
+
+
 def encode_corrections(encoder, k, valid):
     """Correction integers (a grid, 0 at invalid nodes) row by row in two passes (even, odd
     columns), by context of the rows above and (odd columns) the neighbours beside."""
@@ -355,6 +387,8 @@ class Prepared:
             k[self.valid] = w2.corrections(self.grid.z, decoded, self.valid, correction)
             encode_corrections(encoder, k, self.valid)
             decoded[self.valid] += correction * k[self.valid]   # as the decoder adds them
+        if self.grid.charts is not None:
+            encode_charts(encoder, self.grid.charts)
         decoded[~self.valid] = np.nan
         return file_bytes(self.header_lines(step, correction, max_error), encoder.finish()), decoded
 
@@ -363,7 +397,9 @@ class Prepared:
         # lines at their defaults are left out: a face's file can be 1.5 KB, and they were 50 B of it
         lines = [magic_line(KIND, file_version(self.grid, VERSION, PROJECTED_VERSION, GEOREFERENCED_VERSION,
                                                CHARTED_VERSION)),
-                 *grid_header_lines(self.grid, write_defaults=False)]
+                 *grid_header_lines(self.grid, write_defaults=False, chart_records=False)]
+        if self.grid.charts is not None:   # their records are in the payload: 8-10 bytes a chart, not 25
+            lines.append(f"chart_count {len(self.grid.charts)}")
         if self.wavelet != DEFAULT_WAVELET:
             lines.append(f"wavelet {self.wavelet}")
         if self.levels != w2.default_levels(self.grid.shape, self.transform.coarsest):
@@ -571,6 +607,8 @@ def read(data, source="<bytes>"):
         if correction > 0:
             k = decoder.read_rows(valid, np.zeros(valid.shape), CORRECTION_THRESHOLDS, correction_model(0))
             z[valid] += correction * k[valid]
+    if header.charted and header.has("chart_count"):
+        fields["charts"] = decode_charts(decoder, header.integer("chart_count", 1, MAX_CHARTS))
     decoder.check_end()
     if not np.isfinite(z[valid]).all():
         raise MzcError("decoded heights are not finite (corrupt steps or payload)", source=source, field="data")
