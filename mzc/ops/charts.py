@@ -74,22 +74,21 @@ def chart_surface(mesh, rotation, shift, spacing, units=None, max_charts=None):
 
 
 class Piece:
-    """A chart to be: the points (in the slicing frame) and triangles of one connected, single
-    layer piece of the surface, and the view (index into VIEWS) it is seen along."""
+    """A chart to be: the view (index into VIEWS) it is seen along, the points in that view's
+    frame (``view_frames``) and the triangles of one connected, single layer piece of the surface."""
 
-    def __init__(self, view, points, triangles):
-        self.view, self.points, self.triangles = view, points, triangles
-        corners = points[triangles]
+    def __init__(self, view, local, triangles):
+        self.view, self.local, self.triangles = view, local, triangles
+        corners = local[triangles]
         self.area = float(lengths(np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])).sum()) / 2
 
     def block(self, spacing):
         """(Chart without its place, its values) rasterized on the lattice, or None when no node meets it."""
-        local = rotated(self.points, view_rotation(VIEWS[self.view]).T)
-        used = local[np.unique(self.triangles)]
+        used = self.local[np.unique(self.triangles)]
         low = np.floor(used[:, :2].min(axis=0) / spacing).astype(np.int64)
         high = np.ceil(used[:, :2].max(axis=0) / spacing).astype(np.int64)
         xs, ys = ((start + np.arange(end - start + 1)) * spacing for start, end in zip(low, high))
-        z = rasterize(local, self.triangles, xs, ys)
+        z = rasterize(self.local, self.triangles, xs, ys)
         valid = ~np.isnan(z)
         if not valid.any():
             return None
@@ -166,10 +165,16 @@ def mesh_pieces(points, triangles, spacing):
     triangles, normal, area = triangles[keep], normal[keep] / (2 * area[keep, None]), area[keep]
     pairs = neighbour_pairs(triangles)
     labels = joined_small(facing_labels(normal, pairs), facing_cosines(normal), pairs, area, spacing)
-    pieces = []
-    for view, members in layers(points, triangles, labels, pairs, spacing):
-        pieces.append(Piece(view, points, triangles[members]))
+    frames = view_frames(points)
+    pieces = [Piece(view, frames[view], triangles[members])
+              for view, members in layers(frames, triangles, labels, pairs, spacing)]
     return merged_small(pieces, spacing)
+
+
+def view_frames(points):
+    """``points`` in the frame of each view, in VIEWS' order (the views' rotations permute the
+    coordinates and turn their signs: exact)."""
+    return [rotated(points, view_rotation(view).T) for view in VIEWS]
 
 
 def neighbour_pairs(triangles):
@@ -254,7 +259,7 @@ def components(labels, pairs, members):
     return np.split(members[order], np.flatnonzero(np.diff(group[order])) + 1)
 
 
-def layers(points, triangles, labels, pairs, spacing):
+def layers(frames, triangles, labels, pairs, spacing):
     """(view, triangle indices) of the single-layer connected pieces: each connected piece of
     one label, less the triangles it hides behind its own surface, which are peeled off into
     the next layer (up to MAX_LAYERS)."""
@@ -263,7 +268,7 @@ def layers(points, triangles, labels, pairs, spacing):
         hidden = []
         for group in components(labels, pairs, remaining):
             view = int(labels[group[0]])
-            behind = hidden_triangles(points, triangles[group], view, spacing)
+            behind = hidden_triangles(frames[view], triangles[group], spacing)
             hidden.append(group[behind])
             yield view, group[~behind]
         remaining = np.concatenate(hidden) if hidden else remaining[:0]
@@ -271,10 +276,10 @@ def layers(points, triangles, labels, pairs, spacing):
             return
 
 
-def hidden_triangles(points, triangles, view, spacing):
-    """Per triangle of a piece, True when its centroid lies more than LAYER_TOLERANCE spacings
-    behind the piece's front-most surface along the view (another part of the piece covers it)."""
-    local = rotated(points, view_rotation(VIEWS[view]).T)
+def hidden_triangles(local, triangles, spacing):
+    """Per triangle of a piece (its points ``local`` in its view's frame), True when its centroid
+    lies more than LAYER_TOLERANCE spacings behind the piece's front-most surface along the view
+    (another part of the piece covers it)."""
     centroid = local[triangles].mean(axis=1)
     low = np.floor(centroid[:, :2].min(axis=0) / spacing).astype(np.int64) - 1
     cells = np.ceil(centroid[:, :2].max(axis=0) / spacing).astype(np.int64) - low + 2
@@ -325,7 +330,7 @@ def cloud_pieces(points, normals, spacing):
         except MzcError:   # fewer than 3 points, or all on a line: no surface of its own
             continue
         if len(triangles):
-            pieces.append(Piece(view, points[group], triangles))
+            pieces.append(Piece(view, local, triangles))
     return merged_small(pieces, spacing)
 
 
