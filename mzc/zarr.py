@@ -92,7 +92,11 @@ class Dwt2d(Codec):
         data = ensure_bytes(buf)
         if data[:1] not in DTYPES:
             raise MzcError("not an mzc_dwt2d chunk (no dtype code)")
-        values = mzc.decode(data[1:]).z.astype(DTYPES[data[:1]], order="C")   # zarr flattens in memory order
+        grid = mzc.decode(data[1:])
+        if grid.charts is not None:
+            raise MzcError(f"the chunk holds a multi-chart grid ({len(grid.charts)} charts): a Zarr chunk is one "
+                           "grid of values", field="charts")
+        values = grid.z.astype(DTYPES[data[:1]], order="C")   # zarr flattens in memory order
         if out is not None:
             out = ensure_ndarray_like(out)
             check_fits(values, out.shape, out.dtype)

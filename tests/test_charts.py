@@ -256,3 +256,12 @@ def test_info_lists_the_charts(tmp_path, mzc):
     assert "charts    2 (records in the payload" in header_only and "cut by    charts" in header_only
     decoded = mzc("info", "--decode", path, check=True).stdout.decode()
     assert "charts    2 (1 +z, 1 -x)" in decoded and "-x 4 x 4 at row 0, column 5; lattice 4 -1" in decoded
+
+
+def test_the_zarr_codec_refuses_a_multi_chart_chunk_in_one_line():
+    pytest.importorskip("numcodecs")
+    from mzc.zarr import Dwt2d
+
+    with pytest.raises(MzcError, match="multi-chart grid") as error:
+        Dwt2d(max_error=0.05).decode(b"d" + dwt2d.write(two_charts(), max_error=0.05))
+    assert error.value.field == "charts"
