@@ -90,7 +90,10 @@ def densify_grid(grid, n, method=DEFAULT_METHOD, iterations=DEFAULT_ITERATIONS, 
 def densify_charts(grid, n, method, iterations, tol, jump_angle, strip):
     """A multi-chart ``grid`` densified chart by chart, each chart's rows and place scaled by n+1
     (``Chart.with_rows_inserted``): no chart is smoothed into the one beside it."""
+    from mzc.ops.triangulation import CHART_JUMP_ANGLE
+
     check_request(grid.z, n, grid.d1, grid.d2, method, iterations, tol)   # the whole grid's request, first
+    jump_angle = CHART_JUMP_ANGLE if jump_angle is None else jump_angle
     charts = tuple(chart.with_rows_inserted(n) for chart in grid.charts)
     z = np.full(((grid.shape[0] - 1) * (n + 1) + 1, grid.shape[1]), np.nan)
     for chart, part in zip(charts, grid.chart_grids()):

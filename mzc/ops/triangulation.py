@@ -31,6 +31,7 @@ if TYPE_CHECKING:
     from mzc.meshes import Mesh
 
 JUMP_ANGLE = 3.0   # degrees between an edge and the node line below which the edge is a jump
+CHART_JUMP_ANGLE = 30.0   # a chart's: its surface faces its lines within 60 degrees, so a steeper edge is a step
 STRIP_NODES = 1 << 16   # nodes whose edges, triangles or points are made at a time (half a MB a value)
 
 
@@ -220,10 +221,12 @@ def mesh_of(grid, jump_angle=None):
 
 
 def charted_mesh(grid, jump_angle=None):
-    """The Mesh of a multi-chart grid (its ``grid`` set): each chart's GridMesh, one after the other."""
+    """The Mesh of a multi-chart grid (its ``grid`` set): each chart's GridMesh, one after the other,
+    its jumps those of CHART_JUMP_ANGLE unless ``jump_angle`` is given (spec/zgrid.md, Charts)."""
     from mzc.meshes import Mesh
 
-    meshes = [GridMesh(chart, jump_angle).mesh() for chart in grid.chart_grids()]
+    angle = CHART_JUMP_ANGLE if jump_angle is None else jump_angle
+    meshes = [GridMesh(chart, angle).mesh() for chart in grid.chart_grids()]
     offsets = np.cumsum([0] + [len(mesh.points) for mesh in meshes])
     points = np.concatenate([mesh.points for mesh in meshes])
     triangles = np.concatenate([mesh.triangles + offset for mesh, offset in zip(meshes, offsets)])
