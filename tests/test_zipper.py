@@ -1,0 +1,203 @@
+"""The zipper (mzc.ops.zipper): the charts of a closed surface zip into a closed surface, with no
+folds and as near the surface as the charts; open rims stay open; the same triangles every time.
+
+The charts come from tests/charts.py (a small stand-in for issue 28's segmentation).
+"""
+
+import numpy as np
+import pytest
+import trimesh
+from hypothesis import given, settings
+from hypothesis import strategies as st
+from scipy.spatial import cKDTree
+
+from mzc.measure.metrics import nearest_triangles, surface_distance_parts
+from mzc.meshes import read_mesh
+from mzc.ops.zipper import boundary_edges, zip_charts
+from mzc.samples import icosphere
+
+from charts import chart_meshes
+from conftest import REPO, edge_counts
+
+OBJECTS = REPO.parent / "shared" / "data" / "objects"
+DIVISIONS = (150, 300)   # spacings D/150 and D/300, D the bounding box's diagonal
+
+
+def sphere():
+    return icosphere(4)
+
+
+def cube():
+    box = trimesh.creation.box(extents=(2.0, 2.0, 2.0))
+    return box.vertices, box.faces
+
+
+def torus():
+    ring = trimesh.creation.torus(major_radius=1.0, minor_radius=0.4, major_sections=96, minor_sections=48)
+    return ring.vertices, ring.faces
+
+
+def two_spheres():
+    points, triangles = icosphere(4)
+    return np.vstack([points, 0.6 * points + (2.2, 0.3, 0.1)]), np.vstack([triangles, triangles + len(points)])
+
+
+def bored_box(around=64):
+    """A 2 x 2 x 1.2 box with a round bore of radius 0.5 through it (genus 1, sharp edges)."""
+    angle = 2 * np.pi * np.arange(around) / around
+    ring = np.stack([np.cos(angle), np.sin(angle)], axis=1)
+    square = ring / np.maximum(np.abs(ring[:, 0]), np.abs(ring[:, 1]))[:, None]
+    points = np.concatenate([np.c_[flat, np.full(around, z)] for z in (0.6, -0.6) for flat in (0.5 * ring, square)])
+    bore_top, side_top, bore_bottom, side_bottom = (np.arange(around) + k * around for k in range(4))
+    after = np.roll(np.arange(around), -1)
+    quads = [(bore_top, side_top, side_top[after], bore_top[after]),           # top face
+             (bore_bottom, bore_bottom[after], side_bottom[after], side_bottom),   # bottom face
+             (side_bottom, side_bottom[after], side_top[after], side_top),     # outer walls
+             (bore_bottom, bore_top, bore_top[after], bore_bottom[after])]     # the bore
+    return points, np.concatenate([np.concatenate([np.c_[a, b, c], np.c_[a, c, d]]) for a, b, c, d in quads])
+
+
+def hemisphere():
+    points, triangles = icosphere(5)
+    return points, triangles[(points[triangles][:, :, 2] >= -1e-9).all(axis=1)]
+
+
+def shared_object(name):
+    """(points, triangles) of a shared object, its duplicate vertices merged (skips when absent)."""
+    path = OBJECTS / name
+    if not path.is_file():
+        pytest.skip(f"shared object data not available ({path})")
+    mesh = read_mesh(path)
+    points, index = np.unique(mesh.points, axis=0, return_inverse=True)
+    triangles = index.ravel()[mesh.triangles]
+    keep = (triangles[:, 0] != triangles[:, 1]) & (triangles[:, 1] != triangles[:, 2]) & \
+        (triangles[:, 2] != triangles[:, 0])
+    return points, triangles[keep]
+
+
+def zipped(points, triangles, division):
+    """(input, chart mesh, zipped mesh, spacing) at spacing D / division."""
+    points = np.asarray(points, dtype=float)
+    spacing = float(np.linalg.norm(points.max(axis=0) - points.min(axis=0))) / division
+    chart_points, chart_triangles, chart = chart_meshes(points, triangles, spacing)
+    return (points, np.asarray(triangles)), (chart_points, chart_triangles), \
+        zip_charts(chart_points, chart_triangles, chart, spacing), spacing
+
+
+def runs_each_edge_once(triangles):
+    """Whether no directed edge is run by two triangles."""
+    tails, heads = triangles.ravel(), triangles[:, [1, 2, 0]].ravel()
+    return len(np.unique(tails * (triangles.max(initial=0) + 1) + heads)) == len(tails)
+
+
+def folded(points, triangles, first):
+    """How many of the triangles from ``first`` on make more than 120 degrees with a neighbour
+    across an edge (a triangle laid back over another)."""
+    corners = points[triangles]
+    normal = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
+    normal /= np.maximum(np.linalg.norm(normal, axis=1), 1e-300)[:, None]
+    tails, heads = triangles.ravel(), triangles[:, [1, 2, 0]].ravel()
+    owner = np.repeat(np.arange(len(triangles)), 3)
+    key = tails * (triangles.max() + 1) + heads
+    order = np.argsort(key)
+    across = np.searchsorted(key[order], heads * (triangles.max() + 1) + tails)
+    across = np.minimum(across, len(key) - 1)
+    found = key[order][across] == heads * (triangles.max() + 1) + tails
+    neighbour = owner[order][across]
+    cosine = np.where(found, np.sum(normal[owner] * normal[neighbour], axis=1), 1.0)
+    return int(np.count_nonzero(np.bincount(owner, weights=cosine < -0.5)[first:]))
+
+
+def whole_distance(surface, rebuilt):
+    """The symmetric whole-surface distance of two meshes (rms and hausdorff)."""
+    return surface_distance_parts(surface, rebuilt, {"all": (None, None)}, samples=20_000)["all"]
+
+
+@pytest.mark.parametrize("division", DIVISIONS)
+@pytest.mark.parametrize("shape", [sphere, cube, torus, two_spheres, bored_box])
+def test_the_charts_of_a_closed_surface_zip_into_a_closed_surface(shape, division):
+    surface, charts, (points, triangles), spacing = zipped(*shape(), division)
+    assert edge_counts(triangles) == (0, 0)
+    assert runs_each_edge_once(triangles)
+    assert folded(points, triangles, len(charts[1])) == 0
+    distance = whole_distance(surface, (points, triangles))
+    assert distance["hausdorff"] < spacing and distance["rms"] < 0.1 * spacing
+
+
+@pytest.mark.parametrize("division", DIVISIONS)
+@pytest.mark.parametrize("name", ["hand.ply", "featuretype.ply"])
+def test_the_charts_of_closed_shared_objects_zip_closed(name, division):
+    surface, charts, (points, triangles), spacing = zipped(*shared_object(name), division)
+    assert edge_counts(surface[1]) == (0, 0)   # the input is closed
+    assert edge_counts(triangles) == (0, 0)
+    assert runs_each_edge_once(triangles)
+    assert folded(points, triangles, len(charts[1])) < 0.005 * (len(triangles) - len(charts[1]))
+    distance = whole_distance(surface, (points, triangles))
+    assert distance["hausdorff"] < 1.5 * spacing and distance["rms"] < 0.1 * spacing
+
+
+def open_edges_off_the_rim(surface, rebuilt):
+    """How far the farthest vertex of an open edge of ``rebuilt`` lies from an open edge of
+    ``surface`` (both (points, triangles)), and how many open edges ``rebuilt`` has."""
+    rim = boundary_edges(surface[1], len(surface[0]))
+    along = np.linspace(0.0, 1.0, 9)[:, None, None]
+    rim_points = (surface[0][rim[:, 0]] * (1 - along) + surface[0][rim[:, 1]] * along).reshape(-1, 3)
+    open_ = boundary_edges(rebuilt[1], len(rebuilt[0]))
+    distance, _index = cKDTree(rim_points).query(rebuilt[0][np.unique(open_[:, :2])])
+    return distance.max(initial=0.0), len(open_)
+
+
+@pytest.mark.parametrize("division", DIVISIONS)
+def test_a_hemisphere_keeps_its_rim_open_and_its_seams_closed(division):
+    surface, _charts, rebuilt, spacing = zipped(*hemisphere(), division)
+    assert runs_each_edge_once(rebuilt[1]) and edge_counts(rebuilt[1])[1] == 0
+    farthest, count = open_edges_off_the_rim(surface, rebuilt)
+    assert count and farthest < 2 * spacing
+
+
+def test_a_face_keeps_its_outer_rim_open_and_its_seams_closed(f18):
+    mesh = read_mesh(f18)
+    surface, _charts, rebuilt, spacing = zipped(mesh.points, mesh.triangles, 150)
+    farthest, count = open_edges_off_the_rim(surface, rebuilt)
+    assert count and farthest < 5 * spacing
+
+
+def test_the_same_triangles_every_time():
+    points, triangles, chart = chart_meshes(*torus(), 0.02)
+    first, second = zip_charts(points, triangles, chart, 0.02), zip_charts(points, triangles, chart, 0.02)
+    assert np.array_equal(first[0], second[0]) and np.array_equal(first[1], second[1])
+
+
+def test_charts_that_coincide_on_a_lattice_edge_are_welded():
+    points, triangles = cube()   # its edges on the lattice of spacing 0.1: the charts share their rims
+    chart_points, chart_triangles, chart = chart_meshes(points, triangles, 0.1)
+    zipped_points, zipped_triangles = zip_charts(chart_points, chart_triangles, chart, 0.1)
+    assert edge_counts(zipped_triangles) == (0, 0) and runs_each_edge_once(zipped_triangles)
+    corners = zipped_points[zipped_triangles]
+    area = np.linalg.norm(np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0]), axis=1)
+    assert np.all(area > 0)
+
+
+@st.composite
+def bumpy_spheres(draw):
+    """A closed star-shaped mesh: an icosphere with random radii, and a spacing."""
+    points, triangles = icosphere(draw(st.integers(1, 3)))
+    radius = 1 + np.array(draw(st.lists(st.floats(-0.3, 0.3), min_size=len(points), max_size=len(points))))
+    return points * radius[:, None], triangles, draw(st.floats(0.03, 0.4))
+
+
+@settings(max_examples=40, deadline=None)
+@given(bumpy_spheres())
+def test_zipping_never_runs_an_edge_three_times(case):
+    points, triangles, spacing = case
+    chart_points, chart_triangles, chart = chart_meshes(points, triangles, spacing)
+    zipped_points, zipped_triangles = zip_charts(chart_points, chart_triangles, chart, spacing)
+    assert edge_counts(zipped_triangles)[1] == 0 and runs_each_edge_once(zipped_triangles)
+    assert np.isfinite(zipped_points).all() and np.all(zipped_triangles < len(zipped_points))
+
+
+def test_stitches_lie_on_the_surface():
+    surface, charts, (points, triangles), spacing = zipped(*bored_box(), 150)
+    middle = points[triangles[len(charts[1]):]].mean(axis=1)
+    distance, _nearest = nearest_triangles(middle, *surface)
+    assert distance.max() < spacing
