@@ -17,7 +17,8 @@
  *   chosen     uint8 (k): whether to fill the face of each half-edge (the same for a whole face)
  *   edges      int64 (e, 2): the edges between the vertices that exist already (no new
  *              triangle may add one of them again)
- *   longest    the longest edge a filling may add: a cycle that needs a longer one stays open
+ *   longest    float64 (k): the longest edge a filling of each half-edge's face may add (the
+ *              same for a whole face): a cycle that needs a longer one stays open
  *   triangles  int64 (k, 3): written with the new triangles, over 0..n-1 and n + i for
  *              added point i
  *   added      float64 (k, 3): written with the points added
@@ -181,7 +182,7 @@ typedef struct {
     int64_t *vertex, *prev, *next, *version;   /* per position of the cycle being clipped */
     double *reference;        /* per position: the reference of the edge to the next position */
     int64_t *cuts;            /* the edges added while a cycle is filled: (u, w) pairs */
-    double longest;           /* the longest edge a filling may add */
+    double longest;           /* the longest edge the filling of the face at hand may add */
     double area[3];           /* the vector area of the cycle being filled: a reference for each ear */
     Ear *heap;
     Py_ssize_t heap_size;
@@ -406,7 +407,7 @@ static void fill_walk(Filler *f, int64_t *walk, Py_ssize_t count, const int64_t 
 
 /* Fills every chosen face; 0, or -1 without memory. */
 static int fill_faces(Filler *f, Py_ssize_t k, const int64_t *source, const int64_t *next, const double *reference,
-                      const unsigned char *chosen) {
+                      const unsigned char *chosen, const double *longest) {
     unsigned char *done = calloc((size_t)k + 1, 1);
     int64_t *walk = malloc(((size_t)k + 1) * sizeof(int64_t)), *depth = malloc(((size_t)f->n + 1) * sizeof(int64_t));
     int status = done && walk && depth ? 0 : -1;
@@ -419,6 +420,7 @@ static int fill_faces(Filler *f, Py_ssize_t k, const int64_t *source, const int6
             done[h] = 1;
             walk[count++] = h;
         }
+        f->longest = longest[h0];
         if (h == h0) fill_walk(f, walk, count, source, reference, depth);
     }
     free(done);
@@ -429,10 +431,9 @@ static int fill_faces(Filler *f, Py_ssize_t k, const int64_t *source, const int6
 
 static PyObject *fill(PyObject *self, PyObject *args) {
     (void)self;
-    Py_buffer points, sources, targets, nexts, references, chosens, edges, triangles, added;
-    double longest;
-    if (!PyArg_ParseTuple(args, "y*y*y*y*y*y*y*dw*w*", &points, &sources, &targets, &nexts, &references, &chosens,
-                          &edges, &longest, &triangles, &added))
+    Py_buffer points, sources, targets, nexts, references, chosens, edges, longests, triangles, added;
+    if (!PyArg_ParseTuple(args, "y*y*y*y*y*y*y*y*w*w*", &points, &sources, &targets, &nexts, &references, &chosens,
+                          &edges, &longests, &triangles, &added))
         return NULL;
     const Py_ssize_t word = (Py_ssize_t)sizeof(int64_t);   /* and of a double */
     Py_ssize_t n = points.len / (3 * word), k = sources.len / word, e = edges.len / (2 * word);
@@ -440,7 +441,7 @@ static PyObject *fill(PyObject *self, PyObject *args) {
     int status = 1;   /* 1: sizes, 2: an index, 3: memory */
     Filler f = {0};
     if (points.len == 3 * n * word && sources.len == k * word && targets.len == k * word && nexts.len == k * word &&
-        references.len == 3 * k * word && chosens.len == k && edges.len == 2 * e * word &&
+        references.len == 3 * k * word && chosens.len == k && edges.len == 2 * e * word && longests.len == k * word &&
         triangles.len == 3 * k * word && added.len == 3 * k * word && n < ((Py_ssize_t)1 << 31)) {
         status = 0;
         unsigned char *seen = calloc((size_t)k + 1, 1);
@@ -460,7 +461,6 @@ static PyObject *fill(PyObject *self, PyObject *args) {
         f.p = points.buf;
         f.n = n;
         f.triangles = triangles.buf;
-        f.longest = longest;
         f.added = added.buf;
         f.vertex = malloc(((size_t)k + 1) * sizeof(int64_t));
         f.prev = malloc(((size_t)k + 1) * sizeof(int64_t));
@@ -477,7 +477,7 @@ static PyObject *fill(PyObject *self, PyObject *args) {
         Py_BEGIN_ALLOW_THREADS
         for (Py_ssize_t i = 0; i < e; i++) add_edge(&f.edges, edge[2 * i], edge[2 * i + 1]);
         for (Py_ssize_t h = 0; h < k; h++) add_edge(&f.edges, source[h], target[h]);
-        if (fill_faces(&f, k, source, next, references.buf, chosens.buf)) status = 3;
+        if (fill_faces(&f, k, source, next, references.buf, chosens.buf, longests.buf)) status = 3;
         Py_END_ALLOW_THREADS
     }
     free(f.edges.keys);
@@ -495,6 +495,7 @@ static PyObject *fill(PyObject *self, PyObject *args) {
     PyBuffer_Release(&references);
     PyBuffer_Release(&chosens);
     PyBuffer_Release(&edges);
+    PyBuffer_Release(&longests);
     PyBuffer_Release(&triangles);
     PyBuffer_Release(&added);
     if (status == 1) return PyErr_Format(PyExc_ValueError, "fill: buffers whose sizes do not fit");

@@ -47,11 +47,12 @@ from scipy.spatial import cKDTree
 from mzc.vectors import dotted, lengths
 
 REACH = 3.0        # spacings: the longest rung
-CANDIDATES = 16    # the nearest boundary vertices looked at for a partner
+CANDIDATES = 8     # the nearest boundary vertices looked at for a partner
 FACING = -0.5      # cosine of normals that face each other
 AHEAD = 0.5        # cosine within which a point lies ahead of a surface, not beside it
 WELD = 1e-9        # spacings: boundary vertices of two charts this close are one
-LONGEST = 6.0      # spacings: the longest edge a face's filling may add (a face that needs more is a rim)
+LONGEST = 6.0      # spacings: the longest edge a filling may add to a face on a rim (one that needs more is a rim)
+RIM_SHARE = 0.25   # a face more of whose vertices have no other chart near lies on a rim
 
 
 def zip_charts(points, triangles, chart, spacing):
@@ -63,11 +64,17 @@ def zip_charts(points, triangles, chart, spacing):
     points = np.asarray(points, dtype=np.float64).reshape(-1, 3)
     triangles = np.asarray(triangles, dtype=np.int64).reshape(-1, 3)
     chart = np.asarray(chart).reshape(len(points))
-    triangles, boundary = welded(points, triangles, chart, boundary_edges(triangles, len(points)), spacing)
+    boundary = boundary_edges(triangles, len(points))
     if not len(boundary):
         return points, triangles
-    gap = Gap(points, triangles, chart, boundary, spacing)
-    added, stitches = gap.filled()
+    near = Neighbours(points, boundary, spacing)
+    welding = welded(points, triangles, chart, boundary, near, spacing)
+    if welding is not None:
+        triangles, boundary = welding
+        if not len(boundary):
+            return points, triangles
+        near = Neighbours(points, boundary, spacing)
+    added, stitches = Gap(points, triangles, chart, boundary, near, spacing).filled()
     return np.concatenate([points, added]), np.concatenate([triangles, stitches])
 
 
@@ -80,17 +87,29 @@ def boundary_edges(triangles, count):
     return edges[:_zipper.boundary(np.ascontiguousarray(triangles), count, edges)]
 
 
-def welded(points, triangles, chart, boundary, spacing):
+class Neighbours:
+    """The boundary vertices (``vertex``, the indices of the boundary edges' ends in order) and,
+    for each, the CANDIDATES nearest within REACH spacings (``candidate``, numbered as
+    ``vertex``; its own count where there are fewer) and how far (``distance``; inf)."""
+
+    def __init__(self, points, boundary, spacing):
+        self.vertex = np.unique(boundary[:, :2])
+        size = len(self.vertex)
+        distance, candidate = cKDTree(points[self.vertex]).query(
+            points[self.vertex], k=min(CANDIDATES, size), distance_upper_bound=REACH * spacing)
+        self.distance, self.candidate = distance.reshape(size, -1), candidate.reshape(size, -1)
+
+
+def welded(points, triangles, chart, boundary, near, spacing):
     """(triangles, boundary) with the boundary vertices of different charts within WELD
     spacings of each other made one (the lowest index) and the boundary edges (rows of
-    ``boundary_edges``) this joins dropped; unchanged if welding would run an edge twice the
-    same way or collapse one."""
-    vertex = np.unique(boundary[:, :2])
-    pairs = cKDTree(points[vertex]).query_pairs(WELD * spacing, output_type="ndarray") if len(vertex) else []
-    pairs = vertex[np.asarray(pairs, dtype=np.int64).reshape(-1, 2)]
+    ``boundary_edges``) this joins dropped; None if there are none, or if welding would run
+    an edge twice the same way or collapse one. ``near``: the Neighbours of the boundary."""
+    row, column = np.nonzero(near.distance <= WELD * spacing)
+    pairs = near.vertex[np.stack([row, near.candidate[row, column]], axis=1)]
     pairs = np.sort(pairs[chart[pairs[:, 0]] != chart[pairs[:, 1]]], axis=1)
     if not len(pairs):
-        return triangles, boundary
+        return None
     one = np.arange(len(points))
     for _ in range(3):   # chains of three charts meeting at a corner
         np.minimum.at(one, pairs[:, 1], one[pairs[:, 0]])
@@ -98,7 +117,7 @@ def welded(points, triangles, chart, boundary, spacing):
     tail, head = one[boundary[:, 0]], one[boundary[:, 1]]
     key = tail * len(points) + head
     if (tail == head).any() or len(np.unique(key)) < len(key):
-        return triangles, boundary
+        return None
     joined = np.isin(head * len(points) + tail, key)
     return one[triangles], np.stack([tail, head, boundary[:, 2]], axis=1)[~joined]
 
@@ -108,13 +127,15 @@ class Gap:
     one way, then the other) over the boundary vertices, numbered 0.. (``vertex`` their
     indices in the mesh), and each one's ``next`` around its face."""
 
-    def __init__(self, points, triangles, chart, boundary, spacing):
-        self.vertex = np.unique(boundary[:, :2])
+    def __init__(self, points, triangles, chart, boundary, near, spacing):
+        self.vertex, self.near = near.vertex, near
         self.p, self.point_count, self.spacing = points[self.vertex], len(points), spacing
-        self.frame = tangent_frames(boundary_normals(points, triangles, self.vertex))
         rank = np.full(len(points), -1, dtype=np.int64)
         rank[self.vertex] = np.arange(len(self.vertex))
-        self.edges = existing_edges(triangles, rank)
+        at = (rank[triangles] >= 0).any(axis=1)   # the triangles with a boundary vertex
+        self.frame = tangent_frames(vertex_normals(triangle_normals(points, triangles[at]), rank[triangles[at]],
+                                                   len(self.vertex)))
+        self.edges = existing_edges(rank[triangles[at]])
         self.chart = chart[self.vertex]
         self.source, self.target = rank[boundary[:, 1]], rank[boundary[:, 0]]
         self.beside = triangle_normals(points, triangles[boundary[:, 2]])   # the chart's, across each
@@ -167,18 +188,19 @@ class Gap:
         """(k, 4) rows (a, b, wedge at a, wedge at b): the rungs, joining each vertex and its
         partner where they are each other's; and on a boundary loop that this leaves without
         one (a chart of a cell or two, whose neighbours' nearest lie elsewhere), its vertex
-        nearest its partner and that partner, so that no loop is left apart. A wedge is
-        named by the gap's half-edge that arrives at its start."""
-        partner, distance, wedge, far_wedge = self.partners(wedge_next)
+        nearest its partner and that partner (or, if none of its vertices has one, its nearest
+        other chart's vertex), so that no loop is left apart. A wedge is named by the gap's
+        half-edge that arrives at its start."""
+        partner, distance, wedge, far_wedge, loose = self.partners(wedge_next)
         loop = np.zeros(len(self.p), dtype=np.int64)
         loop[self.source] = walks(wedge_next)
         here = np.arange(len(partner))
-        mutual = (partner >= 0) & (partner[np.maximum(partner, 0)] == here)
+        mutual = (partner >= 0) & ~loose & (partner[np.maximum(partner, 0)] == here) & ~loose[np.maximum(partner, 0)]
         first = np.flatnonzero(mutual & (here < partner))
         alone = np.ones(loop.max(initial=-1) + 1, dtype=bool)
         alone[loop[mutual]] = False
         lonely = np.flatnonzero(alone[loop] & (partner >= 0))
-        lonely = lonely[np.lexsort((lonely, distance[lonely], loop[lonely]))]
+        lonely = lonely[np.lexsort((lonely, distance[lonely], loose[lonely], loop[lonely]))]
         lonely = lonely[starts(loop[lonely])]
         lonely = lonely[~(mutual[partner[lonely]] & (partner[partner[lonely]] == lonely))]
         ends = np.concatenate([first, lonely])
@@ -191,28 +213,35 @@ class Gap:
         return rungs[~np.isin(low * size + high, self.edges[:, 0] * size + self.edges[:, 1])]
 
     def partners(self, wedge_next):
-        """(partner, distance, wedge, far wedge): per boundary vertex, its partner (-1 for none),
-        how far, and the wedges at it and at the partner that the rung between them lies in."""
+        """(partner, distance, wedge, far wedge, loose): per boundary vertex, its partner (-1 for
+        none), how far, and the wedges at it and at the partner that the rung between them lies
+        in; a vertex with no partner whose wedges see it takes the nearest other chart's vertex,
+        ``loose``, in its own first wedge and that vertex's (a last resort for a loop that has
+        no rung). Sets ``seam``: whether another chart's boundary lies within REACH of each, not
+        across air (a vertex without is on a rim)."""
         size = len(self.p)
         wedges = wedge_table(self.target, size)
-        distance, candidate = cKDTree(self.p).query(self.p, k=min(CANDIDATES, size),
-                                                   distance_upper_bound=REACH * self.spacing)
-        distance, candidate = distance.reshape(size, -1), candidate.reshape(size, -1)
+        distance, candidate = self.near.distance, self.near.candidate
         partner, gap = np.full(size, -1), np.full(size, np.inf)
-        wedge, far_wedge = np.full(size, -1), np.full(size, -1)
+        wedge, far_wedge, loose = np.full(size, -1), np.full(size, -1), np.ones(size, dtype=bool)
+        self.seam = np.zeros(size, dtype=bool)
         for column in range(candidate.shape[1]):
-            here = np.flatnonzero((candidate[:, column] < size) & (partner < 0))
+            here = np.flatnonzero((candidate[:, column] < size) & loose)
             other = candidate[here, column]
             keep = (self.chart[other] != self.chart[here]) & ~self.across_air(here, other)
             here, other = here[keep], other[keep]
+            first = ~self.seam[here]
+            self.seam[here] = True
+            partner[here[first]], gap[here[first]] = other[first], distance[here[first], column]
+            wedge[here[first]], far_wedge[here[first]] = wedges[here[first], 0], wedges[other[first], 0]
             frame = tangent_frames(self.frame[2][here] + self.frame[2][other])
             at_here = self.wedge_of(wedges, wedge_next, here, other, frame)
             at_other = self.wedge_of(wedges, wedge_next, other, here, frame)
             found = (at_here >= 0) & (at_other >= 0)
             here = here[found]
             partner[here], gap[here] = other[found], distance[here, column]
-            wedge[here], far_wedge[here] = at_here[found], at_other[found]
-        return partner, gap, wedge, far_wedge
+            wedge[here], far_wedge[here], loose[here] = at_here[found], at_other[found], False
+        return partner, gap, wedge, far_wedge, loose
 
     def across_air(self, a, b):
         """Whether boundary vertices a and b face each other across air: normals opposed, and b
@@ -265,18 +294,22 @@ class Gap:
         source, target, rung = self.source, self.target, slice(self.gap_count, None)
         reference = np.concatenate([self.beside, self.frame[2][source[rung]] + self.frame[2][target[rung]]])
         triangles, added = np.empty((len(source), 3), dtype=np.int64), np.empty((len(source), 3))
+        chosen, longest = self.chosen(reference)
         made, points = _zipper.fill(self.p, source, target, self.next, np.ascontiguousarray(reference),
-                                    self.chosen(reference).astype(np.uint8), self.edges, LONGEST * self.spacing,
-                                    triangles, added)
+                                    chosen.astype(np.uint8), self.edges, longest, triangles, added)
         triangles, size = triangles[:made], len(self.p)
         triangles = np.where(triangles < size, self.vertex[np.minimum(triangles, size - 1)],
                              triangles - size + self.point_count)
         return added[:points], triangles
 
     def chosen(self, reference):
-        """Whether to fill each half-edge's face: a closed one with a rung, or without one when
-        its area (twice, the sum of its half-edges' cross products) faces the way of the
-        surface beside it (``reference``, per half-edge): a hole in a chart, not the chart."""
+        """(whether to fill each half-edge's face, the longest cut its filling may make): a
+        closed face with a rung, or without one when its area (twice, the sum of its
+        half-edges' cross products) faces the way of the surface beside it (``reference``, per
+        half-edge): a hole in a chart, not the chart. Its cuts are at most LONGEST spacings
+        when more than RIM_SHARE of its vertices lie on a rim (not ``seam``): a long cut there
+        would close a rim or a hole of the surface; a face whose vertices lie on seams is a gap
+        between charts, however wide (where many small charts meet)."""
         face = walks(self.next)
         per_face = lambda values: np.bincount(face, weights=values)  # noqa: E731
         centre = self.p.mean(axis=0)
@@ -285,7 +318,8 @@ class Gap:
         facing = sum(per_face(area[:, k]) * per_face(unit[:, k]) for k in range(3))
         rungs = per_face((np.arange(len(face)) >= self.gap_count).astype(float))
         closed = per_face((self.next < 0).astype(float)) == 0
-        return (closed & ((rungs > 0) | (facing > 0)))[face]
+        rim = per_face((~self.seam[self.source]).astype(float)) > RIM_SHARE * per_face(np.ones(len(face)))
+        return (closed & ((rungs > 0) | (facing > 0)))[face], np.where(rim, LONGEST * self.spacing, np.inf)[face]
 
 
 def starts(values):
@@ -319,17 +353,12 @@ def triangle_normals(points, triangles):
     return np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
 
 
-def boundary_normals(points, triangles, vertex):
-    """The normal at each of the boundary vertices ``vertex``: the sum of its triangles' (their
-    areas' weights)."""
-    mine = np.zeros(len(points), dtype=bool)
-    mine[vertex] = True
-    near = triangles[mine[triangles].any(axis=1)]
-    normal = triangle_normals(points, near)
-    rank = np.searchsorted(vertex, near)
-    owner = np.where(mine[near], rank, len(vertex))
-    return np.stack([np.bincount(owner.ravel(), weights=np.repeat(normal[:, k], 3), minlength=len(vertex) + 1)
-                     [:len(vertex)] for k in range(3)], axis=1)
+def vertex_normals(normal, corners, size):
+    """The normal at each of ``size`` vertices: the sum of the ``normal``s (area-weighted) of the
+    triangles whose ``corners`` (k, 3) it is; corners -1 are left out."""
+    owner = np.where(corners >= 0, corners, size).ravel()
+    return np.stack([np.bincount(owner, weights=np.repeat(normal[:, k], 3), minlength=size + 1)[:size]
+                     for k in range(3)], axis=1)
 
 
 def tangent_frames(normal):
@@ -352,11 +381,11 @@ def pseudo_angle(x, y):
     return np.where(y >= 0, 1.0 - along, np.mod(3.0 + along, 4.0))
 
 
-def existing_edges(triangles, rank):
-    """(k, 2), each row low, high: the edges of ``triangles`` between boundary vertices (their
-    ``rank``, -1 for the others)."""
-    a, b = rank[triangles], rank[triangles[:, [1, 2, 0]]]
+def existing_edges(corners):
+    """(k, 2), each row low, high: the edges between the vertices that are not -1 of triangles
+    whose ``corners`` (m, 3) they are."""
+    a, b = corners, corners[:, [1, 2, 0]]
     both = (a >= 0) & (b >= 0)
     low, high = np.minimum(a[both], b[both]), np.maximum(a[both], b[both])
-    key = np.unique(low * (rank.max() + 1) + high)
-    return np.stack(np.divmod(key, rank.max() + 1), axis=1)
+    size = corners.max(initial=0) + 1
+    return np.stack(np.divmod(np.unique(low * size + high), size), axis=1)
