@@ -4,6 +4,10 @@ folds and as near the surface as the charts; open rims stay open; the same trian
 The charts come from tests/charts.py (a small stand-in for issue 28's segmentation).
 """
 
+import hashlib
+import subprocess
+import sys
+
 import numpy as np
 import pytest
 import trimesh
@@ -18,6 +22,7 @@ from mzc.samples import icosphere
 
 from charts import chart_meshes
 from conftest import REPO, edge_counts
+from test_unchanged_outputs import OTHER_MACHINES, switched_off_environment
 
 OBJECTS = REPO.parent / "shared" / "data" / "objects"
 DIVISIONS = (150, 300)   # spacings D/150 and D/300, D the bounding box's diagonal
@@ -166,6 +171,25 @@ def test_the_same_triangles_every_time():
     points, triangles, chart = chart_meshes(*torus(), 0.02)
     first, second = zip_charts(points, triangles, chart, 0.02), zip_charts(points, triangles, chart, 0.02)
     assert np.array_equal(first[0], second[0]) and np.array_equal(first[1], second[1])
+
+
+def zipped_digest():
+    """The SHA-256 of the zipped charts of the bored box at D/150 (points, then triangles)."""
+    _surface, _charts, (points, triangles), _spacing = zipped(*bored_box(), 150)
+    return hashlib.sha256(points.tobytes() + triangles.tobytes()).hexdigest()
+
+
+@pytest.mark.parametrize("case", OTHER_MACHINES)
+def test_the_same_triangles_with_numpys_simd_loops_switched_off(case):
+    """What an AVX2 machine and an SSE4 one would zip: the same points and triangles."""
+    environment, _off = switched_off_environment(case)
+    script = f"import sys; sys.path.insert(0, {str(REPO / 'tests')!r}); import test_zipper; " \
+             "print(test_zipper.zipped_digest())"
+    result = subprocess.run([sys.executable, "-c", script], env=environment, capture_output=True, text=True)
+    if "cannot disable" in result.stderr or "baseline" in result.stderr:
+        pytest.skip(f"{case}: this numpy cannot switch those loops off")
+    assert result.returncode == 0, result.stderr[-2000:]
+    assert result.stdout.strip() == zipped_digest()
 
 
 def test_charts_that_coincide_on_a_lattice_edge_are_welded():
