@@ -202,6 +202,21 @@ def test_charts_that_coincide_on_a_lattice_edge_are_welded():
     assert np.all(area > 0)
 
 
+@pytest.mark.parametrize("turned", [False, True])
+def test_a_chart_given_twice_never_runs_an_edge_three_times(turned):
+    """Charts that overlap (a chart and a copy of it, either way round) are not welded into a
+    mesh that runs an edge twice, and zip without any edge in three triangles."""
+    points, triangles, chart = chart_meshes(*cube(), 0.1)
+    copy = np.flatnonzero(chart == 0)
+    index = np.full(len(points), -1)
+    index[copy] = len(points) + np.arange(len(copy))
+    again = index[triangles[(chart[triangles] == 0).all(axis=1)]]
+    zipped_points, zipped_triangles = zip_charts(
+        np.vstack([points, points[copy]]), np.vstack([triangles, again[:, ::-1] if turned else again]),
+        np.r_[chart, np.full(len(copy), chart.max() + 1)], 0.1)
+    assert edge_counts(zipped_triangles)[1] == 0 and runs_each_edge_once(zipped_triangles)
+
+
 @st.composite
 def bumpy_spheres(draw):
     """A closed star-shaped mesh: an icosphere with random radii, and a spacing."""
@@ -217,6 +232,31 @@ def test_zipping_never_runs_an_edge_three_times(case):
     chart_points, chart_triangles, chart = chart_meshes(points, triangles, spacing)
     zipped_points, zipped_triangles = zip_charts(chart_points, chart_triangles, chart, spacing)
     assert edge_counts(zipped_triangles)[1] == 0 and runs_each_edge_once(zipped_triangles)
+    assert np.isfinite(zipped_points).all() and np.all(zipped_triangles < len(zipped_points))
+
+
+def edge_uses(triangles):
+    """{(low, high): the number of triangles with that edge}."""
+    edges = np.sort(np.concatenate([triangles[:, [0, 1]], triangles[:, [1, 2]], triangles[:, [2, 0]]]), axis=1)
+    unique, count = np.unique(edges, axis=0, return_counts=True)
+    return dict(zip(map(tuple, unique.tolist()), count.tolist()))
+
+
+@settings(max_examples=300, deadline=None)
+@given(st.integers(3, 30), st.integers(0, 40), st.integers(1, 4), st.sampled_from([1e-3, 0.1, 1.0, 10.0]),
+       st.booleans(), st.integers(0, 2**32 - 1))
+def test_any_triangles_zip_without_crashing_or_adding_an_edge_beyond_two_uses(count, size, charts, spacing, rounded,
+                                                                               seed):
+    """Triangle soups (repeated, degenerate, inconsistently wound, across charts, on coincident
+    points): the zipper neither fails nor puts an edge in more triangles than two, or than the
+    input had it in."""
+    rng = np.random.default_rng(seed)
+    points = rng.normal(size=(count, 3))
+    points = np.round(points, 1) if rounded else points
+    triangles = rng.integers(0, count, (size, 3))
+    zipped_points, zipped_triangles = zip_charts(points, triangles, rng.integers(0, charts, count), spacing)
+    before = edge_uses(triangles) if size else {}
+    assert all(uses <= max(2, before.get(edge, 0)) for edge, uses in edge_uses(zipped_triangles).items())
     assert np.isfinite(zipped_points).all() and np.all(zipped_triangles < len(zipped_points))
 
 

@@ -5,9 +5,10 @@
  *   triangles  int64 (m, 3), corner indices checked to be in 0..vertex_count-1
  *   edges      int64 (3m, 3): written with the boundary edges (tail, head, triangle), tail ->
  *              head as their triangle runs them, in the order of the triangles' edges (0-1,
- *              1-2, 2-0 of each): the directed edges whose reverse no triangle runs
+ *              1-2, 2-0 of each): the edges in one triangle only (no other runs them either way)
  *   Each vertex's outgoing edges are listed (a counting sort by tail), and each edge a -> b
- *   looks for b -> a among b's: O(m) for meshes of bounded valence.
+ *   looks for b -> a among b's and for another a -> b among a's: O(m) for meshes of bounded
+ *   valence.
  * fill(points, source, target, next, reference, chosen, edges, longest, triangles, added) -> (triangles, points)
  *   points     float64 (n, 3): the vertices the faces run through
  *   source, target  int64 (k): each half-edge's first and last vertex, in 0..n-1
@@ -128,9 +129,10 @@ static Py_ssize_t boundary_edges(const int64_t *t, Py_ssize_t m, Py_ssize_t n, i
     first[0] = 0;
     Py_ssize_t count = 0;
     for (Py_ssize_t e = 0; e < 3 * m; e++) {
-        int64_t a = t[e], b = t[e % 3 == 2 ? e - 2 : e + 1], j = first[b];
+        int64_t a = t[e], b = t[e % 3 == 2 ? e - 2 : e + 1], j = first[b], twice = 0;
         while (j < first[b + 1] && out[j] != a) j++;
-        if (j == first[b + 1]) {
+        for (int64_t i = first[a]; i < first[a + 1]; i++) twice += out[i] == b;
+        if (j == first[b + 1] && twice == 1) {
             int64_t *edge = edges + 3 * count++;
             edge[0] = a;
             edge[1] = b;

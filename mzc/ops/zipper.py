@@ -9,8 +9,8 @@ watertight, every edge in two triangles and run once each way, without laying tr
 back over the charts. Nothing near a boundary (the rim of an open scan, a hole of the
 surface) leaves it open.
 
-1. The boundary edges are those no triangle runs the other way, each as its triangle runs
-   it: its chart on its left. Boundary vertices of two charts that coincide (a lattice line
+1. The boundary edges are those in one triangle only, each as its triangle runs it: its
+   chart on its left. Boundary vertices of two charts that coincide (a lattice line
    through a sharp edge) are welded into one.
 2. The gap lies right of them: reversed, they are its half-edges. At each boundary vertex
    it fills a wedge (two or more where a chart touches itself at a corner), turning
@@ -28,12 +28,15 @@ surface) leaves it open.
    joined by its vertex nearest its partner.
 4. Each face runs on from a half-edge arriving in a wedge to the next rung leaving in that
    wedge (clockwise), or to the gap's half-edge leaving it: the faces of a planar map.
-5. A face without rungs runs around one chart's boundary alone: it is filled only as a hole
-   in the chart (its area facing as the chart does), never over the chart.
+5. A closed face with a rung is filled; one without runs around one chart's boundary
+   alone, and is filled only as a hole in the chart (its area facing as the chart does),
+   never over the chart.
 6. The faces are filled by ear clipping (``_zipper.c``): shortest well-shaped cuts first,
-   none that folds back over the surface beside it or adds an edge that exists; a face
-   whose filling needs a cut longer than LONGEST spacings is no gap but a rim, or a hole
-   of the surface, and stays open.
+   none that folds back over the surface beside it or adds an edge that exists. A face more
+   than RIM_SHARE of whose vertices have no other chart's boundary near lies on a rim (of
+   an open scan, a hole of the surface): if its filling would need a cut longer than
+   LONGEST spacings it stays open. Other faces are gaps between charts, however wide
+   (where many small charts meet), and are closed.
 
 Everything is elementwise numpy, a KD-tree and the C kernel, with IEEE operations in a fixed
 order: the same triangles on every machine (spec/arithmetic.md).
@@ -80,7 +83,7 @@ def zip_charts(points, triangles, chart, spacing):
 
 def boundary_edges(triangles, count):
     """(k, 3) rows (tail, head, triangle): the edges of ``triangles`` (over ``count`` vertices)
-    that no triangle runs the other way, each as its triangle runs it."""
+    that are in one triangle only, each as it runs them."""
     from mzc.ops import _zipper
 
     edges = np.empty((triangles.size, 3), dtype=np.int64)
@@ -103,23 +106,32 @@ class Neighbours:
 def welded(points, triangles, chart, boundary, near, spacing):
     """(triangles, boundary) with the boundary vertices of different charts within WELD
     spacings of each other made one (the lowest index) and the boundary edges (rows of
-    ``boundary_edges``) this joins dropped; None if there are none, or if welding would run
-    an edge twice the same way or collapse one. ``near``: the Neighbours of the boundary."""
+    ``boundary_edges``) this joins dropped, None if there are none; ``near``: the Neighbours
+    of the boundary. Vertices whose welding would run an edge twice the same way, or collapse
+    an edge or a triangle (charts that overlap, a triangle across charts), stay apart."""
     row, column = np.nonzero(near.distance <= WELD * spacing)
     pairs = near.vertex[np.stack([row, near.candidate[row, column]], axis=1)]
     pairs = np.sort(pairs[chart[pairs[:, 0]] != chart[pairs[:, 1]]], axis=1)
-    if not len(pairs):
-        return None
-    one = np.arange(len(points))
-    for _ in range(3):   # chains of three charts meeting at a corner
-        np.minimum.at(one, pairs[:, 1], one[pairs[:, 0]])
-        one = one[one]
-    tail, head = one[boundary[:, 0]], one[boundary[:, 1]]
-    key = tail * len(points) + head
-    if (tail == head).any() or len(np.unique(key)) < len(key):
-        return None
-    joined = np.isin(head * len(points) + tail, key)
-    return one[triangles], np.stack([tail, head, boundary[:, 2]], axis=1)[~joined]
+    while len(pairs):
+        one = np.arange(len(points))
+        for _ in range(3):   # chains of three charts meeting at a corner
+            np.minimum.at(one, pairs[:, 1], one[pairs[:, 0]])
+            one = one[one]
+        tail, head = one[boundary[:, 0]], one[boundary[:, 1]]
+        key = tail * len(points) + head
+        unique, count = np.unique(key, return_counts=True)
+        clash = (tail == head) | (count[np.searchsorted(unique, key)] > 1)
+        corners = one[triangles]
+        collapsed = (corners == np.roll(corners, 1, axis=1)).any(axis=1) & \
+            (triangles != np.roll(triangles, 1, axis=1)).all(axis=1)
+        if not clash.any() and not collapsed.any():
+            joined = np.isin(head * len(points) + tail, key)
+            return corners, np.stack([tail, head, boundary[:, 2]], axis=1)[~joined]
+        apart = np.isin(one[pairs], np.concatenate([one[boundary[clash, :2]].ravel(), corners[collapsed].ravel()]))
+        if not apart.any():
+            return None
+        pairs = pairs[~apart.any(axis=1)]
+    return None
 
 
 class Gap:
@@ -170,8 +182,8 @@ class Gap:
         start = np.flatnonzero(new)
         position = np.arange(len(at)) - start[group]
         first = np.zeros(len(start), dtype=np.int64)
-        _groups, where = np.unique(group[arriving], return_index=True)
-        first[_groups] = position[arriving][where]
+        with_arriving, where = np.unique(group[arriving], return_index=True)
+        first[with_arriving] = position[arriving][where]
         size = np.diff(np.r_[start, len(at)])
         rotated = np.lexsort(((position - first[group]) % size[group], group))   # each vertex's from its first arriving
         order, arriving, group = order[rotated], arriving[rotated], group[rotated]
@@ -205,12 +217,11 @@ class Gap:
         lonely = lonely[~(mutual[partner[lonely]] & (partner[partner[lonely]] == lonely))]
         ends = np.concatenate([first, lonely])
         rungs = np.stack([ends, partner[ends], wedge[ends], far_wedge[ends]], axis=1)
-        size = len(self.p)
-        low, high = np.minimum(rungs[:, 0], rungs[:, 1]), np.maximum(rungs[:, 0], rungs[:, 1])
-        _unique, once = np.unique(low * size + high, return_index=True)
-        rungs = rungs[np.sort(once)]
-        low, high = np.minimum(rungs[:, 0], rungs[:, 1]), np.maximum(rungs[:, 0], rungs[:, 1])
-        return rungs[~np.isin(low * size + high, self.edges[:, 0] * size + self.edges[:, 1])]
+        rungs = rungs[(rungs[:, 2] >= 0) & (rungs[:, 3] >= 0)]   # a vertex with no wedge: the charts are not oriented
+        key = edge_keys(rungs[:, 0], rungs[:, 1], len(self.p))
+        _unique, once = np.unique(key, return_index=True)
+        once = np.sort(once)
+        return rungs[once][~np.isin(key[once], edge_keys(self.edges[:, 0], self.edges[:, 1], len(self.p)))]
 
     def partners(self, wedge_next):
         """(partner, distance, wedge, far wedge, loose): per boundary vertex, its partner (-1 for
@@ -230,10 +241,9 @@ class Gap:
             other = candidate[here, column]
             keep = (self.chart[other] != self.chart[here]) & ~self.across_air(here, other)
             here, other = here[keep], other[keep]
-            first = ~self.seam[here]
-            self.seam[here] = True
-            partner[here[first]], gap[here[first]] = other[first], distance[here[first], column]
-            wedge[here[first]], far_wedge[here[first]] = wedges[here[first], 0], wedges[other[first], 0]
+            nearest, self.seam[here] = here[~self.seam[here]], True
+            partner[nearest], gap[nearest] = candidate[nearest, column], distance[nearest, column]
+            wedge[nearest], far_wedge[nearest] = wedges[nearest, 0], wedges[partner[nearest], 0]
             frame = tangent_frames(self.frame[2][here] + self.frame[2][other])
             at_here = self.wedge_of(wedges, wedge_next, here, other, frame)
             at_other = self.wedge_of(wedges, wedge_next, other, here, frame)
@@ -322,6 +332,11 @@ class Gap:
         return (closed & ((rungs > 0) | (facing > 0)))[face], np.where(rim, LONGEST * self.spacing, np.inf)[face]
 
 
+def edge_keys(a, b, size):
+    """One number for each undirected edge a-b between ``size`` vertices."""
+    return np.minimum(a, b) * size + np.maximum(a, b)
+
+
 def starts(values):
     """Where each run of equal ``values`` starts (a boolean per value)."""
     new = np.ones(len(values), dtype=bool)
@@ -386,6 +401,5 @@ def existing_edges(corners):
     whose ``corners`` (m, 3) they are."""
     a, b = corners, corners[:, [1, 2, 0]]
     both = (a >= 0) & (b >= 0)
-    low, high = np.minimum(a[both], b[both]), np.maximum(a[both], b[both])
     size = corners.max(initial=0) + 1
-    return np.stack(np.divmod(np.unique(low * size + high), size), axis=1)
+    return np.stack(np.divmod(np.unique(edge_keys(a[both], b[both], size)), size), axis=1)
