@@ -28,25 +28,26 @@
  * used: ValueError for sizes, IndexError for an index out of range or a next given twice,
  * MemoryError. The GIL is released while they run, on one thread.
  *
- * Filling a face: its walk (the half-edges from the first in index order, following next;
- * a walk that does not come back to it is no face and stays open) is cut into simple cycles where it comes back to a vertex it has left (a stack of the
- * vertices passed: a vertex met again closes the cycle above it). A cycle of two half-edges
- * is a rung walked both ways and needs no triangle. A longer one is clipped ear by ear, as
- * its vertices v1 ... vk run (the face on the left): the ear at v is the triangle u v w of it
- * and its neighbours, which adds the edge u w. An ear may not add an edge that exists (an
- * edge in three triangles), and the one taken is the least by (folds, cost): it folds when
- * its normal makes more than acos(FACING) with the reference of one of its two edges (a
- * triangle laid back over the surface beside it) or with the cycle's vector area (an ear
- * turned over within a flat gap), or when it has no area; its cost is the
- * length of u w over its quality 4 sqrt(3) area / (sum of its squared sides), at least
- * QUALITY (1 for an equilateral triangle), so short cuts of well-shaped ears go first: a
- * long thin gap is zipped from its ends, ladder-like. Equal ears go by position. Clipping an
- * ear gives the new edge u w the ear's normal as reference and recomputes the ears at u and
- * w (a binary heap with stale entries skipped). The last cut, of a quad, is the one of its
- * two whose triangles fold least, against their edges' references and each other. A cycle with no ear left that adds no
- * existing edge (rare: both diagonals of a quad exist elsewhere) is closed by a fan around
- * a new point, the mean of its vertices: its edges are all new. A cycle whose filling would
- * add an edge longer than `longest` is no gap between charts but a rim, or a hole of the
+ * Filling a face: its walk (the half-edges from the first in index order, following next; a
+ * walk that does not come back to it is no face and stays open) is cut into simple cycles
+ * where it comes back to a vertex it has left (a stack of the vertices passed: a vertex met
+ * again closes the cycle above it). A cycle of two half-edges is a rung walked both ways and
+ * needs no triangle. A longer one is clipped ear by ear, as its vertices v1 ... vk run (the
+ * face on the left): the ear at v is the triangle u v w of it and its neighbours, which adds
+ * the edge u w. An ear may not add an edge that exists (an edge in three triangles), and the
+ * one taken is the least by (folds, cost): it folds when its normal makes more than
+ * acos(FACING) with the reference of one of its two edges (a triangle laid back over the
+ * surface beside it) or with the cycle's vector area (an ear turned over within a flat gap),
+ * or when it has no area; its cost is the length of u w over its quality 4 sqrt(3) area /
+ * (sum of its squared sides), at least QUALITY (1 for an equilateral triangle), so short
+ * cuts of well-shaped ears go first: a long thin gap is zipped from its ends, ladder-like.
+ * Equal ears go by position. Clipping an ear gives the new edge u w the ear's normal as
+ * reference and recomputes the ears at u and w (a binary heap with stale entries skipped).
+ * The last cut, of a quad, is the one of its two whose triangles fold least, against their
+ * edges' references and each other. A cycle with no ear left that adds no existing edge
+ * (rare: both diagonals of a quad exist elsewhere) is closed by a fan around a new point,
+ * the mean of its vertices: its edges are all new. A cycle whose filling would add an edge
+ * longer than its face's `longest` is no gap between charts but a rim, or a hole of the
  * surface: it is left open (its triangles and edges taken back).
  *
  * Every triangle uses each half-edge of its face in the face's direction, and adds only
@@ -129,10 +130,10 @@ static Py_ssize_t boundary_edges(const int64_t *t, Py_ssize_t m, Py_ssize_t n, i
     first[0] = 0;
     Py_ssize_t count = 0;
     for (Py_ssize_t e = 0; e < 3 * m; e++) {
-        int64_t a = t[e], b = t[e % 3 == 2 ? e - 2 : e + 1], j = first[b], twice = 0;
+        int64_t a = t[e], b = t[e % 3 == 2 ? e - 2 : e + 1], j = first[b], runs = 0;
         while (j < first[b + 1] && out[j] != a) j++;
-        for (int64_t i = first[a]; i < first[a + 1]; i++) twice += out[i] == b;
-        if (j == first[b + 1] && twice == 1) {
+        for (int64_t i = first[a]; j == first[b + 1] && i < first[a + 1]; i++) runs += out[i] == b;
+        if (runs == 1) {   /* no b -> a, and a -> b once */
             int64_t *edge = edges + 3 * count++;
             edge[0] = a;
             edge[1] = b;
@@ -247,8 +248,8 @@ static int folds(const double *normal, double size, const double *reference) {
     return length > 0 && dot3(normal, reference) < FACING * size * length;
 }
 
-/* The folds of triangle u v w (positions; none, or 1 for no area) against the references of
-   its edges u -> v and v -> w, its quality and normal. */
+/* Whether triangle u v w (positions) folds against the references of its edges u -> v and
+   v -> w or the cycle's area, or has no area; its quality (at least QUALITY) and normal. */
 static int ear_folds(Filler *f, int64_t u, int64_t v, int64_t w, double *quality, double *normal) {
     const int64_t *x = f->vertex;
     normal_of(f->p, x[u], x[v], x[w], normal);
@@ -501,7 +502,9 @@ static PyObject *fill(PyObject *self, PyObject *args) {
     PyBuffer_Release(&triangles);
     PyBuffer_Release(&added);
     if (status == 1) return PyErr_Format(PyExc_ValueError, "fill: buffers whose sizes do not fit");
-    if (status == 2) return PyErr_Format(PyExc_IndexError, "fill: an index out of range, or a next given twice or not where its half-edge ends");
+    if (status == 2)
+        return PyErr_Format(PyExc_IndexError,
+                            "fill: an index out of range, or a next given twice or not where its half-edge ends");
     if (status == 3) return PyErr_NoMemory();
     return Py_BuildValue("nn", f.triangle_count, f.added_count);
 }
