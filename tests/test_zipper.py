@@ -141,6 +141,29 @@ def test_the_charts_of_closed_shared_objects_zip_closed(name, division):
     assert distance["hausdorff"] < 1.5 * spacing and distance["rms"] < 0.1 * spacing
 
 
+def test_the_charts_of_a_degenerate_closed_object_zip_closed():
+    """The dragon is closed and edge-manifold, but its fins are sheets of coincident opposite
+    triangles: at D/150 its charts still zip closed (finer, a fin's side is a chart alone)."""
+    surface, charts, (points, triangles), spacing = zipped(*shared_object("dragon.ply"), 150)
+    assert edge_counts(surface[1]) == (0, 0)
+    assert edge_counts(triangles) == (0, 0) and runs_each_edge_once(triangles)
+
+
+@pytest.mark.parametrize("name", ["ogre.obj", "cycloidal.ply"])
+def test_the_charts_of_objects_that_are_not_closed_manifolds_zip_without_harm(name):
+    """The ogre has holes (200 open edges) and 43 small bodies piercing its skin; the cycloidal
+    gear is 100 bodies touching along 242 edges in four triangles each: their rebuilds put no
+    edge in three triangles, run each edge once each way, and stay open only near the input's
+    own holes (the gear has none)."""
+    surface, _charts, rebuilt, spacing = zipped(*shared_object(name), 300)
+    assert edge_counts(rebuilt[1])[1] == 0 and runs_each_edge_once(rebuilt[1])
+    if len(boundary_edges(surface[1], len(surface[0]))):
+        farthest, _count = open_edges_off_the_rim(surface, rebuilt)
+        assert farthest < 8 * spacing
+    else:
+        assert edge_counts(rebuilt[1])[0] == 0
+
+
 def open_edges_off_the_rim(surface, rebuilt):
     """How far the farthest vertex of an open edge of ``rebuilt`` lies from an open edge of
     ``surface`` (both (points, triangles)), and how many open edges ``rebuilt`` has."""

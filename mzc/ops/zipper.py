@@ -107,8 +107,9 @@ def welded(points, triangles, chart, boundary, near, spacing):
     """(triangles, boundary) with the boundary vertices of different charts within WELD
     spacings of each other made one (the lowest index) and the boundary edges (rows of
     ``boundary_edges``) this joins dropped, None if there are none; ``near``: the Neighbours
-    of the boundary. Vertices whose welding would run an edge twice the same way, or collapse
-    an edge or a triangle (charts that overlap, a triangle across charts), stay apart."""
+    of the boundary. Vertices whose welding would run an edge twice the same way (so put an
+    edge in three triangles) or collapse a triangle (charts that overlap, a triangle across
+    charts) stay apart."""
     row, column = np.nonzero(near.distance <= WELD * spacing)
     pairs = near.vertex[np.stack([row, near.candidate[row, column]], axis=1)]
     pairs = np.sort(pairs[chart[pairs[:, 0]] != chart[pairs[:, 1]]], axis=1)
@@ -117,21 +118,32 @@ def welded(points, triangles, chart, boundary, near, spacing):
         for _ in range(3):   # chains of three charts meeting at a corner
             np.minimum.at(one, pairs[:, 1], one[pairs[:, 0]])
             one = one[one]
-        tail, head = one[boundary[:, 0]], one[boundary[:, 1]]
-        key = tail * len(points) + head
-        unique, count = np.unique(key, return_counts=True)
-        clash = (tail == head) | (count[np.searchsorted(unique, key)] > 1)
         corners = one[triangles]
-        collapsed = (corners == np.roll(corners, 1, axis=1)).any(axis=1) & \
-            (triangles != np.roll(triangles, 1, axis=1)).all(axis=1)
-        if not clash.any() and not collapsed.any():
-            joined = np.isin(head * len(points) + tail, key)
+        blamed = np.concatenate([clashes(triangles, corners, np.unique(one[one != np.arange(len(one))])),
+                                 triangles[(corners == np.roll(corners, 1, axis=1)).any(axis=1)
+                                           & (triangles != np.roll(triangles, 1, axis=1)).all(axis=1)].ravel()])
+        if not len(blamed):
+            tail, head = one[boundary[:, 0]], one[boundary[:, 1]]
+            joined = np.isin(head * len(points) + tail, tail * len(points) + head)
             return corners, np.stack([tail, head, boundary[:, 2]], axis=1)[~joined]
-        apart = np.isin(one[pairs], np.concatenate([one[boundary[clash, :2]].ravel(), corners[collapsed].ravel()]))
+        apart = np.isin(one[pairs], one[blamed]).any(axis=1)
         if not apart.any():
             return None
-        pairs = pairs[~apart.any(axis=1)]
+        pairs = pairs[~apart]
     return None
+
+
+def clashes(triangles, corners, welds):
+    """The vertices (of ``triangles``) of the edges that ``corners`` (the triangles over welded
+    vertices) run twice the same way, where one of them runs over a vertex welded into one of
+    ``welds``."""
+    at = np.isin(corners, welds).any(axis=1)
+    before, after = triangles[at], corners[at]
+    key = (after * (triangles.max() + 1) + after[:, [1, 2, 0]]).ravel()
+    changed = ((before != after) | (before[:, [1, 2, 0]] != after[:, [1, 2, 0]])).ravel()
+    unique, index, count = np.unique(key, return_inverse=True, return_counts=True)
+    twice = (count[index] > 1) & (np.bincount(index, weights=changed, minlength=len(unique))[index] > 0)
+    return np.concatenate([before.ravel()[twice], before[:, [1, 2, 0]].ravel()[twice]])
 
 
 class Gap:
