@@ -25,6 +25,7 @@ MERGING = 3     # rounds of small pieces taking a neighbour's label
 SMALL_PIECE = 16.0   # cells: the area of a piece too small for a chart of its own
 HIDDEN = 0.5    # spacings behind the front at which a triangle is another layer
 STEEP = 75.0    # degrees from the view beyond which a grid triangle is not the chart's surface
+FEWEST = 2      # triangles: a grid of fewer is a crumb (a body or a hidden layer under the spacing), no chart
 
 
 def chart_meshes(points, triangles, spacing):
@@ -98,7 +99,8 @@ def neighbour_pairs(triangles):
 
 def chart_grid(points, triangles, frame, spacing):
     """((points, triangles) of the grid mesh of ``triangles`` seen along the frame's z, or None
-    without cells; which triangles lie behind others, HIDDEN spacings or more, left out of it)."""
+    with fewer than FEWEST triangles; which triangles lie behind others, HIDDEN spacings or
+    more, left out of it)."""
     used = np.unique(triangles)
     local = np.zeros((len(points), 3))
     local[used] = rotated(points[used], frame.T)
@@ -115,7 +117,7 @@ def chart_grid(points, triangles, frame, spacing):
     grid = grid_triangles(~np.isnan(z))
     nodes = np.stack([np.broadcast_to(xs, z.shape), np.broadcast_to(ys[:, None], z.shape), z], axis=-1).reshape(-1, 3)
     grid = grid[~steep(nodes[grid])]
-    if not len(grid):
+    if len(grid) < FEWEST:
         return None, hidden
     used, grid = np.unique(grid, return_inverse=True)
     return (rotated(nodes[used], frame), grid.reshape(-1, 3)), hidden

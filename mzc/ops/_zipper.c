@@ -9,13 +9,13 @@
  *   Each vertex's outgoing edges are listed (a counting sort by tail), and each edge a -> b
  *   looks for b -> a among b's and for another a -> b among a's: O(m) for meshes of bounded
  *   valence.
- * fill(points, source, target, next, reference, chosen, edges, longest, triangles, added) -> (triangles, points)
+ * fill(points, source, target, next, rungs, reference, edges, longest, triangles, added) -> (triangles, points)
  *   points     float64 (n, 3): the vertices the faces run through
  *   source, target  int64 (k): each half-edge's first and last vertex, in 0..n-1
  *   next       int64 (k): the half-edge after each around its face (where its target is the
  *              next's source), -1 for none; no two have the same next
+ *   rungs      the first rung: the half-edges before it are the boundary's (reversed)
  *   reference  float64 (k, 3): the normal of the surface on the other side of each half-edge
- *   chosen     uint8 (k): whether to fill the face of each half-edge (the same for a whole face)
  *   edges      int64 (e, 2): the edges between the vertices that exist already (no new
  *              triangle may add one of them again)
  *   longest    float64 (k): the longest edge a filling of each half-edge's face may add (the
@@ -29,26 +29,28 @@
  * MemoryError. The GIL is released while they run, on one thread.
  *
  * Filling a face: its walk (the half-edges from the first in index order, following next; a
- * walk that does not come back to it is no face and stays open) is cut into simple cycles
- * where it comes back to a vertex it has left (a stack of the vertices passed: a vertex met
- * again closes the cycle above it). A cycle of two half-edges is a rung walked both ways and
- * needs no triangle. A longer one is clipped ear by ear, as its vertices v1 ... vk run (the
- * face on the left): the ear at v is the triangle u v w of it and its neighbours, which adds
- * the edge u w. An ear may not add an edge that exists (an edge in three triangles), and the
- * one taken is the least by (folds, cost): it folds when its normal makes more than
- * acos(FACING) with the reference of one of its two edges (a triangle laid back over the
- * surface beside it) or with the cycle's vector area (an ear turned over within a flat gap),
- * or when it has no area; its cost is the length of u w over its quality 4 sqrt(3) area /
- * (sum of its squared sides), at least QUALITY (1 for an equilateral triangle), so short
- * cuts of well-shaped ears go first: a long thin gap is zipped from its ends, ladder-like.
- * Equal ears go by position. Clipping an ear gives the new edge u w the ear's normal as
- * reference and recomputes the ears at u and w (a binary heap with stale entries skipped).
- * The last cut, of a quad, is the one of its two whose triangles fold least, against their
- * edges' references and each other. A cycle with no ear left that adds no existing edge
- * (rare: both diagonals of a quad exist elsewhere) is closed by a fan around a new point,
- * the mean of its vertices: its edges are all new. A cycle whose filling would add an edge
- * longer than its face's `longest` is no gap between charts but a rim, or a hole of the
- * surface: it is left open (its triangles and edges taken back).
+ * walk that does not come back to it is no face and stays open) is a polygon, its vertices
+ * v1 ... vk as they run (the face on the left), a vertex twice where a chart's corner
+ * touches the rest of it or a rung is walked both ways. A walk of the boundary's half-edges
+ * alone runs round one chart's boundary: it is filled only as a hole in the chart, when its
+ * vector area faces as the references of its edges do (their unit vectors summed), never
+ * over the chart. The polygon is clipped ear by ear: the ear at v is the triangle u v w of
+ * it and its neighbours, which adds the edge u w. An ear may not add an edge that exists (an
+ * edge in three triangles) nor join a vertex to itself, and the one taken is the least by
+ * (folds, cost): it folds when its normal makes more than acos(FACING) with the reference of
+ * one of its two edges (a triangle laid back over the surface beside it) or with the
+ * polygon's vector area (an ear turned over within a flat gap), or when it has no area; its
+ * cost is the length of u w over its quality 4 sqrt(3) area / (sum of its squared sides), at
+ * least QUALITY (1 for an equilateral triangle), so short cuts of well-shaped ears go first:
+ * a long thin gap is zipped from its ends, ladder-like. Equal ears go by position. Clipping
+ * an ear gives the new edge u w the ear's normal as reference and recomputes the ears at u
+ * and w (a binary heap with stale entries skipped). The last cut, of a quad, is the one of
+ * its two whose triangles fold least, against their edges' references and each other. What
+ * is left with no ear that adds no existing edge (rare: both diagonals of a quad exist
+ * elsewhere) is closed by fans about new points, the means of the vertices of each simple
+ * cycle it runs: their edges are all new. A polygon whose filling would add an edge longer
+ * than its face's `longest` is no gap between charts but a rim, or a hole of the surface: it
+ * is left open (its triangles, points and edges taken back).
  *
  * Every triangle uses each half-edge of its face in the face's direction, and adds only
  * edges that do not exist, so no edge is ever in more than two triangles, and one in two
@@ -185,8 +187,11 @@ typedef struct {
     int64_t *vertex, *prev, *next, *version;   /* per position of the cycle being clipped */
     double *reference;        /* per position: the reference of the edge to the next position */
     int64_t *cuts;            /* the edges added while a cycle is filled: (u, w) pairs */
+    int64_t *stack, *depth;   /* fans' stack of positions, and per vertex where its is on it (-1) */
+    int64_t *walked;          /* per vertex, where its half-edge is on a walk's stack (-1) */
     double longest;           /* the longest edge the filling of the face at hand may add */
     double area[3];           /* the vector area of the cycle being filled: a reference for each ear */
+    Py_ssize_t rungs;         /* the first rung's half-edge: those before are the boundary's */
     Ear *heap;
     Py_ssize_t heap_size;
     int64_t *triangles;       /* output */
@@ -294,28 +299,74 @@ static void emit(Filler *f, int64_t a, int64_t b, int64_t c) {
     t[2] = c;
 }
 
-/* Closes the cycle of `count` live positions from `start` with a fan around a new point; 0, or
-   -1 (nothing made) when a spoke would be longer than f->longest. */
-static int fan(Filler *f, int64_t start, Py_ssize_t count) {
+/* Closes the simple cycle of the `count` live positions `at` with a fan about a new point, the
+   mean of its vertices: 0, or -1 when a spoke would be longer than f->longest. */
+static int fan(Filler *f, const int64_t *at, Py_ssize_t count) {
     double *centre = f->added + 3 * f->added_count;
-    int64_t i = start;
     centre[0] = centre[1] = centre[2] = 0.0;
-    for (Py_ssize_t c = 0; c < count; c++, i = f->next[i])
-        for (int d = 0; d < 3; d++) centre[d] += f->p[3 * f->vertex[i] + d];
+    for (Py_ssize_t c = 0; c < count; c++)
+        for (int d = 0; d < 3; d++) centre[d] += f->p[3 * f->vertex[at[c]] + d];
     for (int d = 0; d < 3; d++) centre[d] /= (double)count;
-    for (Py_ssize_t c = 0; c < count; c++, i = f->next[i]) {
-        const double *a = f->p + 3 * f->vertex[i];
+    for (Py_ssize_t c = 0; c < count; c++) {
+        const double *a = f->p + 3 * f->vertex[at[c]];
         double d[3] = {a[0] - centre[0], a[1] - centre[1], a[2] - centre[2]};
         if (!(sqrt(dot3(d, d)) <= f->longest)) return -1;
     }
     int64_t point = f->n + f->added_count++;
-    for (Py_ssize_t c = 0; c < count; c++, i = f->next[i]) emit(f, f->vertex[i], f->vertex[f->next[i]], point);
+    for (Py_ssize_t c = 0; c < count; c++) emit(f, f->vertex[at[c]], f->vertex[at[(c + 1) % count]], point);
     return 0;
 }
 
-/* Fills the simple cycle of half-edges hs (count >= 3): ears, then a fan if it is stuck. A
-   cycle that would need an edge longer than f->longest (a rim, not a gap) is left open:
-   its triangles and edges are taken back. */
+/* Closes the live cycle of `count` positions from `start` with a fan for each simple cycle it
+   runs: where it comes back to a vertex it has left, the positions since close one (a stack of
+   them, f->depth[v] where v's is on it); a cycle of two is a rung walked both ways and needs
+   no triangle. 0, or -1 when a spoke would be longer than f->longest. */
+static int fans(Filler *f, int64_t start, Py_ssize_t count) {
+    Py_ssize_t top = 0;
+    int status = 0;
+    int64_t i = start;
+    for (Py_ssize_t c = 0; c <= count; c++, i = f->next[i]) {   /* the last: back at the start */
+        int64_t v = f->vertex[i];
+        if (f->depth[v] >= 0) {
+            Py_ssize_t from = f->depth[v];
+            if (top - from > 2 && fan(f, f->stack + from, top - from)) status = -1;
+            for (Py_ssize_t j = from; j < top; j++) f->depth[f->vertex[f->stack[j]]] = -1;
+            top = from;
+        }
+        if (c < count) {
+            f->depth[v] = top;
+            f->stack[top++] = i;
+        }
+    }
+    return status;
+}
+
+/* Whether to fill the closed walk of half-edges hs (count): when it has a rung, or when its
+   vector area (written to `area`, twice, the fan's normals from its first vertex summed) faces
+   as the references of its edges do (their unit vectors summed): a hole in a chart, not the
+   chart. */
+static int fillable(const Filler *f, const int64_t *hs, Py_ssize_t count, const int64_t *source,
+                    const double *reference, double *area) {
+    double beside[3] = {0.0, 0.0, 0.0};
+    int rung = 0;
+    area[0] = area[1] = area[2] = 0.0;
+    for (Py_ssize_t i = 0; i < count; i++) {
+        const double *r = reference + 3 * hs[i];
+        double length = sqrt(dot3(r, r)), normal[3];
+        for (int d = 0; d < 3 && length > 0; d++) beside[d] += r[d] / length;
+        rung |= hs[i] >= f->rungs;
+        if (i == 0 || i + 1 == count) continue;
+        normal_of(f->p, source[hs[0]], source[hs[i]], source[hs[i + 1]], normal);
+        for (int d = 0; d < 3; d++) area[d] += normal[d];
+    }
+    return rung || dot3(area, beside) > 0;
+}
+
+/* Fills the closed walk of half-edges hs (count >= 3; a vertex may come twice: a chart's corner
+   touching the rest of it, a rung walked both ways): ears, then fans if it is stuck. A walk of
+   the boundary's half-edges alone is filled only when its area faces as the surface beside it
+   (a hole in a chart, not the chart); one that would need an edge longer than f->longest (a
+   rim, not a gap) is left open: its triangles, points and edges are taken back. */
 static void clip(Filler *f, const int64_t *hs, Py_ssize_t count, const int64_t *source, const double *reference) {
     for (Py_ssize_t i = 0; i < count; i++) {
         f->vertex[i] = source[hs[i]];
@@ -324,15 +375,10 @@ static void clip(Filler *f, const int64_t *hs, Py_ssize_t count, const int64_t *
         f->next[i] = i == count - 1 ? 0 : i + 1;
         f->version[i] = 0;
     }
-    f->area[0] = f->area[1] = f->area[2] = 0.0;
-    for (Py_ssize_t i = 1; i + 1 < count; i++) {   /* the fan's normals from the first vertex, summed */
-        double normal[3];
-        normal_of(f->p, f->vertex[0], f->vertex[i], f->vertex[i + 1], normal);
-        for (int d = 0; d < 3; d++) f->area[d] += normal[d];
-    }
+    if (!fillable(f, hs, count, source, reference, f->area)) return;
     f->heap_size = 0;
     for (Py_ssize_t i = 0; i < count; i++) consider(f, i);
-    Py_ssize_t alive = count, made = f->triangle_count, cuts = 0;
+    Py_ssize_t alive = count, made = f->triangle_count, added = f->added_count, cuts = 0;
     int64_t any = 0;
     int open = 0;
     while (alive > 4 && f->heap_size > 0 && !open) {
@@ -382,41 +428,44 @@ static void clip(Filler *f, const int64_t *hs, Py_ssize_t count, const int64_t *
     if (!open && alive == 3) {
         int64_t j = f->next[any], k = f->next[j];
         emit(f, f->vertex[any], f->vertex[j], f->vertex[k]);
-    } else if (open || fan(f, any, alive)) {
+    } else if (open || fans(f, any, alive)) {
         f->triangle_count = made;
+        f->added_count = added;
         for (Py_ssize_t c = 0; c < cuts; c++) remove_edge(&f->edges, f->cuts[2 * c], f->cuts[2 * c + 1]);
     }
 }
 
-/* Fills the simple cycles of the closed walk of half-edges walk[0..count), using depth (-1 for
-   each vertex, and left so) to find where it comes back to a vertex. */
-static void fill_walk(Filler *f, int64_t *walk, Py_ssize_t count, const int64_t *source, const double *reference,
-                      int64_t *depth) {
-    Py_ssize_t top = 0;   /* walk[0..top) the stack of half-edges; depth[v] where v's is on it */
+/* Fills the closed walk of half-edges walk[0..count): where it comes back to a vertex it has
+   left, the half-edges since (a stack of them, f->walked[v] where v's is on it) close a cycle,
+   filled apart when it is to be filled at all (``fillable``): a cycle round a chart's corner
+   that touches the rest of it stays in the walk, whose filling then covers the gap on both
+   sides of the corner. A cycle of two is a rung walked both ways and needs no triangle. */
+static void fill_walk(Filler *f, int64_t *walk, Py_ssize_t count, const int64_t *source, const double *reference) {
+    Py_ssize_t top = 0;   /* walk[0..top): the stack, written over the walk as it is read */
+    double area[3];
     for (Py_ssize_t i = 0; i < count; i++) {
         int64_t h = walk[i], v = source[h];
-        if (depth[v] >= 0) {   /* back at v: the half-edges above its own close a cycle */
-            Py_ssize_t from = depth[v];
+        Py_ssize_t from = f->walked[v];
+        if (from >= 0 && (top - from < 3 || fillable(f, walk + from, top - from, source, reference, area))) {
             if (top - from > 2) clip(f, walk + from, top - from, source, reference);
-            for (Py_ssize_t j = from; j < top; j++) depth[source[walk[j]]] = -1;
+            for (Py_ssize_t j = from; j < top; j++) f->walked[source[walk[j]]] = -1;
             top = from;
         }
-        depth[v] = top;
+        f->walked[v] = top;
         walk[top++] = h;
     }
     if (top > 2) clip(f, walk, top, source, reference);
-    for (Py_ssize_t j = 0; j < top; j++) depth[source[walk[j]]] = -1;
+    for (Py_ssize_t j = 0; j < top; j++) f->walked[source[walk[j]]] = -1;
 }
 
-/* Fills every chosen face; 0, or -1 without memory. */
+/* Fills every face (every closed walk); 0, or -1 without memory. */
 static int fill_faces(Filler *f, Py_ssize_t k, const int64_t *source, const int64_t *next, const double *reference,
-                      const unsigned char *chosen, const double *longest) {
+                      const double *longest) {
     unsigned char *done = calloc((size_t)k + 1, 1);
-    int64_t *walk = malloc(((size_t)k + 1) * sizeof(int64_t)), *depth = malloc(((size_t)f->n + 1) * sizeof(int64_t));
-    int status = done && walk && depth ? 0 : -1;
-    for (Py_ssize_t v = 0; !status && v < f->n; v++) depth[v] = -1;
+    int64_t *walk = malloc(((size_t)k + 1) * sizeof(int64_t));
+    int status = done && walk ? 0 : -1;
     for (Py_ssize_t h0 = 0; !status && h0 < k; h0++) {
-        if (done[h0] || !chosen[h0]) continue;
+        if (done[h0]) continue;
         Py_ssize_t count = 0;
         int64_t h = h0;
         for (; h >= 0 && !done[h]; h = next[h]) {
@@ -424,18 +473,18 @@ static int fill_faces(Filler *f, Py_ssize_t k, const int64_t *source, const int6
             walk[count++] = h;
         }
         f->longest = longest[h0];
-        if (h == h0) fill_walk(f, walk, count, source, reference, depth);
+        if (h == h0) fill_walk(f, walk, count, source, reference);
     }
     free(done);
     free(walk);
-    free(depth);
     return status;
 }
 
 static PyObject *fill(PyObject *self, PyObject *args) {
     (void)self;
-    Py_buffer points, sources, targets, nexts, references, chosens, edges, longests, triangles, added;
-    if (!PyArg_ParseTuple(args, "y*y*y*y*y*y*y*y*w*w*", &points, &sources, &targets, &nexts, &references, &chosens,
+    Py_buffer points, sources, targets, nexts, references, edges, longests, triangles, added;
+    Py_ssize_t rungs;
+    if (!PyArg_ParseTuple(args, "y*y*y*y*ny*y*y*w*w*", &points, &sources, &targets, &nexts, &rungs, &references,
                           &edges, &longests, &triangles, &added))
         return NULL;
     const Py_ssize_t word = (Py_ssize_t)sizeof(int64_t);   /* and of a double */
@@ -444,7 +493,7 @@ static PyObject *fill(PyObject *self, PyObject *args) {
     int status = 1;   /* 1: sizes, 2: an index, 3: memory */
     Filler f = {0};
     if (points.len == 3 * n * word && sources.len == k * word && targets.len == k * word && nexts.len == k * word &&
-        references.len == 3 * k * word && chosens.len == k && edges.len == 2 * e * word && longests.len == k * word &&
+        references.len == 3 * k * word && edges.len == 2 * e * word && longests.len == k * word &&
         triangles.len == 3 * k * word && added.len == 3 * k * word && n < ((Py_ssize_t)1 << 31)) {
         status = 0;
         unsigned char *seen = calloc((size_t)k + 1, 1);
@@ -464,23 +513,28 @@ static PyObject *fill(PyObject *self, PyObject *args) {
         f.p = points.buf;
         f.n = n;
         f.triangles = triangles.buf;
+        f.rungs = rungs;
         f.added = added.buf;
         f.vertex = malloc(((size_t)k + 1) * sizeof(int64_t));
         f.prev = malloc(((size_t)k + 1) * sizeof(int64_t));
         f.next = malloc(((size_t)k + 1) * sizeof(int64_t));
         f.version = malloc(((size_t)k + 1) * sizeof(int64_t));
         f.cuts = malloc(((size_t)k + 1) * 2 * sizeof(int64_t));
+        f.stack = malloc(((size_t)k + 1) * sizeof(int64_t));
+        f.depth = malloc(((size_t)n + 1) * sizeof(int64_t));
+        f.walked = malloc(((size_t)n + 1) * sizeof(int64_t));
         f.reference = malloc(((size_t)k + 1) * 3 * sizeof(double));
         f.heap = malloc(((size_t)k + 1) * 3 * sizeof(Ear));   /* k ears, and two more per clip */
-        if (!f.vertex || !f.prev || !f.next || !f.version || !f.cuts || !f.reference || !f.heap ||
-            !edge_set(&f.edges, (size_t)(e + 2 * k)))   /* the edges, the half-edges', the cuts */
+        if (!f.vertex || !f.prev || !f.next || !f.version || !f.cuts || !f.stack || !f.depth || !f.walked ||
+            !f.reference || !f.heap || !edge_set(&f.edges, (size_t)(e + 2 * k)))   /* the edges, the half-edges', the cuts */
             status = 3;
     }
     if (!status) {
+        for (Py_ssize_t v = 0; v < n; v++) f.depth[v] = f.walked[v] = -1;
         Py_BEGIN_ALLOW_THREADS
         for (Py_ssize_t i = 0; i < e; i++) add_edge(&f.edges, edge[2 * i], edge[2 * i + 1]);
         for (Py_ssize_t h = 0; h < k; h++) add_edge(&f.edges, source[h], target[h]);
-        if (fill_faces(&f, k, source, next, references.buf, chosens.buf, longests.buf)) status = 3;
+        if (fill_faces(&f, k, source, next, references.buf, longests.buf)) status = 3;
         Py_END_ALLOW_THREADS
     }
     free(f.edges.keys);
@@ -489,6 +543,9 @@ static PyObject *fill(PyObject *self, PyObject *args) {
     free(f.next);
     free(f.version);
     free(f.cuts);
+    free(f.stack);
+    free(f.depth);
+    free(f.walked);
     free(f.reference);
     free(f.heap);
     PyBuffer_Release(&points);
@@ -496,7 +553,6 @@ static PyObject *fill(PyObject *self, PyObject *args) {
     PyBuffer_Release(&targets);
     PyBuffer_Release(&nexts);
     PyBuffer_Release(&references);
-    PyBuffer_Release(&chosens);
     PyBuffer_Release(&edges);
     PyBuffer_Release(&longests);
     PyBuffer_Release(&triangles);
@@ -513,8 +569,8 @@ static PyMethodDef methods[] = {
     {"boundary", boundary, METH_VARARGS,
      "boundary(triangles, vertex_count, edges) -> count: write the edges no triangle runs the other way."},
     {"fill", fill, METH_VARARGS,
-     "fill(points, source, target, next, reference, chosen, edges, longest, triangles, added) -> (triangles, points): "
-     "triangulate "
+     "fill(points, source, target, next, rungs, reference, edges, longest, triangles, added) -> "
+     "(triangles, points): triangulate "
      "the chosen faces."},
     {NULL, NULL, 0, NULL},
 };

@@ -28,9 +28,9 @@ surface) leaves it open.
    joined by its vertex nearest its partner.
 4. Each face runs on from a half-edge arriving in a wedge to the next rung leaving in that
    wedge (clockwise), or to the gap's half-edge leaving it: the faces of a planar map.
-5. A closed face with a rung is filled; one without runs around one chart's boundary
-   alone, and is filled only as a hole in the chart (its area facing as the chart does),
-   never over the chart.
+5. Each closed face is filled, but for its cycles that run around one chart's boundary
+   alone (no rung): such a cycle is filled only as a hole in the chart (its area facing as
+   the chart does), never over the chart.
 6. The faces are filled by ear clipping (``_zipper.c``): shortest well-shaped cuts first,
    none that folds back over the surface beside it or adds an edge that exists. A face more
    than RIM_SHARE of whose vertices have no other chart's boundary near lies on a rim (of
@@ -316,32 +316,21 @@ class Gap:
         source, target, rung = self.source, self.target, slice(self.gap_count, None)
         reference = np.concatenate([self.beside, self.frame[2][source[rung]] + self.frame[2][target[rung]]])
         triangles, added = np.empty((len(source), 3), dtype=np.int64), np.empty((len(source), 3))
-        chosen, longest = self.chosen(reference)
-        made, points = _zipper.fill(self.p, source, target, self.next, np.ascontiguousarray(reference),
-                                    chosen.astype(np.uint8), self.edges, longest, triangles, added)
+        made, points = _zipper.fill(self.p, source, target, self.next, self.gap_count, np.ascontiguousarray(reference),
+                                    self.edges, self.longest(), triangles, added)
         triangles, size = triangles[:made], len(self.p)
         triangles = np.where(triangles < size, self.vertex[np.minimum(triangles, size - 1)],
                              triangles - size + self.point_count)
         return added[:points], triangles
 
-    def chosen(self, reference):
-        """(whether to fill each half-edge's face, the longest cut its filling may make): a
-        closed face with a rung, or without one when its area (twice, the sum of its
-        half-edges' cross products) faces the way of the surface beside it (``reference``, per
-        half-edge): a hole in a chart, not the chart. Its cuts are at most LONGEST spacings
-        when more than RIM_SHARE of its vertices lie on a rim (not ``seam``): a long cut there
-        would close a rim or a hole of the surface; a face whose vertices lie on seams is a gap
-        between charts, however wide (where many small charts meet)."""
+    def longest(self):
+        """The longest cut the filling of each half-edge's face may make: LONGEST spacings when
+        more than RIM_SHARE of its vertices lie on a rim (not ``seam``), where a long cut would
+        close a rim or a hole of the surface; none on a face whose vertices lie on seams, a gap
+        between charts however wide (where many small charts meet)."""
         face = walks(self.next)
-        per_face = lambda values: np.bincount(face, weights=values)  # noqa: E731
-        centre = self.p.mean(axis=0)
-        area = np.cross(self.p[self.source] - centre, self.p[self.target] - centre)
-        unit = reference / np.maximum(lengths(reference), 1e-300)[:, None]
-        facing = sum(per_face(area[:, k]) * per_face(unit[:, k]) for k in range(3))
-        rungs = per_face((np.arange(len(face)) >= self.gap_count).astype(float))
-        closed = per_face((self.next < 0).astype(float)) == 0
-        rim = per_face((~self.seam[self.source]).astype(float)) > RIM_SHARE * per_face(np.ones(len(face)))
-        return (closed & ((rungs > 0) | (facing > 0)))[face], np.where(rim, LONGEST * self.spacing, np.inf)[face]
+        rim = np.bincount(face, weights=~self.seam[self.source]) > RIM_SHARE * np.bincount(face)
+        return np.where(rim, LONGEST * self.spacing, np.inf)[face]
 
 
 def edge_keys(a, b, size):
