@@ -14,7 +14,8 @@
  *   source, target  int64 (k): each half-edge's first and last vertex, in 0..n-1
  *   next       int64 (k): the half-edge after each around its face (where its target is the
  *              next's source), -1 for none; no two have the same next
- *   rungs      the first rung: the half-edges before it are the boundary's (reversed)
+ *   rungs      the first rung: the half-edges before it are the boundary's (reversed), those
+ *              after the rungs', rung i's a -> b as rungs + i, b -> a as rungs + (k - rungs) / 2 + i
  *   reference  float64 (k, 3): the normal of the surface on the other side of each half-edge
  *   edges      int64 (e, 2): the edges between the vertices that exist already (no new
  *              triangle may add one of them again)
@@ -191,7 +192,8 @@ typedef struct {
     int64_t *walked;          /* per vertex, where its half-edge is on a walk's stack (-1) */
     double longest;           /* the longest edge the filling of the face at hand may add */
     double area[3];           /* the vector area of the cycle being filled: a reference for each ear */
-    Py_ssize_t rungs;         /* the first rung's half-edge: those before are the boundary's */
+    Py_ssize_t rungs, k;      /* the first rung's half-edge (those before are the boundary's), all */
+    unsigned char *crossed;   /* per rung half-edge: whether the walk at hand crosses it (0) */
     Ear *heap;
     Py_ssize_t heap_size;
     int64_t *triangles;       /* output */
@@ -437,16 +439,34 @@ static void clip(Filler *f, const int64_t *hs, Py_ssize_t count, const int64_t *
 
 /* Fills the closed walk of half-edges walk[0..count): where it comes back to a vertex it has
    left, the half-edges since (a stack of them, f->walked[v] where v's is on it) close a cycle,
-   filled apart when it is to be filled at all (``fillable``): a cycle round a chart's corner
-   that touches the rest of it stays in the walk, whose filling then covers the gap on both
-   sides of the corner. A cycle of two is a rung walked both ways and needs no triangle. */
+   filled apart when it is to be filled at all (``fillable``) and walks no rung both ways: a
+   cycle round a chart's corner that touches the rest of it, or round a chart hanging on a
+   rung (one side of a body too thin for the spacing, whose other side is at the rung's other
+   end), stays in the walk, whose filling then covers the gap on both sides of the corner, or
+   the band between the sides. A cycle of two is a rung walked both ways and needs no triangle. */
+/* Whether the closed walk of half-edges hs (count) walks a rung both ways. */
+static int walks_a_rung_twice(Filler *f, const int64_t *hs, Py_ssize_t count) {
+    Py_ssize_t pairs = (f->k - f->rungs) / 2;   /* rung i runs a -> b as rungs + i, b -> a as rungs + pairs + i */
+    int twice = 0;
+    for (Py_ssize_t i = 0; i < count; i++)
+        if (hs[i] >= f->rungs) f->crossed[hs[i] - f->rungs] = 1;
+    for (Py_ssize_t i = 0; i < count; i++) {
+        Py_ssize_t half = hs[i] - f->rungs;
+        if (half >= 0) twice |= f->crossed[half < pairs ? half + pairs : half - pairs];
+    }
+    for (Py_ssize_t i = 0; i < count; i++)
+        if (hs[i] >= f->rungs) f->crossed[hs[i] - f->rungs] = 0;
+    return twice;
+}
+
 static void fill_walk(Filler *f, int64_t *walk, Py_ssize_t count, const int64_t *source, const double *reference) {
     Py_ssize_t top = 0;   /* walk[0..top): the stack, written over the walk as it is read */
     double area[3];
     for (Py_ssize_t i = 0; i < count; i++) {
         int64_t h = walk[i], v = source[h];
         Py_ssize_t from = f->walked[v];
-        if (from >= 0 && (top - from < 3 || fillable(f, walk + from, top - from, source, reference, area))) {
+        if (from >= 0 && (top - from < 3 || (fillable(f, walk + from, top - from, source, reference, area) &&
+                                             !walks_a_rung_twice(f, walk + from, top - from)))) {
             if (top - from > 2) clip(f, walk + from, top - from, source, reference);
             for (Py_ssize_t j = from; j < top; j++) f->walked[source[walk[j]]] = -1;
             top = from;
@@ -494,7 +514,8 @@ static PyObject *fill(PyObject *self, PyObject *args) {
     Filler f = {0};
     if (points.len == 3 * n * word && sources.len == k * word && targets.len == k * word && nexts.len == k * word &&
         references.len == 3 * k * word && edges.len == 2 * e * word && longests.len == k * word &&
-        triangles.len == 3 * k * word && added.len == 3 * k * word && n < ((Py_ssize_t)1 << 31)) {
+        triangles.len == 3 * k * word && added.len == 3 * k * word && n < ((Py_ssize_t)1 << 31) && rungs >= 0 &&
+        rungs <= k && (k - rungs) % 2 == 0) {
         status = 0;
         unsigned char *seen = calloc((size_t)k + 1, 1);
         if (!seen) status = 3;
@@ -514,6 +535,7 @@ static PyObject *fill(PyObject *self, PyObject *args) {
         f.n = n;
         f.triangles = triangles.buf;
         f.rungs = rungs;
+        f.k = k;
         f.added = added.buf;
         f.vertex = malloc(((size_t)k + 1) * sizeof(int64_t));
         f.prev = malloc(((size_t)k + 1) * sizeof(int64_t));
@@ -523,10 +545,12 @@ static PyObject *fill(PyObject *self, PyObject *args) {
         f.stack = malloc(((size_t)k + 1) * sizeof(int64_t));
         f.depth = malloc(((size_t)n + 1) * sizeof(int64_t));
         f.walked = malloc(((size_t)n + 1) * sizeof(int64_t));
+        f.crossed = calloc((size_t)k + 1, 1);
         f.reference = malloc(((size_t)k + 1) * 3 * sizeof(double));
         f.heap = malloc(((size_t)k + 1) * 3 * sizeof(Ear));   /* k ears, and two more per clip */
         if (!f.vertex || !f.prev || !f.next || !f.version || !f.cuts || !f.stack || !f.depth || !f.walked ||
-            !f.reference || !f.heap || !edge_set(&f.edges, (size_t)(e + 2 * k)))   /* the edges, the half-edges', the cuts */
+            !f.crossed || !f.reference || !f.heap ||
+            !edge_set(&f.edges, (size_t)(e + 2 * k)))   /* the edges, the half-edges', the cuts */
             status = 3;
     }
     if (!status) {
@@ -546,6 +570,7 @@ static PyObject *fill(PyObject *self, PyObject *args) {
     free(f.stack);
     free(f.depth);
     free(f.walked);
+    free(f.crossed);
     free(f.reference);
     free(f.heap);
     PyBuffer_Release(&points);
