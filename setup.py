@@ -19,4 +19,5 @@ setup(ext_modules=[
     kernel("mzc.meshes._lzf"),
     kernel("mzc.ops._plate"),
     kernel("mzc.ops._raster"),
+    kernel("mzc.ops._zipper"),
 ])
