@@ -222,15 +222,18 @@ def mesh_of(grid, jump_angle=None):
 
 def charted_mesh(grid, jump_angle=None):
     """The Mesh of a multi-chart grid (its ``grid`` set): each chart's GridMesh, one after the other,
-    its jumps those of CHART_JUMP_ANGLE unless ``jump_angle`` is given (spec/zgrid.md, Charts)."""
+    its jumps those of CHART_JUMP_ANGLE unless ``jump_angle`` is given (spec/zgrid.md, Charts),
+    zipped along their seams into one surface (``mzc.ops.zipper``)."""
     from mzc.meshes import Mesh
+    from mzc.ops.zipper import zip_charts
 
     angle = CHART_JUMP_ANGLE if jump_angle is None else jump_angle
     meshes = [GridMesh(chart, angle).mesh() for chart in grid.chart_grids()]
     offsets = np.cumsum([0] + [len(mesh.points) for mesh in meshes])
     points = np.concatenate([mesh.points for mesh in meshes])
     triangles = np.concatenate([mesh.triangles + offset for mesh, offset in zip(meshes, offsets)])
-    return Mesh(points, triangles, grid=grid)
+    chart = np.repeat(np.arange(len(meshes)), [len(mesh.points) for mesh in meshes])
+    return Mesh(*zip_charts(points, triangles, chart, max(grid.d1, grid.d2)), grid=grid)
 
 
 class GridMesh:
