@@ -317,10 +317,12 @@ def cloud_pieces(points, normals, spacing):
     keep = length > 0
     points, normals = points[keep], normals[keep] / length[keep, None]
     count = min(CLOUD_NEIGHBOURS + 1, len(points))
-    _distance, near = cKDTree(points).query(points, k=count)
+    distance, near = cKDTree(points).query(points, k=count)
     near = np.asarray(near).reshape(len(points), count)
     pairs = np.column_stack([np.repeat(np.arange(len(points)), count - 1), near[:, 1:].ravel()])
-    labels = facing_labels(normals, pairs)
+    nearest = np.asarray(distance).reshape(len(points), count)[:, min(1, count - 1)]
+    area = np.full(len(points), float(np.median(nearest)) ** 2)   # a point stands for about its spacing squared
+    labels = joined_small(facing_labels(normals, pairs), facing_cosines(normals), pairs, area, spacing)
     pieces = []
     for group in components(labels, pairs, np.arange(len(points))):
         view = int(labels[group[0]])

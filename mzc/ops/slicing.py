@@ -144,7 +144,7 @@ def slice_surface(surface, d1=None, d2=None, rows=None, cols=None, align="none",
     if np.isnan(grid.z).all():
         raise MzcError("no grid node meets the surface (seen edge-on? try --view or --align pca)")
     if count is None and not one_grid and (single_grid_cover(grid, mesh) or 1.0) < SINGLE_COVER:
-        return chart_surface(mesh, *frame_for(mesh, align), grid.d1, units)
+        return chart_surface(mesh, *frame_for(mesh, align), chart_spacing(d1, d2, mesh), units)
     crs = grid_crs(mesh.crs) if grid.projection == "planar" else None
     if crs is not None:
         grid = grid.with_z(grid.z, crs=crs)   # the transform maps the grid to the cloud's frame, the CRS's
