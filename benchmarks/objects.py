@@ -48,6 +48,7 @@ from report import (  # noqa: E402
     machine,
     measure_ratios,
     pareto,
+    terminal_progress,
     versions,
 )
 
@@ -880,7 +881,7 @@ def parse_args(argv):
 
 def main(argv=None):
     args = parse_args(argv)
-    progress = (lambda text: print(text, file=sys.stderr, flush=True)) if sys.stderr.isatty() else (lambda text: None)
+    progress = terminal_progress()
     specs = item_specs(args.quick)
     if not specs:
         print(f"objects.py: skipped: no objects in {OBJECTS} and no faces in {FACES}", file=sys.stderr)

@@ -270,10 +270,10 @@ def parse_args(argv):
 
 
 def main(argv=None):
-    from report import pipeline_timings, write_outputs
+    from report import pipeline_timings, terminal_progress, write_outputs
 
     args = parse_args(argv)
-    progress = (lambda text: print(text, file=sys.stderr, flush=True)) if sys.stderr.isatty() else (lambda text: None)
+    progress = terminal_progress()
     samples = QUICK_SAMPLES if args.quick else SAMPLES
     repeats = QUICK_REPEATS if args.quick else REPEATS
     specs = corpus_specs(args.quick, args.faces)

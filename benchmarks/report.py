@@ -29,6 +29,13 @@ NODE_VALUES = {"planar": "node values are heights", "cylindrical": "node values 
                "spherical": "node values are distances along rays from a centre behind the face"}
 
 
+def terminal_progress():
+    """A function printing a line of progress to stderr when it is a terminal, doing nothing otherwise."""
+    if sys.stderr.isatty():
+        return lambda text: print(text, file=sys.stderr, flush=True)
+    return lambda text: None
+
+
 # --------------------------------------------------------------------------- CLI timings
 
 
