@@ -9,8 +9,9 @@ from scipy.spatial import Delaunay
 from mzc.errors import MzcError
 from mzc.formats import zgrid
 from mzc.meshes import Mesh, read_mesh
+from mzc.ops.delaunay import triangulate_point_cloud
 from mzc.ops.raster import rasterize
-from mzc.ops.slicing import pca_frame, slice_surface, triangulate_point_cloud
+from mzc.ops.slicing import pca_frame, slice_surface
 
 from conftest import FACE_NAMES, face_path
 

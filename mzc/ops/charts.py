@@ -311,7 +311,7 @@ def cloud_pieces(points, normals, spacing):
     CLOUD_NEIGHBOURS nearest points, each piece triangulated in its view's plane (Delaunay)."""
     from scipy.spatial import cKDTree
 
-    from mzc.ops.slicing import triangulate_point_cloud
+    from mzc.ops.delaunay import triangulate_point_cloud
 
     length = lengths(normals)
     keep = length > 0

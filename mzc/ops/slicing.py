@@ -14,9 +14,10 @@ from mzc.errors import MzcError
 from mzc.georef import grid_crs
 from mzc.grid import ZGrid
 from mzc.limits import MAX_DIMENSION, check_grid_size, length_problem
+from mzc.ops.delaunay import triangulate_point_cloud
 from mzc.ops.raster import rasterize
 from mzc.ops.rays import cast
-from mzc.vectors import dotted, inner, lengths, of_each_row, rotated, symmetric_eigen
+from mzc.vectors import dotted, inner, lengths, rotated, symmetric_eigen
 
 DEFAULT_ROWS = 72           # the thesis cuts a face with about 70 horizontal planes (--thesis-grid)
 COLUMN_STEP_RATIO = 10      # and uses about 10x as many vertical planes: d2 = d1/10
@@ -25,7 +26,6 @@ MIN_NODES_ACROSS = 200        # and at least 200 nodes along the longest side
 SNAP_TOLERANCE = 1e-3       # a spacing this close (relative) to a lattice's own step snaps to it
 LATTICE_TOLERANCE = 1e-6    # coordinates this close (in steps) to a multiple of the step lie on a lattice
 LATTICE_FILL = 0.1          # and the points fill at least this share of its nodes (not a LAS cloud's 0.01 quanta)
-LONG_EDGE_FACTOR = 5.0
 BIN_POINTS = 100_000        # clouds of more points are binned (mzc.ops.binning) when dense at the grid's spacing
 CLOUD_METHODS = ("auto", "bin", "delaunay")
 
@@ -63,34 +63,6 @@ def facing_direction(points, triangles):
         return np.array([0.0, 0.0, 1.0])
     a, b, c = (points[triangles[:, i]] for i in range(3))
     return np.cross(b - a, c - a).sum(axis=0)
-
-
-# --------------------------------------------------------------------------- point clouds
-
-
-def triangulate_point_cloud(points_xy, long_edge_factor=LONG_EDGE_FACTOR):
-    """Triangles of a Delaunay triangulation in xy, without those that bridge gaps.
-
-    Delaunay fills the convex hull, so it spans holes and concave borders with long thin
-    triangles a scanner never sampled. A triangle is dropped when any of its edges is
-    longer than ``long_edge_factor`` times the median Delaunay edge length: the median is
-    the sample spacing (robust to the few bridging edges). 5x keeps every interior
-    triangle even of uniformly random samples, the most irregular sampling (their longest
-    edges reach about 3.5x the median; scanner grids stay under 2x), while cutting every
-    gap wider than about five samples.
-    """
-    from scipy.spatial import Delaunay, QhullError
-
-    points_xy = np.asarray(points_xy, dtype=np.float64)
-    if len(points_xy) < 3:
-        raise MzcError(f"a point cloud needs at least 3 points to form a surface, not {len(points_xy)}")
-    try:
-        triangles = Delaunay(points_xy).simplices.astype(np.int64)
-    except QhullError:
-        raise MzcError("the point cloud is degenerate in xy (all points on a line?)") from None
-    corners = points_xy[triangles]
-    edges = lengths((corners - np.roll(corners, 1, axis=1)).reshape(-1, 2)).reshape(-1, 3)
-    return triangles[of_each_row(np.max, edges) <= long_edge_factor * np.median(edges)]
 
 
 # --------------------------------------------------------------------------- slicing
