@@ -296,3 +296,15 @@ def test_the_hand_comes_back_closed_and_whole(tmp_path):
                             samples=20_000)["rms"] <= 0.0002 * diagonal
     samples = sample_surface(mesh.points, mesh.triangles, 20_000, np.random.default_rng(0))[0]
     assert np.mean(distance_to_mesh(samples, rebuilt.points, rebuilt.triangles) <= 0.001 * diagonal) >= 0.995
+
+
+def test_diff_measures_a_multi_chart_grids_nodes_by_their_distance_to_the_other_surface():
+    from mzc.api import compare
+
+    mesh = torus()
+    grid = slice_surface(mesh)
+    exact = compare(grid, mesh)
+    assert exact["rmse"] < 1e-9 and "surface_rms" in exact   # every node lies on the torus
+    moved = grid.with_z(grid.z + 0.25)   # each node 0.25 further along its chart's line
+    report = compare(moved, mesh)
+    assert 0.1 < report["rmse"] <= 0.25 + 1e-9

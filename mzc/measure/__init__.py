@@ -2,7 +2,7 @@
 
 Both surfaces are sampled on one common grid over A's extent (``sampling``) and compared
 along its node lines; the point-to-surface distances over every triangle (``metrics``) are
-added when asked for, and always for central grids, which are compared in space. A point
+added when asked for, and always for central and multi-chart grids, which are compared in space. A point
 cloud on either side is measured by the distances of its points to the other surface.
 """
 
@@ -57,7 +57,8 @@ def compare_surfaces(first: Mesh, second: Mesh, chosen: tuple[str, ...] | list[s
         raise MzcError(f"no node of the common grid is valid in both {names[0]} and {names[1]}: the surfaces do not "
                        "overlap, so there is nothing to compare", field="diff")
     report = select(stats, chosen or STATISTICS)
-    if surface or heightfield or any(side.grid is not None and side.grid.projection != "planar"
+    if surface or heightfield or any(side.grid is not None and (side.grid.projection != "planar"
+                                                                or side.grid.charts is not None)
                                      for side in (first, second)):
         report.update(surface_report(first, second, heightfield, samples, seed))
     return Comparison(report, reference, errors, stats)

@@ -4,7 +4,9 @@ The common grid lies in A's frame (a z-grid's own frame and projection, or a mes
 coordinates as they are, cut with planes) and covers A's extent. A z-grid compared
 without new spacings is compared at its own nodes; otherwise the spacing defaults to a
 fine one, 1/1000 of A's longest side. B is sampled along the common grid's node lines
-(vertical lines, or the rays of a central grid), so the error is measured along them.
+(vertical lines, or the rays of a central grid), so the error is measured along them. A
+multi-chart grid's nodes are measured by their distance to B's surface instead: along a
+chart's line B's outermost hit may be another part of the object, in front of the chart.
 """
 
 import numpy as np
@@ -35,11 +37,28 @@ def common_grid(a, d1=None, d2=None):
 
 
 def sample_like(grid, surface):
-    """Values of ``surface`` along the node lines of ``grid``, in grid's frame (outermost hit)."""
+    """Values of ``surface`` along the node lines of ``grid``, in grid's frame (outermost hit); for
+    a multi-chart grid, each node's value plus its distance to ``surface``."""
     from mzc.ops.slicing import values_along
 
+    if grid.charts is not None:
+        return grid.z + node_distances(grid, surface)
     local = grid.to_grid_frame(surface.points)
     return values_along(grid.projection, grid.radius, local, surface.triangles, grid.xs(), grid.ys())
+
+
+def node_distances(grid, surface):
+    """The distance of every valid node of a multi-chart ``grid`` to ``surface``'s triangles (NaN
+    at invalid nodes), each chart's nodes placed in the input frame."""
+    from mzc.measure.metrics import distance_to_mesh
+
+    distances = np.full(grid.shape, np.nan)
+    for chart, part in zip(grid.charts, grid.chart_grids()):
+        valid = part.valid
+        points = part.to_input_frame(part.node_points()[valid])
+        block = distances[chart.block()]
+        block[valid] = distance_to_mesh(points, surface.points, surface.triangles)
+    return distances
 
 
 def error_grid(a, b, d1=None, d2=None):
