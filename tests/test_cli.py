@@ -52,7 +52,7 @@ def test_missing_file_is_one_line(mzc):
 def test_a_mesh_given_where_a_grid_is_expected(mzc, tmp_path):
     mesh = tmp_path / "m.obj"
     mesh.write_text("v 0 0 0\n")
-    assert_one_line_error(mzc("triangulate", mesh), "not an mzc file")
+    assert_one_line_error(mzc("triangulate", mesh), "m.obj: holds a mesh (obj), not a z-grid")
 
 
 def test_bad_grid_names_file_and_line(mzc, tmp_path):

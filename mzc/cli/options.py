@@ -7,7 +7,7 @@ writes through ``mzc.streams`` so output is atomic.
 import click
 
 from mzc.errors import MzcError, about
-from mzc.streams import display_name, read_input
+from mzc.streams import display_name
 
 input_argument = click.argument("input", required=False, default="-", metavar="[INPUT]")
 output_option = click.option("-o", "--output", default="-", metavar="FILE",
@@ -19,17 +19,11 @@ jump_angle_option = click.option(
 
 
 def read_grid(path):
-    """Read a z-grid, or any compressed mzc file (decoded), from ``path`` or stdin."""
-    from mzc.formats import is_mzc, read_any
+    """Read a grid from ``path`` or stdin: a z-grid, a compressed mzc file (decoded) or a raster."""
+    from mzc.formats import GRIDS, read_file
 
-    data = read_input(path)
-    source = display_name(path)
-    if not data:
-        raise MzcError("empty input: expected an mzc z-grid", source=source)
-    if not is_mzc(data):
-        raise MzcError("not an mzc file (expected a z-grid, e.g. from 'mzc slice')", source=source, line=1)
-    with about(source, "decoding it"):
-        return read_any(data, source)
+    with about(display_name(path), "decoding it"):
+        return read_file(path, GRIDS)
 
 
 plain_option = click.option("--plain", is_flag=True,

@@ -9,8 +9,9 @@ gives the same raster: the same cells, georeferencing, no-data value and sample 
 
 GeoTIFF is read and written by rasterio (GDAL: every compression, tiling, BigTIFF and CRS
 encoding GIS tools write), in the optional extra ``geo``; ESRI ASCII grids by mzc's own
-vectorised reader and writer (``asc``). Each is recognised by its bytes, not its name (an
-``.asc`` file may also be an ``x y z`` point cloud).
+vectorised reader and writer (``asc``). Both are rows of the table of file formats
+(``mzc.formats``), which recognises each by its bytes, not its name (an ``.asc`` file may also
+be an ``x y z`` point cloud) and reads an ESRI grid's CRS from the ``.prj`` beside it.
 
 Georeferencing is exact both ways: a node's coordinate is the raster's reference (a cell
 corner, or a centre) plus an offset of half a cell or whole rows, computed one way
@@ -31,17 +32,7 @@ from mzc.numbers import real_array
 
 FORMATS = ("tif", "asc")
 EXTENSIONS = {".tif": "tif", ".tiff": "tif", ".asc": "asc"}
-TIFF_MAGIC = (b"II*\0", b"MM\0*", b"II+\0", b"MM\0+")   # classic and BigTIFF, either byte order
 ULPS = 4   # how far from the plain inverse raster_reference looks for the shortest reference
-
-
-def sniff(data):
-    """``tif`` or ``asc`` when ``data`` is a raster of that format, else None."""
-    if data[:4] in TIFF_MAGIC:
-        return "tif"
-    from mzc.rasters import asc
-
-    return "asc" if asc.sniff(data) else None
 
 
 def format_for(path, file_format=None):
@@ -49,41 +40,6 @@ def format_for(path, file_format=None):
     case, .tiff too), or None: a z-grid or a mesh."""
     extension = "." + file_format if file_format is not None else os.path.splitext(str(path or ""))[1]
     return EXTENSIONS.get(extension.lower())
-
-
-def read_raster(data, source, path=None):
-    """The ZGrid of raster bytes ``data`` (sniff says which format); an ESRI grid read from a
-    file ``path`` takes its CRS from the ``.prj`` beside it, as GIS tools do."""
-    if sniff(data) == "tif":
-        from mzc.rasters import geotiff
-
-        return geotiff.read(data, source)
-    from mzc.rasters import asc
-
-    return asc.read(data, source, sidecar_crs(path))
-
-
-def raster_or_mesh(data, source, path=None):
-    """The surface a file to slice holds: a raster as its own ZGrid (``read_raster``), anything
-    else as a mesh or point cloud (``mzc.meshes``)."""
-    if sniff(data):
-        return read_raster(data, source, path)
-    from mzc.meshes import mesh_from_bytes
-
-    return mesh_from_bytes(data, source)
-
-
-def sidecar_crs(path):
-    """The one-line WKT of the ``.prj`` file beside ``path``, or None."""
-    if path is None or path == "-":
-        return None
-    prj = os.path.splitext(os.fspath(path))[0] + ".prj"
-    try:
-        with open(prj, "rb") as file:
-            text = file.read(1 << 20).decode("utf-8", "replace")
-    except OSError:
-        return None
-    return " ".join(text.split()) or None
 
 
 @dataclass(frozen=True)

@@ -29,16 +29,19 @@ KEYWORDS = ("ncols", "nrows", "xllcorner", "yllcorner", "xllcenter", "yllcenter"
             "nodata_value")
 HEAD = re.compile(rb"\A\s*(" + b"|".join(k.encode() for k in KEYWORDS) + rb")[ \t]+[-+.0-9]", re.IGNORECASE)
 DEFAULT_MARKER = -9999.0   # the no-data value written when the grid's own marker is not a number
+EXTENSIONS = (".asc",)
 
 
 def sniff(data):
-    """True when ``data`` starts with an ESRI ASCII grid header line."""
+    """True when ``data`` starts with an ESRI ASCII grid header line, else False: an ESRI grid always
+    does (an .asc of x y z lines is a point cloud)."""
     return HEAD.match(data[:256]) is not None
 
 
 def read(data, source, crs=None):
-    """The ZGrid of an ESRI ASCII grid's bytes, with the CRS ``crs`` (a ``.prj``'s WKT) when given;
-    a bad header or value is an MzcError naming the line and the keyword."""
+    """The ZGrid of an ESRI ASCII grid's bytes, with the CRS ``crs`` (the WKT of the ``.prj`` beside
+    it, which mzc.formats reads) when given; a bad header or value is an MzcError naming the line
+    and the keyword."""
     try:
         text = unpadded(data).decode("utf-8")
     except UnicodeDecodeError:
