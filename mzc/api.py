@@ -234,13 +234,15 @@ def write(path: PathLike, item: ZGrid | Mesh | bytes, file_format: str | None = 
           precision: int | None = None, *, plain: bool = False, float32: bool = False) -> None:
     """Write a ZGrid as a z-grid, or as a raster when ``path`` ends in .tif, .tiff or .asc (or
     ``file_format`` is tif or asc: mzc.rasters, ``float32`` samples for GeoTIFF), a Mesh in the
-    format of ``path``'s extension (or ``file_format``), or bytes (a compressed file) as they
-    are; atomically: nothing is left on failure.
+    format of ``path``'s extension (or ``file_format``), each format chosen from the table of
+    formats (``mzc.formats``), or bytes (a compressed file) as they are; atomically: nothing is
+    left on failure.
 
     A z-grid's heights are written raw by default (``mzc-zgrid 3.0``: exact little-endian
     float64, or float32 with ``float32``); ``plain`` writes them as text rows (1.0, 2.0), which
     ``precision`` (decimals) rounds. ``precision`` without ``plain`` is an MzcError."""
     from mzc.codecs.rows import MAX_PRECISION
+    from mzc.formats import GRIDS, writer_for
     from mzc.grid import ZGrid
     from mzc.streams import write_output
 
@@ -253,11 +255,11 @@ def write(path: PathLike, item: ZGrid | Mesh | bytes, file_format: str | None = 
 
         write_mesh(path, as_mesh(item), file_format)
         return
-    from mzc.rasters import format_for, write_raster
+    row = writer_for(path, file_format, GRIDS)
+    if row is not None and row.kind == "raster":
+        from mzc.rasters import write_raster
 
-    raster = format_for(path, file_format)
-    if raster:
-        write_raster(path, item, raster, float32=float32)
+        write_raster(path, item, row.name, float32=float32)
         return
     from mzc.formats import zgrid
 
@@ -294,12 +296,11 @@ def batch_encode(sources: Any, dest: PathLike, codec: str = "dwt2d", *, slice_op
 
 
 def sliceable_extensions() -> list[str]:
-    """The extensions of the files ``mzc batch encode`` takes from a folder: meshes, point
-    clouds and rasters."""
-    from mzc import rasters
-    from mzc.meshes import registry
+    """The extensions of the files ``mzc batch encode`` takes from a folder: rasters, meshes and
+    point clouds."""
+    from mzc.formats import SURFACES, extensions
 
-    return [*(e for name in registry.FORMATS for e in registry.format_named(name).EXTENSIONS), *rasters.EXTENSIONS]
+    return extensions(("raster", *SURFACES))
 
 
 def batch_decode(sources: Any, dest: PathLike, *, densify: int = 0, method: str = "biharmonic",
@@ -308,18 +309,17 @@ def batch_decode(sources: Any, dest: PathLike, *, densify: int = 0, method: str 
     """Decode every mzc file of ``sources`` into a mesh in the folder ``dest`` on Dask (``mzc batch
     decode``): decoded, densified with ``densify`` rows between planes, triangulated into
     ``file_format``, or written as a raster when it is tif or asc. Returns the ``mzc.batch.Summary``."""
-    from mzc import rasters
     from mzc.codecs import codec_names, get_codec
+    from mzc.formats import SURFACES, extensions, writable
     from mzc.limits import MAX_INSERTED
-    from mzc.meshes import registry
 
-    known = (*registry.writable(), *rasters.FORMATS)
+    known = writable(("raster", *SURFACES))
     if file_format not in known:
         raise MzcError(f"cannot write format {file_format!r} (known: {', '.join(known)})", field="file_format")
     densify = number(densify, "densify", int, 0, MAX_INSERTED)
     settings = {"densify": densify, "method": method, "format": file_format, "jump_angle": jump_angle}
-    extensions = [".zg", *(get_codec(name).extension for name in codec_names())]
-    return run_batch_job("decode", sources, dest, settings, extensions, "." + file_format, scheduler=scheduler,
+    decoded = [*extensions(("grid",)), *(get_codec(name).extension for name in codec_names())]
+    return run_batch_job("decode", sources, dest, settings, decoded, "." + file_format, scheduler=scheduler,
                          workers=workers, chunk_size=chunk_size, listener=listener)
 
 

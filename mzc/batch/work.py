@@ -186,8 +186,7 @@ def decode_item(job, item, data, row, timings):
     """A grid's bytes (an mzc file, or a raster) decoded, densified when asked and triangulated:
     [(the item's output, the mesh file)]; or, for a raster format, the raster's files
     (``mzc.rasters.raster_files``)."""
-    from mzc import rasters
-    from mzc.formats import GRIDS, read
+    from mzc.formats import GRIDS, named, read
 
     settings, source = job.settings, item.source
     with timings.stage("decode"), about(source, "decoding it"):
@@ -199,9 +198,11 @@ def decode_item(job, item, data, row, timings):
         with timings.stage("densify"), about(source, f"densifying it ({settings['method']}, "
                                                      f"n = {settings['densify']})"):
             grid = densify_grid(grid, settings["densify"], settings["method"], jump_angle=settings["jump_angle"])
-    if settings["format"] in rasters.FORMATS:
+    if named(settings["format"]).kind == "raster":
+        from mzc.rasters import raster_files
+
         with timings.stage("raster"), about(source, f"writing it as {settings['format']}"):
-            return rasters.raster_files(item.output, grid, settings["format"])
+            return raster_files(item.output, grid, settings["format"])
     from mzc.meshes import mesh_to_bytes
     from mzc.ops.triangulation import grid_to_mesh
 

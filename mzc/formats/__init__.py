@@ -18,7 +18,7 @@ GDAL's drivers do, so an ESRI grid named .txt is a raster and an .asc of x y z l
 name decides only what the bytes cannot (a cut STL, an OBJ without vertices). The formats of
 mzc and of this process rank before those installed packages declare, which are loaded only
 when a file is none of the others. What is read is held to what every item of its kind is
-(CHECKS).
+(CHECKS); a writer is chosen from the same rows (``writer_for``).
 """
 
 from __future__ import annotations
@@ -272,3 +272,27 @@ def header_versions(row: Format) -> dict[str, int | None]:
         return {"projected_major": module.PROJECTED_VERSION[0],
                 "charted_major": getattr(module, "CHARTED_VERSION", (None,))[0]}
     return {"projected_major": module.version[0], "charted_major": None}
+
+
+def writes(row: Format) -> bool:
+    """True when mzc writes ``row``'s format from an item (a codec's file is encoded, with options)."""
+    return row.kind != "compressed" and row.load().write is not None
+
+
+def writable(kinds: tuple[str, ...]) -> list[str]:
+    """The names of the formats of ``kinds`` that mzc writes, in rank order."""
+    return [row.name for row in own_formats() if row.kind in kinds and writes(row)]
+
+
+def writer_for(path: str | os.PathLike | None, file_format: str | None, kinds: tuple[str, ...]) -> Format | None:
+    """The row of ``kinds`` that writes the format ``file_format`` names (a name or an extension:
+    ply, tif, tiff, zg), else the one the extension of ``path`` names; None when they name none."""
+    word = file_format if file_format is not None else os.path.splitext(os.fspath(path or ""))[1]
+    word = word.lower().lstrip(".")
+    return next((row for row in own_formats() if word and row.kind in kinds and writes(row)
+                 and (row.name == word or "." + word in row.load().EXTENSIONS)), None)
+
+
+def extensions(kinds: tuple[str, ...]) -> list[str]:
+    """The extensions of mzc's formats of ``kinds`` (not compressed: a codec names its own), in rank order."""
+    return [extension for row in own_formats() if row.kind in kinds for extension in row.load().EXTENSIONS]

@@ -24,7 +24,6 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from mzc.errors import MzcError
-from mzc.meshes import registry
 from mzc.meshes.common import as_indices
 from mzc.numbers import real_array
 from mzc.streams import is_stdio, is_stream, write_output
@@ -181,10 +180,11 @@ def mesh_to_bytes(mesh: Mesh, file_format: str) -> bytes:
 
 
 def mesh_chunks(mesh: Mesh, file_format: str) -> Any:
-    """``mesh`` in ``file_format``: its bytes, or (PLY) an iterator of bytes-like chunks that
-    ``mzc.streams.write_output`` writes as they are made."""
-    writer = registry.format_named(file_format).write if file_format in registry.FORMATS else None
-    if writer is None:
-        raise MzcError(f"cannot write mesh format {file_format!r} (choose one of "
-                       f"{', '.join(registry.writable())})")
-    return writer(mesh)
+    """``mesh`` in ``file_format`` (a format's name or extension): its bytes, or (PLY) an iterator
+    of bytes-like chunks that ``mzc.streams.write_output`` writes as they are made."""
+    from mzc.formats import SURFACES, writable, writer_for
+
+    row = writer_for(None, file_format, SURFACES)
+    if row is None:
+        raise MzcError(f"cannot write mesh format {file_format!r} (choose one of {', '.join(writable(SURFACES))})")
+    return row.load().write(mesh)

@@ -30,16 +30,7 @@ from mzc.grid import IDENTITY_TRANSFORM, SAMPLES, Raster, ZGrid
 from mzc.limits import check_grid_magnitudes
 from mzc.numbers import real_array
 
-FORMATS = ("tif", "asc")
-EXTENSIONS = {".tif": "tif", ".tiff": "tif", ".asc": "asc"}
 ULPS = 4   # how far from the plain inverse raster_reference looks for the shortest reference
-
-
-def format_for(path, file_format=None):
-    """The raster format (tif or asc) that ``file_format`` names, else ``path``'s extension (any
-    case, .tiff too), or None: a z-grid or a mesh."""
-    extension = "." + file_format if file_format is not None else os.path.splitext(str(path or ""))[1]
-    return EXTENSIONS.get(extension.lower())
 
 
 @dataclass(frozen=True)
@@ -179,28 +170,23 @@ def holds(sample, values):
 
 
 def write_raster(path, grid, file_format, float32=False):
-    """Write ``grid`` as a ``tif`` or ``asc`` raster to ``path`` (or stdout), atomically with its
-    ``.prj`` when it has one (``raster_files``)."""
+    """Write ``grid`` as the raster format ``file_format`` (tif or asc) to ``path`` (or stdout),
+    atomically with its sidecar when it has one (``raster_files``)."""
     from mzc.streams import write_outputs
 
     write_outputs(*raster_files(path, grid, file_format, float32))
 
 
 def raster_files(path, grid, file_format, float32=False):
-    """[(path, bytes)] of ``grid`` as a ``tif`` or ``asc`` raster at ``path``: the raster, then an
-    ESRI grid's ``.prj`` beside it when the grid has a CRS (not on stdout; a GeoTIFF holds its own)."""
+    """[(path, bytes)] of ``grid`` as the raster format ``file_format`` (tif or asc; mzc.formats) at
+    ``path``: the raster, then the sidecar beside it that holds the grid's CRS, for a format that
+    keeps it there (an ESRI grid's .prj; not on stdout; a GeoTIFF holds its own)."""
+    from mzc.formats import named
     from mzc.streams import is_stdio
 
     check_writable(grid)
-    if file_format == "tif":
-        from mzc.rasters import geotiff
-
-        return [(path, geotiff.write(grid, float32))]
-    from mzc.rasters import asc
-
-    if float32:
-        raise MzcError("an ESRI ASCII grid is text: float32 is for GeoTIFF samples", field="float32")
-    files = [(path, asc.write(grid))]
-    if grid.crs is not None and not is_stdio(path):
-        files.append((os.path.splitext(os.fspath(path))[0] + ".prj", (grid.crs + "\n").encode("utf-8")))
+    row = named(file_format)
+    files = [(path, row.load().write(grid, float32))]
+    if row.sidecar and grid.crs is not None and not is_stdio(path):
+        files.append((os.path.splitext(os.fspath(path))[0] + row.sidecar, (grid.crs + "\n").encode("utf-8")))
     return files

@@ -162,10 +162,13 @@ def first_bad(body, first_line):
     raise AssertionError("no bad token in a body that failed to convert")
 
 
-def write(grid):
+def write(grid, float32=False):
     """The bytes of ``grid`` as an ESRI ASCII grid (a grid mzc.rasters.check_writable accepts):
     its raster's corner or centre, the cell size (dx and dy when not square), the no-data value
-    when it has one, then the rows north first, every number in its shortest exact form."""
+    when it has one, then the rows north first, every number in its shortest exact form. Text
+    holds no float32 samples: ``float32`` is refused."""
+    if float32:
+        raise MzcError("an ESRI ASCII grid is text: float32 is for GeoTIFF samples", field="float32")
     cells = grid.raster.cells if grid.raster is not None else "area"
     place = layout_of(grid, top=False, centred=cells == "point")
     kind = "corner" if place.cells == "area" else "center"
