@@ -130,7 +130,7 @@ def command_rows(a_path, b_path, base_python, rounds):
 
 def steps_child(a_path, b_path):
     """Time the steps of ``mzc diff A B --surface`` in this process; print them as JSON."""
-    from mzc.api import read_surface
+    from mzc.api import as_mesh
     from mzc.cli.diff import format_report
     from mzc.measure import surface_report
     from mzc.measure.metrics import grid_error_stats
@@ -147,7 +147,7 @@ def steps_child(a_path, b_path):
         last = now
         return result
 
-    a, b = step("read A", lambda: read_surface(a_path)), step("read B", lambda: read_surface(b_path))
+    a, b = step("read A", lambda: as_mesh(a_path)), step("read B", lambda: as_mesh(b_path))
     reference, errors = step("common grid, B along its node lines", lambda: error_grid(a, b))
     step("grid statistics", lambda: grid_error_stats(reference.z, reference.z + errors.z))
     report = step("surface distance", lambda: surface_report(a, b, False, 100_000, 0))

@@ -12,7 +12,7 @@ points or a path is a surface.
 from __future__ import annotations
 
 import os
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, cast
 
 from mzc.errors import MzcError
 
@@ -30,16 +30,27 @@ MESH_SOURCE = "<mesh>"   # a surface given in memory, in error messages
 
 
 def as_mesh(surface: Any) -> Mesh:
-    """A ``Mesh`` of a surface given as a Mesh, a ZGrid, a path, a trimesh-like object, a pair or an
-    array; one given in memory is held to what a mesh file is (``mzc.meshes.checked``: points,
+    """A ``Mesh`` of a surface given as a path, a ZGrid, a Mesh, a trimesh-like object, a pair or an
+    array (``given``): a grid's mesh keeps its grid, so it is compared at the grid's own nodes."""
+    from mzc.formats import read_file
+    from mzc.grid import ZGrid
+
+    item = given(surface)
+    item = read_file(item) if isinstance(item, str) else item
+    return triangulate(item) if isinstance(item, ZGrid) else item
+
+
+def given(surface: Any) -> str | ZGrid | Mesh:
+    """A surface as it was given, before any file is read: a path as a str (``path_of``), a ZGrid as
+    it is, and anything else as a Mesh held to what a mesh file is (``mzc.meshes.checked``: points,
     finite coordinates, triangles that index them)."""
     from mzc.grid import ZGrid
     from mzc.meshes import checked
 
-    if isinstance(surface, ZGrid):
-        return triangulate(surface)   # a Mesh that keeps its grid: compared at the grid's own nodes
     if isinstance(surface, (str, os.PathLike)):
-        return read_surface(path_of(surface, "surface"))
+        return path_of(surface, "surface")
+    if isinstance(surface, ZGrid):
+        return surface
     mesh = mesh_in_memory(surface)
     return mesh if mesh.grid is not None else checked(mesh, MESH_SOURCE)
 
@@ -49,7 +60,6 @@ def mesh_in_memory(surface: Any) -> Mesh:
     import numpy as np
 
     from mzc.meshes import Mesh
-    from mzc.numbers import real_array
 
     if isinstance(surface, Mesh):
         return surface
@@ -58,7 +68,7 @@ def mesh_in_memory(surface: Any) -> Mesh:
     if isinstance(surface, tuple) and len(surface) == 2:
         return Mesh(*surface)
     if isinstance(surface, (np.ndarray, list)):
-        return Mesh(real_array(surface, "points"))
+        return Mesh(cast("np.ndarray", surface))   # Mesh checks the points are numbers (real_array)
     raise MzcError(f"cannot read a surface from a {type(surface).__name__}: give a path, a Mesh, "
                    "an object with vertices and faces, (points, triangles) or an (n, 3) array")
 
@@ -89,37 +99,6 @@ def path_of(path: Any, name: str = "path") -> str:
     return os.fspath(path)
 
 
-def read_surface(path: PathLike | None) -> Mesh:
-    """A surface to compare: a mesh file, or any mzc file or raster as the mesh of its grid
-    (``grid`` set)."""
-    from mzc.grid import ZGrid
-
-    item = read_item(path)
-    if not isinstance(item, ZGrid):
-        return item
-    from mzc.ops.triangulation import grid_to_mesh
-
-    return grid_to_mesh(item)
-
-
-def read_item(path: PathLike | None) -> ZGrid | Mesh:
-    """What a file holds: an mzc file (z-grid or compressed) or a raster (GeoTIFF, ESRI ASCII
-    grid: ``mzc.rasters``) as its ZGrid, a mesh or point cloud as a Mesh. stdin may carry an
-    mzc file or a raster only: a mesh on stdin could not be told from a mistake, so meshes are
-    given as file names."""
-    from mzc.formats import is_mzc, read_any
-    from mzc.rasters import raster_or_mesh, sniff
-    from mzc.streams import display_name, is_stdio, read_input
-
-    source = display_name(path)
-    data = read_input(path)
-    if is_mzc(data):
-        return read_any(data, source)
-    if is_stdio(path) and not sniff(data):
-        raise MzcError("stdin must carry an mzc file or a raster; give meshes as file names", source=source)
-    return raster_or_mesh(data, source, path)
-
-
 def as_grid(grid: ZGrid | np.ndarray) -> ZGrid:
     """``grid`` itself, or a 2D array as a planar z-grid of unit spacing (NaN = no value), its
     shape and values checked as every ZGrid's are."""
@@ -139,20 +118,19 @@ def slice(surface: Any, d1: float | None = None, d2: float | None = None, *, row
     says how a point cloud becomes a surface; ``charts`` (1, N or auto) whether a closed or
     many-part object is cut into charts, planar grids each seeing its own piece (``ZGrid.charts``).
 
-    A raster (a GeoTIFF or ESRI ASCII grid path, or a grid read from one: it has a ``raster``
-    layout) is its own z-grid, node for node: it is returned as it is (with ``units`` when
-    given), and an option that would cut it otherwise is refused (resample the raster first)."""
-    from mzc.grid import ZGrid
+    A grid (a ZGrid, or a path of a z-grid, a compressed file or a raster: a GeoTIFF or ESRI ASCII
+    grid) already is one: it is returned as it is, node for node (with ``units`` when given), and
+    an option that would cut it otherwise is refused (resample a raster first; triangulate a
+    z-grid and slice its mesh)."""
+    from mzc.formats import read_file
     from mzc.ops.slicing import slice_surface
 
     numbers = slicing_numbers({"d1": d1, "d2": d2, "rows": rows, "cols": cols, "center": center, "axis": axis,
                                "classes": classes})
-    if isinstance(surface, (str, os.PathLike)):
-        surface = read_item(path_of(surface, "surface"))
-    if not (isinstance(surface, ZGrid) and surface.raster is not None):
-        surface = as_mesh(surface)
-    return slice_surface(surface, align=align, units=units, projection=projection, view=view,
-                         thesis_grid=thesis_grid, cloud=cloud, charts=charts, **numbers)
+    surface = given(surface)
+    return slice_surface(read_file(surface) if isinstance(surface, str) else surface, align=align, units=units,
+                         projection=projection, view=view, thesis_grid=thesis_grid, cloud=cloud, charts=charts,
+                         **numbers)
 
 
 def slicing_numbers(options: dict[str, Any]) -> dict[str, Any]:
@@ -183,8 +161,8 @@ def encode(grid: ZGrid | np.ndarray, codec: str = "dwt2d", **options: Any) -> by
 
 
 def decode(data: bytes, legacy: str | None = None) -> ZGrid:
-    """The z-grid of any mzc file's bytes (``mzc decode``); ``legacy`` names the kind of a thesis
-    file (poly, dft, dct, dwt), which has no magic line."""
+    """The z-grid of any mzc file's bytes, or of a raster's (``mzc decode``); ``legacy`` names the
+    kind of a thesis file (poly, dft, dct, dwt), which has no magic line."""
     try:
         contents = bytes(memoryview(data).cast("B"))
     except TypeError:
@@ -195,7 +173,7 @@ def decode(data: bytes, legacy: str | None = None) -> ZGrid:
         return read_legacy(contents, BYTES_SOURCE, legacy)
     from mzc.formats import read_any
 
-    return read_any(contents, BYTES_SOURCE)   # a file without a magic line is refused there
+    return read_any(contents, BYTES_SOURCE)
 
 
 def densify(grid: ZGrid | np.ndarray, n: int, method: str = "biharmonic", *, iterations: int = 100,
@@ -245,22 +223,26 @@ def sample(name: str = "bump") -> Mesh:
 
 
 def read(path: PathLike) -> ZGrid | Mesh:
-    """Read a file: an mzc file (z-grid or compressed) or a raster (GeoTIFF, ESRI ASCII grid) as
-    its ZGrid, a mesh or cloud as a Mesh."""
-    return read_item(path_of(path))
+    """Read a file, of any format mzc knows (``mzc.formats``): an mzc file (z-grid or compressed)
+    or a raster (GeoTIFF, ESRI ASCII grid) as its ZGrid, a mesh or cloud as a Mesh."""
+    from mzc.formats import read_file
+
+    return read_file(path_of(path))
 
 
 def write(path: PathLike, item: ZGrid | Mesh | bytes, file_format: str | None = None,
           precision: int | None = None, *, plain: bool = False, float32: bool = False) -> None:
     """Write a ZGrid as a z-grid, or as a raster when ``path`` ends in .tif, .tiff or .asc (or
     ``file_format`` is tif or asc: mzc.rasters, ``float32`` samples for GeoTIFF), a Mesh in the
-    format of ``path``'s extension (or ``file_format``), or bytes (a compressed file) as they
-    are; atomically: nothing is left on failure.
+    format of ``path``'s extension (or ``file_format``), each format chosen from the table of
+    formats (``mzc.formats``), or bytes (a compressed file) as they are; atomically: nothing is
+    left on failure.
 
     A z-grid's heights are written raw by default (``mzc-zgrid 3.0``: exact little-endian
     float64, or float32 with ``float32``); ``plain`` writes them as text rows (1.0, 2.0), which
     ``precision`` (decimals) rounds. ``precision`` without ``plain`` is an MzcError."""
     from mzc.codecs.rows import MAX_PRECISION
+    from mzc.formats import GRIDS, writer_for
     from mzc.grid import ZGrid
     from mzc.streams import write_output
 
@@ -273,11 +255,11 @@ def write(path: PathLike, item: ZGrid | Mesh | bytes, file_format: str | None = 
 
         write_mesh(path, as_mesh(item), file_format)
         return
-    from mzc.rasters import format_for, write_raster
+    row = writer_for(path, file_format, GRIDS)
+    if row is not None and row.kind == "raster":
+        from mzc.rasters import write_raster
 
-    raster = format_for(path, file_format)
-    if raster:
-        write_raster(path, item, raster, float32=float32)
+        write_raster(path, item, row.name, float32=float32)
         return
     from mzc.formats import zgrid
 
@@ -314,12 +296,11 @@ def batch_encode(sources: Any, dest: PathLike, codec: str = "dwt2d", *, slice_op
 
 
 def sliceable_extensions() -> list[str]:
-    """The extensions of the files ``mzc batch encode`` takes from a folder: meshes, point
-    clouds and rasters."""
-    from mzc import rasters
-    from mzc.meshes import registry
+    """The extensions of the files ``mzc batch encode`` takes from a folder: rasters, meshes and
+    point clouds."""
+    from mzc.formats import SURFACES, extensions
 
-    return [*(e for name in registry.FORMATS for e in registry.format_named(name).EXTENSIONS), *rasters.EXTENSIONS]
+    return extensions(("raster", *SURFACES))
 
 
 def batch_decode(sources: Any, dest: PathLike, *, densify: int = 0, method: str = "biharmonic",
@@ -328,18 +309,17 @@ def batch_decode(sources: Any, dest: PathLike, *, densify: int = 0, method: str 
     """Decode every mzc file of ``sources`` into a mesh in the folder ``dest`` on Dask (``mzc batch
     decode``): decoded, densified with ``densify`` rows between planes, triangulated into
     ``file_format``, or written as a raster when it is tif or asc. Returns the ``mzc.batch.Summary``."""
-    from mzc import rasters
     from mzc.codecs import codec_names, get_codec
+    from mzc.formats import SURFACES, extensions, writable
     from mzc.limits import MAX_INSERTED
-    from mzc.meshes import registry
 
-    known = (*registry.writable(), *rasters.FORMATS)
+    known = writable(("raster", *SURFACES))
     if file_format not in known:
         raise MzcError(f"cannot write format {file_format!r} (known: {', '.join(known)})", field="file_format")
     densify = number(densify, "densify", int, 0, MAX_INSERTED)
     settings = {"densify": densify, "method": method, "format": file_format, "jump_angle": jump_angle}
-    extensions = [".zg", *(get_codec(name).extension for name in codec_names())]
-    return run_batch_job("decode", sources, dest, settings, extensions, "." + file_format, scheduler=scheduler,
+    decoded = [*extensions(("grid",)), *(get_codec(name).extension for name in codec_names())]
+    return run_batch_job("decode", sources, dest, settings, decoded, "." + file_format, scheduler=scheduler,
                          workers=workers, chunk_size=chunk_size, listener=listener)
 
 

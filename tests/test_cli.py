@@ -24,12 +24,11 @@ def test_help_lists_every_command_without_importing_numerics():
 
 
 def test_the_formats_the_options_offer_are_the_ones_mzc_writes():
-    from mzc import rasters
     from mzc.cli.options import RASTER_FORMATS
     from mzc.cli.triangulate import FORMATS
-    from mzc.meshes import registry
+    from mzc.formats import SURFACES, writable
 
-    assert (RASTER_FORMATS, FORMATS) == (rasters.FORMATS, registry.writable())
+    assert (set(RASTER_FORMATS), set(FORMATS)) == (set(writable(("raster",))), set(writable(SURFACES)))
 
 
 def test_version(mzc):
@@ -52,7 +51,7 @@ def test_missing_file_is_one_line(mzc):
 def test_a_mesh_given_where_a_grid_is_expected(mzc, tmp_path):
     mesh = tmp_path / "m.obj"
     mesh.write_text("v 0 0 0\n")
-    assert_one_line_error(mzc("triangulate", mesh), "not an mzc file")
+    assert_one_line_error(mzc("triangulate", mesh), "m.obj: holds a mesh (obj), not a z-grid")
 
 
 def test_bad_grid_names_file_and_line(mzc, tmp_path):

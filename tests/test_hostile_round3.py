@@ -503,13 +503,13 @@ def test_a_geotiff_without_a_geotransform_reads_without_a_warning():
     pytest.importorskip("rasterio")
     import warnings
 
-    from mzc.rasters import raster_or_mesh
+    from mzc.formats import read
 
     data = bytearray((LAS / "rasterio_float.tif").read_bytes())
     data[142] ^= 1   # the tag of the geotransform's pixel scale becomes another
     with warnings.catch_warnings():
         warnings.simplefilter("error")
-        grid = raster_or_mesh(bytes(data), "plain.tif")
+        grid = read(bytes(data), "plain.tif")
     assert grid.shape == (2, 3) and (grid.d1, grid.d2) == (1.0, 1.0)
 
 
@@ -544,12 +544,12 @@ def test_a_transform_of_huge_entries_is_refused_without_an_overflow_warning():
 def test_a_geotiff_whose_crs_is_not_utf8_is_refused_in_one_line():
     """rasterio raised a UnicodeDecodeError as it opened the file: an internal error."""
     pytest.importorskip("rasterio")
-    from mzc.rasters import raster_or_mesh
+    from mzc.formats import read
 
     data = (LAS / "rasterio_float_nodata.tif").read_bytes()
     at = data.index(b"unknown|")   # the GeoTIFF's citation of its CRS
     with pytest.raises(MzcError, match="crs.tif: not a readable GeoTIFF: 'utf-8' codec"):
-        raster_or_mesh(data[:at] + b"\xff" + data[at + 1:], "crs.tif")
+        read(data[:at] + b"\xff" + data[at + 1:], "crs.tif")
 
 
 def test_a_geotiff_of_a_signalling_nan_reads_it_as_no_data_without_a_warning():
@@ -559,7 +559,7 @@ def test_a_geotiff_of_a_signalling_nan_reads_it_as_no_data_without_a_warning():
     from affine import Affine
     from rasterio.io import MemoryFile
 
-    from mzc.rasters import raster_or_mesh
+    from mzc.formats import read
 
     values = np.ones((1, 2, 3), "float32")
     values.view("<u4")[0, 0, 0] = 0x7FA00000
@@ -570,7 +570,7 @@ def test_a_geotiff_of_a_signalling_nan_reads_it_as_no_data_without_a_warning():
         data = memory.read()
     with warnings.catch_warnings():
         warnings.simplefilter("error")
-        assert raster_or_mesh(data, "snan.tif").valid.sum() == 5
+        assert read(data, "snan.tif").valid.sum() == 5
 
 
 @pytest.mark.parametrize("scale", [1e80, 1e99])
@@ -594,12 +594,12 @@ def test_an_organised_cloud_far_out_is_triangulated_without_an_overflow(scale):
 def test_a_geotiff_whose_crs_gdal_cannot_parse_is_refused_in_one_line():
     """rasterio's CRSError (a ValueError, not a RasterioError) was an internal error."""
     pytest.importorskip("rasterio")
-    from mzc.rasters import raster_or_mesh
+    from mzc.formats import read
 
     data = (LAS / "rasterio_float_nodata.tif").read_bytes()
     data = (data[:502] + b"\xff" * 8 + data[510:]).replace(b"GRS80", b"GRS-1")   # a NaN in the CRS's numbers
     with pytest.raises(MzcError, match="crs.tif: not a readable GeoTIFF: OGR Error"):
-        raster_or_mesh(data, "crs.tif")
+        read(data, "crs.tif")
 
 
 def test_a_laz_extended_record_of_2_to_the_63_bytes_is_refused_in_one_line():

@@ -273,24 +273,27 @@ def test_ascii_ply_declaring_no_vertices_is_a_clear_error(tmp_path):
         read_mesh(str(path))
 
 
-def test_read_surface_gives_an_mzc_file_as_the_mesh_of_its_grid(tmp_path):
-    from mzc.api import read_surface
+def test_a_surface_path_gives_an_mzc_file_as_the_mesh_of_its_grid(tmp_path):
+    from mzc.api import as_mesh
     from mzc.formats import zgrid
     from mzc.grid import ZGrid
 
     path = write(tmp_path, "g.zg", zgrid.write(ZGrid(np.zeros((3, 4)), 1, 1)))
-    surface = read_surface(path)
+    surface = as_mesh(path)
     assert surface.grid is not None and surface.grid.shape == (3, 4)
     assert len(surface.triangles) == 2 * 2 * 3 and not surface.is_point_cloud
-    assert read_surface(write(tmp_path, "cloud.xyz", "0 0 0\n1 0 0\n")).is_point_cloud
+    assert as_mesh(write(tmp_path, "cloud.xyz", "0 0 0\n1 0 0\n")).is_point_cloud
 
 
-def test_read_surface_takes_no_mesh_on_stdin(monkeypatch):
+def test_a_surface_on_stdin_is_read_as_a_file_is(monkeypatch):
+    """One registry reads every file: a mesh on stdin is identified by its bytes, as 'mzc slice' always
+    read it (the API refused it, where the command took it)."""
     import io
     import sys
 
-    from mzc.api import read_surface
+    from mzc.api import as_mesh
 
     monkeypatch.setattr(sys, "stdin", io.TextIOWrapper(io.BytesIO(PLAIN_OBJ.encode())))
-    with pytest.raises(MzcError, match="stdin must carry an mzc file"):
-        read_surface("-")
+    mesh, expected = as_mesh("-"), mesh_from_bytes(PLAIN_OBJ.encode(), "m.obj")
+    np.testing.assert_array_equal(mesh.points, expected.points)
+    np.testing.assert_array_equal(mesh.triangles, expected.triangles)

@@ -22,7 +22,7 @@ from mzc.formats import read_any, zgrid
 from mzc.formats.header import format_number
 from mzc.georef import crs_kind, metric_frame
 from mzc.grid import Raster, ZGrid
-from mzc.rasters import Layout, asc, grid_of, layout_of, raster_rows, read_raster
+from mzc.rasters import Layout, asc, grid_of, layout_of, raster_rows
 
 from codec_contract import SPEC, rechecksummed, spec_examples
 
@@ -467,7 +467,7 @@ def mzc_grid():
 def test_without_rasterio_a_geotiff_is_one_line_naming_the_extra(monkeypatch):
     monkeypatch.setitem(sys.modules, "rasterio", None)
     with pytest.raises(MzcError, match=re.escape("pip install 'mzc[geo]'")):
-        read_raster((PUBLIC / "rasterio_float.tif").read_bytes(), "x.tif")
+        read_any((PUBLIC / "rasterio_float.tif").read_bytes(), "x.tif")
     grid = mzc.read(PUBLIC / "hugo_site.asc")   # an ESRI grid needs no library
     assert grid.shape == (55, 76)
 

@@ -146,12 +146,12 @@ def encode_item(job, item, data, row, timings):
     import numpy as np
 
     from mzc.codecs import get_codec
+    from mzc.formats import read
     from mzc.ops.slicing import slice_surface
-    from mzc.rasters import raster_or_mesh
 
     settings, source = job.settings, item.source
     with timings.stage("read"):
-        surface = raster_or_mesh(data, source, source)
+        surface = read(data, source, path=source)
     with timings.stage("slice"), about(source, "slicing it"):
         grid = slice_surface(surface, **settings["slice_options"])
     codec = get_codec(settings["codec"])
@@ -183,14 +183,14 @@ def surface_distances(surface, grid, decoded):
 
 
 def decode_item(job, item, data, row, timings):
-    """An mzc file's bytes decoded, densified when asked and triangulated: [(the item's output,
-    the mesh file)]; or, for a raster format, the raster's files (``mzc.rasters.raster_files``)."""
-    from mzc import rasters
-    from mzc.formats import read_any
+    """A grid's bytes (an mzc file, or a raster) decoded, densified when asked and triangulated:
+    [(the item's output, the mesh file)]; or, for a raster format, the raster's files
+    (``mzc.rasters.raster_files``)."""
+    from mzc.formats import GRIDS, named, read
 
     settings, source = job.settings, item.source
     with timings.stage("decode"), about(source, "decoding it"):
-        grid = read_any(data, source)
+        grid = read(data, source, GRIDS, path=source)
     row.update(rows=grid.shape[0], cols=grid.shape[1], valid_nodes=int(grid.valid.sum()))
     if settings["densify"]:
         from mzc.ops.densify import densify_grid
@@ -198,9 +198,11 @@ def decode_item(job, item, data, row, timings):
         with timings.stage("densify"), about(source, f"densifying it ({settings['method']}, "
                                                      f"n = {settings['densify']})"):
             grid = densify_grid(grid, settings["densify"], settings["method"], jump_angle=settings["jump_angle"])
-    if settings["format"] in rasters.FORMATS:
+    if named(settings["format"]).kind == "raster":
+        from mzc.rasters import raster_files
+
         with timings.stage("raster"), about(source, f"writing it as {settings['format']}"):
-            return rasters.raster_files(item.output, grid, settings["format"])
+            return raster_files(item.output, grid, settings["format"])
     from mzc.meshes import mesh_to_bytes
     from mzc.ops.triangulation import grid_to_mesh
 

@@ -17,11 +17,12 @@ LEGACY_KINDS = ("poly", "dft", "dct", "dwt")
 
 @click.command(help=f"""Decompress an mzc file into a z-grid.
 
-The codec is recognised by the file's magic line (mzc-poly, mzc-dft, mzc-dct, mzc-dwt, ...).
-Files written by the thesis's MATLAB code have no magic line: name their kind with
---legacy. Invalid nodes (outside each row's span, and recorded holes) come back as nan.
-The heights are written exactly by default (raw), the grid the codec's error bounds speak
-of; --plain writes text, which --precision rounds.
+The codec is recognised by the file's magic line (mzc-poly, mzc-dft, mzc-dct, mzc-dwt, ...);
+a z-grid or a raster (GeoTIFF, ESRI ASCII grid) is read as the grid it is. Files written by
+the thesis's MATLAB code have no magic line: name their kind with --legacy. Invalid nodes
+(outside each row's span, and recorded holes) come back as nan. The heights are written
+exactly by default (raw), the grid the codec's error bounds speak of; --plain writes text,
+which --precision rounds.
 
 {RASTER_OUTPUT_HELP}""")
 @input_argument

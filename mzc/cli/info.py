@@ -1,4 +1,4 @@
-"""``mzc info FILE``: one screen about any mzc file."""
+"""``mzc info FILE``: one screen about any file that holds a grid."""
 
 import click
 
@@ -8,44 +8,64 @@ from mzc.cli.options import input_argument
 @click.command(help="""Describe any mzc file: format, version, grid size, spacings, bytes, header lines.
 
 Reads the header only (and checks the file's checksum), so it is quick on any file;
---decode also decodes the file to count its valid nodes and give their range.""")
+--decode also decodes the file to count its valid nodes and give their range. A raster
+(GeoTIFF, ESRI ASCII grid) is read whole and described as the grid it is, with the
+header lines its z-grid would carry.""")
 @input_argument
 @click.option("--decode", "decode", is_flag=True, help="Decode the file: valid nodes, value range, bits per node.")
 def command(input, decode):
-    import numpy as np
-
-    from mzc.formats import header_versions, read_any
-    from mzc.formats.header import read_grid_fields, read_header, split_magic
-    from mzc.grid import ZGrid
+    from mzc.formats import GRIDS, identified, read_as
+    from mzc.formats.header import grid_header_lines
     from mzc.streams import display_name, read_input
 
     data = read_input(input)
     source = display_name(input)
-    kind, major, minor = split_magic(data, source)
-    header, _body, _line = read_header(data, source, kind, major, **header_versions(kind, source))
-    fields, rows, cols = read_grid_fields(header)
-    grid = read_any(data, source) if decode else ZGrid(z=np.broadcast_to(np.nan, (rows, cols)), **fields)
+    row = identified(data, source, GRIDS)
+    if row.kind == "raster":
+        grid = read_as(row, data, source, input)
+        format_line, header, chart_count = f"{row.name} (a raster, read as its grid)", grid_header_lines(grid), None
+    else:
+        grid, format_line, header, chart_count = mzc_header(row, data, source, decode)
+    rows, cols = grid.shape
     lines = [
         f"file      {source}",
-        f"format    mzc-{kind} {major}.{minor}",
+        f"format    {format_line}",
         f"bytes     {len(data)}",
         f"grid      {rows} rows x {cols} cols, d1 {grid.d1:g} d2 {grid.d2:g}{' ' + grid.units if grid.units else ''}",
-        f"cut by    {cutting_surfaces(grid, header.has('chart_count'))}",
-        *chart_lines(grid, header),
+        f"cut by    {cutting_surfaces(grid, chart_count is not None)}",
+        *chart_lines(grid, chart_count),
     ]
     if decode:
         lines += decoded_lines(grid, len(data))
     lines.append("header")
-    lines += [f"  {keyword} {' '.join(values)}" for keyword, (values, _) in header.fields.items()]
+    lines += [f"  {line}" for line in header]
     click.echo("\n".join(lines))
 
 
-def chart_lines(grid, header):
+def mzc_header(row, data, source, decode):
+    """(grid, format line, header lines, chart count) of an mzc file of the format ``row``, from its
+    header alone (its checksum checked), the grid decoded only with ``decode``; the chart count is
+    a charted dwt2d file's ``chart_count`` (its records are in its payload), else None."""
+    import numpy as np
+
+    from mzc.formats import header_versions, read_as
+    from mzc.formats.header import read_grid_fields, read_header, split_magic
+    from mzc.grid import ZGrid
+
+    kind, major, minor = split_magic(data, source)
+    header, _body, _line = read_header(data, source, kind, major, **header_versions(row))
+    fields, rows, cols = read_grid_fields(header)
+    grid = read_as(row, data, source) if decode else ZGrid(z=np.broadcast_to(np.nan, (rows, cols)), **fields)
+    lines = [f"{keyword} {' '.join(values)}" for keyword, (values, _) in header.fields.items()]
+    chart_count = " ".join(header.tokens("chart_count")) if header.charted and header.has("chart_count") else None
+    return grid, f"mzc-{kind} {major}.{minor}", lines, chart_count
+
+
+def chart_lines(grid, chart_count=None):
     """A multi-chart grid's charts: how many, and each one's view, block and nodes' lattice place
-    (a dwt2d file's records are in its payload: their count without --decode)."""
+    (a dwt2d file's records are in its payload: ``chart_count`` alone without --decode)."""
     if grid.charts is None:
-        return [f"charts    {' '.join(header.tokens('chart_count'))} (records in the payload: --decode lists them)"] \
-            if header.charted and header.has("chart_count") else []
+        return [f"charts    {chart_count} (records in the payload: --decode lists them)"] if chart_count else []
     from collections import Counter
 
     views = Counter(chart.view for chart in grid.charts)

@@ -7,7 +7,7 @@ writes through ``mzc.streams`` so output is atomic.
 import click
 
 from mzc.errors import MzcError, about
-from mzc.streams import display_name, read_input
+from mzc.streams import display_name
 
 input_argument = click.argument("input", required=False, default="-", metavar="[INPUT]")
 output_option = click.option("-o", "--output", default="-", metavar="FILE",
@@ -19,17 +19,11 @@ jump_angle_option = click.option(
 
 
 def read_grid(path):
-    """Read a z-grid, or any compressed mzc file (decoded), from ``path`` or stdin."""
-    from mzc.formats import is_mzc, read_any
+    """Read a grid from ``path`` or stdin: a z-grid, a compressed mzc file (decoded) or a raster."""
+    from mzc.formats import GRIDS, read_file
 
-    data = read_input(path)
-    source = display_name(path)
-    if not data:
-        raise MzcError("empty input: expected an mzc z-grid", source=source)
-    if not is_mzc(data):
-        raise MzcError("not an mzc file (expected a z-grid, e.g. from 'mzc slice')", source=source, line=1)
-    with about(source, "decoding it"):
-        return read_any(data, source)
+    with about(display_name(path), "decoding it"):
+        return read_file(path, GRIDS)
 
 
 plain_option = click.option("--plain", is_flag=True,
@@ -48,7 +42,7 @@ def with_options(options, command):
     return command
 
 
-RASTER_FORMATS = ("tif", "asc")   # mzc.rasters.FORMATS, spelled here so that --help imports no numpy
+RASTER_FORMATS = ("tif", "asc")   # mzc.formats' rasters, spelled here so that --help imports no numpy
 format_option = click.option("--format", "file_format", type=click.Choice(("zg", *RASTER_FORMATS)),
                              help="Output format: zg (z-grid), tif (GeoTIFF) or asc (ESRI ASCII grid) "
                                   "[default: from the -o extension, else zg].")
@@ -70,14 +64,14 @@ def grid_writer(output, file_format, plain, float32, precision):
     z-grid with the body the body options give (``zgrid_body``)."""
     from functools import partial
 
-    from mzc.rasters import format_for
+    from mzc.formats import GRIDS, writer_for
 
-    raster = format_for(output, file_format)
-    if not raster:
+    row = writer_for(output, file_format, GRIDS)
+    if row is None or row.kind != "raster":
         return partial(write_grid, path=output, body=zgrid_body(plain, float32, precision))
     if plain or precision is not None:
-        raise click.UsageError(f"--plain and --precision shape a z-grid's body; --format {raster} writes a raster")
-    return partial(write_raster_output, output=output, raster=raster, float32=float32)
+        raise click.UsageError(f"--plain and --precision shape a z-grid's body; --format {row.name} writes a raster")
+    return partial(write_raster_output, output=output, raster=row.name, float32=float32)
 
 
 def write_raster_output(grid, output, raster, float32):

@@ -105,8 +105,8 @@ vertex-only PLY) into a z-grid: each node holds the outermost hit of its line wi
 surface (the front-most height of planar grids, the farthest distance along a central ray).
 
 A raster (GeoTIFF, ESRI ASCII grid) is its own z-grid: read node for node with its
-no-data cells, georeferencing and CRS; the options that would cut it otherwise are
-refused.
+no-data cells, georeferencing and CRS; so is a z-grid or compressed mzc file. The options
+that would cut it otherwise are refused.
 
 {RASTER_OUTPUT_HELP}""")
 @input_argument
@@ -117,16 +117,13 @@ def command(input, output, d1, d2, rows, cols, thesis_grid, align, projection, v
             classes, charts, cloud, file_format, plain, float32, precision):
     from mzc.api import slice as slice_surface
     from mzc.errors import about
-    from mzc.rasters import raster_or_mesh
-    from mzc.streams import check_not_input, display_name, read_input
+    from mzc.streams import check_not_input, display_name
 
     check_slice_options(d1, d2, rows, cols)
     write = grid_writer(output, file_format, plain, float32, precision)
     check_not_input(output, input)
-    data, source = read_input(input), display_name(input)
-    surface = raster_or_mesh(data, source, input)
-    with about(source, "slicing it"):
-        grid = slice_surface(surface, d1=d1, d2=d2, rows=rows, cols=cols, align=align, units=units,
+    with about(display_name(input), "slicing it"):
+        grid = slice_surface(input, d1=d1, d2=d2, rows=rows, cols=cols, align=align, units=units,
                              projection=projection, center=center, axis=axis, view=view,
                              thesis_grid=thesis_grid, classes=classes, charts=charts, cloud=cloud)
     write(grid)

@@ -4,7 +4,8 @@ The thesis's per-row codecs live in ``rows/`` (poly, dft, dct, dwt), the 2D wave
 ``dwt2d/``. Each codec module builds a ``mzc.codecs.base.Codec`` named ``CODEC``; the
 built-in ones are imported on first use (start-up stays fast), others come in through
 ``register_codec`` or the ``mzc.codecs`` entry-point group of an installed package, as
-numcodecs finds its codecs.
+numcodecs finds its codecs. Every codec is a row of the one table of file formats
+(``mzc.formats``): the compressed format its files are in, read by the codec.
 """
 
 from __future__ import annotations
@@ -67,12 +68,12 @@ def get_codec(name: str) -> Codec:
     raise MzcError(f"unknown codec {name!r} (known: {', '.join(codec_names())})", field="codec")
 
 
-def codec_for_kind(kind: str) -> Codec | None:
-    """The codec whose files carry ``mzc-KIND`` on their magic line, or None."""
-    if kind in BUILT_IN:
-        return get_codec(kind)
-    for name in codec_names():
-        codec = get_codec(name) if name not in BUILT_IN else None
-        if codec is not None and codec.kind == kind:
-            return codec
-    return None
+def registered_codecs() -> list[Codec]:
+    """The codecs registered in this process that are not built in (a built-in one registers
+    itself once loaded): rows of the table of formats (``mzc.formats``)."""
+    return [codec for name, codec in registered.items() if name not in BUILT_IN]
+
+
+def installed_codecs() -> list[Codec]:
+    """The codecs installed packages declare that this process has not registered, loaded now."""
+    return [get_codec(name) for name in plugin_names() if name not in registered and name not in BUILT_IN]

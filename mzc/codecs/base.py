@@ -159,3 +159,5 @@ class Codec:
     def decode(self, data: bytes, source: str = "<bytes>") -> ZGrid:
         """The z-grid of a file of this codec; ``source`` names it in error messages."""
         return self.reader(data, source)
+
+    read = decode   # a codec reads its files as every format's module does (mzc.formats)

@@ -32,6 +32,7 @@ from mzc.limits import check_grid_magnitudes
 from mzc.numbers import floats, unpadded
 
 KIND = "zgrid"
+EXTENSIONS = (".zg",)
 VERSION = (1, 0)             # planar grids, byte for byte as before projections
 PROJECTED_VERSION = (2, 0)   # 1.0 with the projection lines (mzc.formats.header)
 OLDEST_MAJOR = 1

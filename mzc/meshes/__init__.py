@@ -10,8 +10,9 @@ fan-triangulated; other cell types are ignored. Every problem becomes an MzcErro
 the file, and the line where it is known: a file that breaks the counts it declares, or
 holds anything but numbers where numbers belong, is refused, never read in part.
 
-Each format is one module of this package, listed in ``registry``; the format modules
-see bytes only, and paths, stdin/stdout and atomic output are ``mzc.streams``'s.
+Each format is one module of this package, a row of the one table of file formats
+(``mzc.formats``), which identifies a file and picks the module that reads or writes it; the
+format modules see bytes only, and paths, stdin/stdout and atomic output are ``mzc.streams``'s.
 """
 
 from __future__ import annotations
@@ -23,10 +24,9 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from mzc.errors import MzcError
-from mzc.meshes import registry
 from mzc.meshes.common import as_indices
 from mzc.numbers import real_array
-from mzc.streams import display_name, is_stdio, is_stream, read_input, write_output
+from mzc.streams import is_stdio, is_stream, write_output
 
 if TYPE_CHECKING:
     from mzc.grid import ZGrid
@@ -113,24 +113,19 @@ def real_or_integers(values):
 
 
 def read_mesh(path: str | os.PathLike | None) -> Mesh:
-    """Read a mesh or point cloud from ``path`` (``-`` or None for stdin, recognised by its bytes)."""
-    return mesh_from_bytes(read_input(path), display_name(path))
+    """Read a mesh or point cloud from ``path`` (``-`` or None for stdin), its format identified
+    as every file's is (``mzc.formats``)."""
+    from mzc.formats import SURFACES, read_file
+
+    return read_file(path, SURFACES)
 
 
 def mesh_from_bytes(data: bytes, source: str = "<bytes>", file_format: str | None = None) -> Mesh:
-    """The mesh or point cloud in ``data``, read as ``file_format`` (a registry name), else
-    the format of ``source``'s extension, else the one its bytes look like. ``source``
-    names the data in error messages."""
-    if not data.strip():
-        raise MzcError("empty input: expected a mesh or point cloud", source=source)
-    if file_format is not None and file_format not in registry.FORMATS:
-        raise MzcError(f"unknown mesh format {file_format!r} (known: {', '.join(registry.FORMATS)})",
-                       source=source)
-    name = file_format or registry.by_extension(source) or registry.by_content(data)
-    if name is None:
-        raise MzcError("unrecognised mesh format (expected OBJ, PLY, VTK, STL, OFF, LAS/LAZ, PCD or x y z text)",
-                       source=source)
-    return checked(registry.format_named(name).read(data, source), source)
+    """The mesh or point cloud in ``data``, read as ``file_format`` (a format's name) or as the
+    format ``mzc.formats`` identifies; ``source`` names the data in error messages."""
+    from mzc.formats import SURFACES, read
+
+    return read(data, source, SURFACES, name=file_format)
 
 
 def checked(mesh: Mesh, source: str) -> Mesh:
@@ -185,10 +180,11 @@ def mesh_to_bytes(mesh: Mesh, file_format: str) -> bytes:
 
 
 def mesh_chunks(mesh: Mesh, file_format: str) -> Any:
-    """``mesh`` in ``file_format``: its bytes, or (PLY) an iterator of bytes-like chunks that
-    ``mzc.streams.write_output`` writes as they are made."""
-    writer = registry.format_named(file_format).write if file_format in registry.FORMATS else None
-    if writer is None:
-        raise MzcError(f"cannot write mesh format {file_format!r} (choose one of "
-                       f"{', '.join(registry.writable())})")
-    return writer(mesh)
+    """``mesh`` in ``file_format`` (a format's name or extension): its bytes, or (PLY) an iterator
+    of bytes-like chunks that ``mzc.streams.write_output`` writes as they are made."""
+    from mzc.formats import SURFACES, writable, writer_for
+
+    row = writer_for(None, file_format, SURFACES)
+    if row is None:
+        raise MzcError(f"cannot write mesh format {file_format!r} (choose one of {', '.join(writable(SURFACES))})")
+    return row.load().write(mesh)

@@ -41,11 +41,6 @@ PANIC_MODULE = "pyo3_runtime"   # where pyo3 makes PanicException, a BaseExcepti
 VLR_HEADER, EVLR_HEADER, EVLR_HEADER_SIZE = 54, 60, 375   # bytes of a record's header; LAS 1.4's header size
 
 
-def sniff(data: bytes) -> bool:
-    """True when ``data`` starts with the LAS signature ``LASF``."""
-    return data.startswith(b"LASF")
-
-
 def read(data: bytes, source: str) -> Mesh:
     """The point cloud of LAS or LAZ ``data``, with its classes and CRS."""
     try:

@@ -29,7 +29,7 @@ from mzc.numbers import unpadded
 class MeshioFormat:
     """One format meshio reads and writes, declared like a format module."""
 
-    def __init__(self, name: str, extensions: tuple[str, ...], sniff: Callable[[bytes], bool],
+    def __init__(self, name: str, extensions: tuple[str, ...], sniff: Callable[[bytes], bool | None] | None,
                  is_text: Callable[[bytes], bool], counts: re.Pattern):
         self.NAME = name
         self.EXTENSIONS = extensions
@@ -58,9 +58,9 @@ VTK_COUNTS = re.compile(rb"^(?:POINTS[ \t]+(?P<points>\d+)|(?:CELLS|POLYGONS|TRI
                         re.MULTILINE)
 OFF_COUNTS = re.compile(rb"\A\s*[NCST4]*OFF\b(?:\s*#[^\n]*)*(?:\s*BINARY)?(?:\s*#[^\n]*)*"
                         rb"\s*(?P<points>\d+)\s+(?P<values>\d+)")
-VTK = MeshioFormat("vtk", (".vtk",), lambda data: data.startswith(b"# vtk DataFile"),
+VTK = MeshioFormat("vtk", (".vtk",), None,   # identified by its magic (mzc.formats)
                    lambda data: data[:1024].split(b"\n", 3)[2:3] == [b"ASCII"], VTK_COUNTS)   # the third line
-OFF = MeshioFormat("off", (".off",), lambda data: bool(re.match(rb"\s*[NCST4]*OFF\b", data[:4096])),
+OFF = MeshioFormat("off", (".off",), lambda data: True if re.match(rb"\s*[NCST4]*OFF\b", data[:4096]) else None,
                    lambda data: b"BINARY" not in data[:64], OFF_COUNTS)
 
 

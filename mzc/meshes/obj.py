@@ -27,9 +27,10 @@ EXTENSIONS = (".obj",)
 OBJ_WHITESPACE = np.frombuffer(b" \t\r\n\v\f", dtype=np.uint8)
 
 
-def sniff(data: bytes) -> bool:
-    """True when a line near the start is a ``v`` statement."""
-    return bool(re.search(rb"(^|[\r\n])\s*v\s", data[:4096]))
+def sniff(data: bytes) -> bool | None:
+    """True when a line near the start is a ``v`` statement; else None: an OBJ has no magic, so
+    any text may be one (its reader says what is wrong with it)."""
+    return True if re.search(rb"(^|[\r\n])\s*v\s", data[:4096]) else None
 
 
 def read(data: bytes, source: str) -> Mesh:

@@ -89,9 +89,10 @@ class Header:
         return self.width * self.height
 
 
-def sniff(data: bytes) -> bool:
-    """True when the first line that is not a ``#`` comment starts with a PCD keyword."""
-    return re.match(rb"(?:[ \t]*#[^\n]*\n|[ \t]*\r?\n)*[ \t]*(VERSION|FIELDS)\b", data[:4096]) is not None
+def sniff(data: bytes) -> bool | None:
+    """True when the first line that is not a ``#`` comment starts with a PCD keyword; else None:
+    a PCD whose header is damaged is for its reader to refuse."""
+    return True if re.match(rb"(?:[ \t]*#[^\n]*\n|[ \t]*\r?\n)*[ \t]*(VERSION|FIELDS)\b", data[:4096]) else None
 
 
 def read(data: bytes, source: str) -> Mesh:

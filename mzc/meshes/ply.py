@@ -25,11 +25,6 @@ NAME = "ply"
 EXTENSIONS = (".ply",)
 
 
-def sniff(data: bytes) -> bool:
-    """True when ``data`` starts with the PLY magic word."""
-    return data.startswith(b"ply")
-
-
 def read(data: bytes, source: str) -> Mesh:
     """The mesh or point cloud of PLY ``data``; a broken file is an MzcError saying why."""
     elements, body_format, body, body_line = parse_ply_header(data, source)

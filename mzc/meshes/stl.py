@@ -22,9 +22,10 @@ HEADER = 84   # 80 bytes of anything, then the uint32 triangle count
 TRIANGLE = np.dtype([("normal", "<f4", (3,)), ("corners", "<f4", (3, 3)), ("attribute", "<u2")])
 
 
-def sniff(data: bytes) -> bool:
-    """True for ascii STL text or bytes whose size fits a binary STL's triangle count."""
-    return is_binary(data) or is_ascii(data)
+def sniff(data: bytes) -> bool | None:
+    """True for ascii STL text or bytes whose size fits a binary STL's triangle count; else None: a
+    binary STL has no magic, and one cut short fits no count (its reader says so)."""
+    return True if is_binary(data) or is_ascii(data) else None
 
 
 def is_binary(data: bytes) -> bool:

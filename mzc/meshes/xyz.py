@@ -15,10 +15,12 @@ EXTENSIONS = (".xyz", ".txt", ".pts", ".asc")
 write = None   # a point cloud is read, never written
 
 
-def sniff(data: bytes) -> bool:
-    """True for text with a line starting like a number (tried last: most text fits)."""
+def sniff(data: bytes) -> bool | None:
+    """True for text whose first line that is not a ``#`` comment starts like a number (ranked last:
+    most such text is x y z); else None: x y z text has no magic, and text under a header (a PCD's
+    that is damaged) is for the reader its name gives."""
     head = data[:4096]
-    return bool(re.search(rb"(^|[\r\n])\s*[-+.\d]", head)) and is_text(head)
+    return True if re.match(rb"(?:\s*#[^\r\n]*[\r\n])*\s*[-+.\d]", head) and is_text(head) else None
 
 
 def read(data: bytes, source: str) -> Mesh:

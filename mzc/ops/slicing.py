@@ -71,8 +71,8 @@ def facing_direction(points, triangles):
 def slice_surface(surface, d1=None, d2=None, rows=None, cols=None, align="none", units=None,
                   projection="auto", center=None, axis=None, view="auto", thesis_grid=False, classes=None,
                   cloud="auto", charts="auto"):
-    """Cut ``surface`` (a Mesh; no triangles = point cloud) into a ZGrid; a raster's grid (a
-    ZGrid with a ``raster`` layout) is its own grid (``raster_as_sliced``).
+    """Cut ``surface`` (a Mesh; no triangles = point cloud) into a ZGrid; a ZGrid (a raster's, or
+    one read from a z-grid or compressed file) is its own grid (``grid_as_sliced``).
 
     ``projection`` names the cutting surfaces (``mzc.projections``); ``auto`` picks the
     one that sees the surface best, ``view`` the direction a planar grid looks along (auto
@@ -96,7 +96,7 @@ def slice_surface(surface, d1=None, d2=None, rows=None, cols=None, align="none",
     from mzc.ops.views import SEEN_WARNING, choose_view
 
     if isinstance(surface, ZGrid):
-        return raster_as_sliced(surface, units, d1=d1, d2=d2, rows=rows, cols=cols, center=center, axis=axis,
+        return grid_as_sliced(surface, units, d1=d1, d2=d2, rows=rows, cols=cols, center=center, axis=axis,
                                 thesis_grid=thesis_grid or None, align=None if align == "none" else align,
                                 projection=None if projection in ("auto", "planar") else projection,
                                 view=None if view in ("auto", "+z") else view,
@@ -167,13 +167,16 @@ def chart_spacing(d1, d2, mesh):
     return within_longest_side(DATA_SPACING_FRACTION * float(np.median(distance[:, 1])), points)
 
 
-def raster_as_sliced(grid, units, **given):
-    """A raster's ``grid`` as slice gives it: itself, node for node (with ``units`` when given),
-    once no cutting option is ``given`` (not None): one would need the raster resampled."""
+def grid_as_sliced(grid, units, **given):
+    """A ``grid`` (a raster's, or any z-grid's) as slice gives it: itself, node for node (with
+    ``units`` when given), once no cutting option is ``given`` (not None): one would need the
+    raster resampled, or the z-grid's surface cut anew from its mesh."""
     refused = next((name for name, value in given.items() if value is not None), None)
     if refused:
-        raise MzcError("a raster is sliced as its own grid, node for node, so this option does not apply: "
-                       "resample the raster first (gdalwarp -tr, -t_srs)", field=refused)
+        what, advice = (("a raster", "resample the raster first (gdalwarp -tr, -t_srs)") if grid.raster is not None
+                        else ("a z-grid", "to cut its surface anew, triangulate it and slice the mesh"))
+        raise MzcError(f"{what} is sliced as its own grid, node for node, so this option does not apply: {advice}",
+                       field=refused)
     return grid if units is None else grid.with_z(grid.z, units=units)
 
 

@@ -9,8 +9,9 @@ gives the same raster: the same cells, georeferencing, no-data value and sample 
 
 GeoTIFF is read and written by rasterio (GDAL: every compression, tiling, BigTIFF and CRS
 encoding GIS tools write), in the optional extra ``geo``; ESRI ASCII grids by mzc's own
-vectorised reader and writer (``asc``). Each is recognised by its bytes, not its name (an
-``.asc`` file may also be an ``x y z`` point cloud).
+vectorised reader and writer (``asc``). Both are rows of the table of file formats
+(``mzc.formats``), which recognises each by its bytes, not its name (an ``.asc`` file may also
+be an ``x y z`` point cloud) and reads an ESRI grid's CRS from the ``.prj`` beside it.
 
 Georeferencing is exact both ways: a node's coordinate is the raster's reference (a cell
 corner, or a centre) plus an offset of half a cell or whole rows, computed one way
@@ -29,61 +30,7 @@ from mzc.grid import IDENTITY_TRANSFORM, SAMPLES, Raster, ZGrid
 from mzc.limits import check_grid_magnitudes
 from mzc.numbers import real_array
 
-FORMATS = ("tif", "asc")
-EXTENSIONS = {".tif": "tif", ".tiff": "tif", ".asc": "asc"}
-TIFF_MAGIC = (b"II*\0", b"MM\0*", b"II+\0", b"MM\0+")   # classic and BigTIFF, either byte order
 ULPS = 4   # how far from the plain inverse raster_reference looks for the shortest reference
-
-
-def sniff(data):
-    """``tif`` or ``asc`` when ``data`` is a raster of that format, else None."""
-    if data[:4] in TIFF_MAGIC:
-        return "tif"
-    from mzc.rasters import asc
-
-    return "asc" if asc.sniff(data) else None
-
-
-def format_for(path, file_format=None):
-    """The raster format (tif or asc) that ``file_format`` names, else ``path``'s extension (any
-    case, .tiff too), or None: a z-grid or a mesh."""
-    extension = "." + file_format if file_format is not None else os.path.splitext(str(path or ""))[1]
-    return EXTENSIONS.get(extension.lower())
-
-
-def read_raster(data, source, path=None):
-    """The ZGrid of raster bytes ``data`` (sniff says which format); an ESRI grid read from a
-    file ``path`` takes its CRS from the ``.prj`` beside it, as GIS tools do."""
-    if sniff(data) == "tif":
-        from mzc.rasters import geotiff
-
-        return geotiff.read(data, source)
-    from mzc.rasters import asc
-
-    return asc.read(data, source, sidecar_crs(path))
-
-
-def raster_or_mesh(data, source, path=None):
-    """The surface a file to slice holds: a raster as its own ZGrid (``read_raster``), anything
-    else as a mesh or point cloud (``mzc.meshes``)."""
-    if sniff(data):
-        return read_raster(data, source, path)
-    from mzc.meshes import mesh_from_bytes
-
-    return mesh_from_bytes(data, source)
-
-
-def sidecar_crs(path):
-    """The one-line WKT of the ``.prj`` file beside ``path``, or None."""
-    if path is None or path == "-":
-        return None
-    prj = os.path.splitext(os.fspath(path))[0] + ".prj"
-    try:
-        with open(prj, "rb") as file:
-            text = file.read(1 << 20).decode("utf-8", "replace")
-    except OSError:
-        return None
-    return " ".join(text.split()) or None
 
 
 @dataclass(frozen=True)
@@ -223,28 +170,23 @@ def holds(sample, values):
 
 
 def write_raster(path, grid, file_format, float32=False):
-    """Write ``grid`` as a ``tif`` or ``asc`` raster to ``path`` (or stdout), atomically with its
-    ``.prj`` when it has one (``raster_files``)."""
+    """Write ``grid`` as the raster format ``file_format`` (tif or asc) to ``path`` (or stdout),
+    atomically with its sidecar when it has one (``raster_files``)."""
     from mzc.streams import write_outputs
 
     write_outputs(*raster_files(path, grid, file_format, float32))
 
 
 def raster_files(path, grid, file_format, float32=False):
-    """[(path, bytes)] of ``grid`` as a ``tif`` or ``asc`` raster at ``path``: the raster, then an
-    ESRI grid's ``.prj`` beside it when the grid has a CRS (not on stdout; a GeoTIFF holds its own)."""
+    """[(path, bytes)] of ``grid`` as the raster format ``file_format`` (tif or asc; mzc.formats) at
+    ``path``: the raster, then the sidecar beside it that holds the grid's CRS, for a format that
+    keeps it there (an ESRI grid's .prj; not on stdout; a GeoTIFF holds its own)."""
+    from mzc.formats import named
     from mzc.streams import is_stdio
 
     check_writable(grid)
-    if file_format == "tif":
-        from mzc.rasters import geotiff
-
-        return [(path, geotiff.write(grid, float32))]
-    from mzc.rasters import asc
-
-    if float32:
-        raise MzcError("an ESRI ASCII grid is text: float32 is for GeoTIFF samples", field="float32")
-    files = [(path, asc.write(grid))]
-    if grid.crs is not None and not is_stdio(path):
-        files.append((os.path.splitext(os.fspath(path))[0] + ".prj", (grid.crs + "\n").encode("utf-8")))
+    row = named(file_format)
+    files = [(path, row.load().write(grid, float32))]
+    if row.sidecar and grid.crs is not None and not is_stdio(path):
+        files.append((os.path.splitext(os.fspath(path))[0] + row.sidecar, (grid.crs + "\n").encode("utf-8")))
     return files

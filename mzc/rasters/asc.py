@@ -29,16 +29,19 @@ KEYWORDS = ("ncols", "nrows", "xllcorner", "yllcorner", "xllcenter", "yllcenter"
             "nodata_value")
 HEAD = re.compile(rb"\A\s*(" + b"|".join(k.encode() for k in KEYWORDS) + rb")[ \t]+[-+.0-9]", re.IGNORECASE)
 DEFAULT_MARKER = -9999.0   # the no-data value written when the grid's own marker is not a number
+EXTENSIONS = (".asc",)
 
 
 def sniff(data):
-    """True when ``data`` starts with an ESRI ASCII grid header line."""
+    """True when ``data`` starts with an ESRI ASCII grid header line, else False: an ESRI grid always
+    does (an .asc of x y z lines is a point cloud)."""
     return HEAD.match(data[:256]) is not None
 
 
 def read(data, source, crs=None):
-    """The ZGrid of an ESRI ASCII grid's bytes, with the CRS ``crs`` (a ``.prj``'s WKT) when given;
-    a bad header or value is an MzcError naming the line and the keyword."""
+    """The ZGrid of an ESRI ASCII grid's bytes, with the CRS ``crs`` (the WKT of the ``.prj`` beside
+    it, which mzc.formats reads) when given; a bad header or value is an MzcError naming the line
+    and the keyword."""
     try:
         text = unpadded(data).decode("utf-8")
     except UnicodeDecodeError:
@@ -159,10 +162,13 @@ def first_bad(body, first_line):
     raise AssertionError("no bad token in a body that failed to convert")
 
 
-def write(grid):
+def write(grid, float32=False):
     """The bytes of ``grid`` as an ESRI ASCII grid (a grid mzc.rasters.check_writable accepts):
     its raster's corner or centre, the cell size (dx and dy when not square), the no-data value
-    when it has one, then the rows north first, every number in its shortest exact form."""
+    when it has one, then the rows north first, every number in its shortest exact form. Text
+    holds no float32 samples: ``float32`` is refused."""
+    if float32:
+        raise MzcError("an ESRI ASCII grid is text: float32 is for GeoTIFF samples", field="float32")
     cells = grid.raster.cells if grid.raster is not None else "area"
     place = layout_of(grid, top=False, centred=cells == "point")
     kind = "corner" if place.cells == "area" else "center"

@@ -20,6 +20,7 @@ from mzc.limits import check_grid_size
 from mzc.rasters import Layout, grid_of, layout_of, no_data_marker, raster_rows, sample_type
 
 EXTRA = "geo"
+EXTENSIONS = (".tif", ".tiff")
 MEMORY_NAME = re.compile(r"[\w/.-]*[0-9a-f]{8}(?:-[0-9a-f]{4}){3}-[0-9a-f]{12}[\w.]*:?\s*")   # a MemoryFile's name
 PREDICTORS = {"f": 3, "i": 2, "u": 2}   # floating-point and horizontal differencing: smaller DEFLATE files
 

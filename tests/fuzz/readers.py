@@ -68,9 +68,9 @@ def read_item(kind, data):
 
         return mesh_from_bytes(data, f"fuzz.{kind}")
     if kind in ("tif", "asc"):
-        from mzc.rasters import raster_or_mesh
+        from mzc.formats import read
 
-        return raster_or_mesh(data, f"fuzz.{kind}")
+        return read(data, f"fuzz.{kind}")
     if kind.startswith("legacy-"):
         from mzc.codecs.rows.legacy import read_legacy
 
