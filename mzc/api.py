@@ -14,6 +14,7 @@ from __future__ import annotations
 import os
 from typing import TYPE_CHECKING, Any, cast
 
+from mzc.codecs import DEFAULT_CODEC
 from mzc.errors import MzcError
 
 if TYPE_CHECKING:
@@ -152,7 +153,7 @@ def slicing_numbers(options: dict[str, Any]) -> dict[str, Any]:
     return checked
 
 
-def encode(grid: ZGrid | np.ndarray, codec: str = "dwt2d", **options: Any) -> bytes:
+def encode(grid: ZGrid | np.ndarray, codec: str = DEFAULT_CODEC, **options: Any) -> bytes:
     """Compress a z-grid (or a 2D array) with a registered codec (``mzc encode``); ``options`` are
     the codec's, e.g. ``max_error=0.01`` for dwt2d, ``quality=20`` for dct."""
     from mzc.codecs import get_codec
@@ -269,9 +270,10 @@ def write(path: PathLike, item: ZGrid | Mesh | bytes, file_format: str | None = 
     write_output(path, zgrid.write(item, precision=precision, raw=raw))
 
 
-def batch_encode(sources: Any, dest: PathLike, codec: str = "dwt2d", *, slice_options: dict[str, Any] | None = None,
-                 verify: bool = False, scheduler: str | None = None, workers: int | None = None,
-                 chunk_size: int | None = None, listener: Any = None, **codec_options: Any) -> Any:
+def batch_encode(sources: Any, dest: PathLike, codec: str = DEFAULT_CODEC, *,
+                 slice_options: dict[str, Any] | None = None, verify: bool = False, scheduler: str | None = None,
+                 workers: int | None = None, chunk_size: int | None = None, listener: Any = None,
+                 **codec_options: Any) -> Any:
     """Slice and encode every mesh, cloud and raster of ``sources`` (paths, folders, globs, ``@list``
     files) into the folder ``dest`` on Dask (``mzc batch encode``): ``slice_options`` are :func:`slice`'s,
     ``codec_options`` :func:`encode`'s. Returns the ``mzc.batch.Summary`` (its ``rows`` are the

@@ -9,14 +9,18 @@ class MzcError(ValueError):
 
     The command line prints it as one line on stderr (``source:line: field: message``)
     and exits with status 1; it never shows a traceback.
+
+    ``options`` names the options (as the API spells them: ``max_error``) that the message
+    mentions, so that the command line can spell them as its own (``--max-error``, ``spelled``).
     """
 
-    def __init__(self, message, *, source=None, line=None, field=None):
+    def __init__(self, message, *, source=None, line=None, field=None, options=()):
         super().__init__(message)
         self.message = message
         self.source = source
         self.line = line
         self.field = field
+        self.options = tuple(options)
 
     def located(self, *, source=None, line=None, field=None):
         """Return this error with missing location parts filled in."""
@@ -25,7 +29,21 @@ class MzcError(ValueError):
             source=self.source or source,
             line=self.line if self.line is not None else line,
             field=self.field or field,
+            options=self.options,
         )
+
+    def spelled(self, spellings):
+        """This error with the options it names spelled by ``spellings`` (an API name -> a command
+        line flag): its ``options`` in the message, and its field when that is one of them or the
+        error names no file (a field of a file's header keeps the file's name for it)."""
+        import re
+
+        message = self.message
+        for name in self.options:
+            message = re.sub(rf"(?<![\w-]){re.escape(name)}(?![\w-])", spellings.get(name, name), message)
+        field = spellings.get(self.field, self.field) if self.source is None or self.field in self.options \
+            else self.field
+        return MzcError(message, source=self.source, line=self.line, field=field, options=())
 
     def __str__(self):
         where = ""

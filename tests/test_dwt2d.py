@@ -265,7 +265,7 @@ def test_all_invalid_grid_round_trips():
     assert not dwt2d.read(dwt2d.write(grid, max_error=0.1)).valid.any()
 
 
-@pytest.mark.parametrize("options", [{}, {"max_error": 0.1, "rmse": 0.1}, {"max_error": -1},
+@pytest.mark.parametrize("options", [{"size": 10, "rmse": 0.1}, {"max_error": 0.1, "rmse": 0.1}, {"max_error": -1},
                                      {"size": float("nan")}, {"max_error": 0.1, "wavelet": "nope"},
                                      {"max_error": 0.1, "levels": 13}, {"rmse": 0.1, "slope_limit": 0.5}])
 def test_bad_options_are_refused(options):

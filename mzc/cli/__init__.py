@@ -57,8 +57,8 @@ def group():
     or stdout, so they chain in pipelines:
 
     \b
-      mzc slice a.obj | mzc encode --dwt -q 10 > a.mzw
-      mzc decode < a.mzw | mzc densify -n 3 | mzc triangulate -o b.ply
+      mzc slice a.obj | mzc encode --dwt2d --rmse 0.05 > a.mzw2
+      mzc decode < a.mzw2 | mzc densify -n 3 | mzc triangulate -o b.ply
     """
 
 
@@ -84,7 +84,7 @@ def main():
         click.echo("mzc: aborted", err=True)
         sys.exit(130)
     except MzcError as error:
-        click.echo(f"mzc: {error}", err=True)
+        click.echo(f"mzc: {error.spelled(option_spellings(sys.argv[1:]))}", err=True)
         sys.exit(1)
     except BrokenPipeError:
         # The reader went away (mzc ... | head): not an error of ours.
@@ -101,6 +101,27 @@ def main():
         click.echo(f"mzc: internal error: {type(error).__name__}: {error} "
                    "(set MZC_DEBUG=1 for a traceback)", err=True)
         sys.exit(3)
+
+
+def option_spellings(args):
+    """{API name: command-line flag} of the options of the command that ``args`` run (``batch
+    encode``'s for ``mzc batch encode ...``): an MzcError from the library names ``max_error``,
+    the user typed ``--max-error``."""
+    command, spellings = group, {}
+    for word in args:
+        found = command.get_command(click.Context(command), word)
+        if found is None:
+            continue   # an option of the group, or its value
+        command = found
+        spellings.update({param.name: long_flag(param) for param in command.params if isinstance(param, click.Option)})
+        if not isinstance(command, click.Group):
+            break
+    return spellings
+
+
+def long_flag(option):
+    """An option's longest spelling: ``--quality``, not ``-q``."""
+    return max(option.opts, key=len)
 
 
 M_TRIM_THRESHOLD, M_MMAP_MAX = -1, -4   # glibc's mallopt parameters

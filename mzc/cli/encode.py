@@ -11,22 +11,22 @@ from mzc.cli.options import input_argument, output_option, read_grid
 
 HELP = """Compress a z-grid.
 
-The thesis's codecs code each row's valid span on its own: a polynomial of a given
-degree, or the DFT, DCT or DWT with quality Q (the percentage of coefficients kept).
-Holes inside a span are recorded and come back invalid. --dwt2d codes the whole grid
-with a 2D wavelet and an entropy coder, error-bounded: --max-error E holds at every
-valid node; --rmse E (RMS distance between the surfaces) and --size BYTES are targets.
-With --rmse and --size, steps grow where the surface leans from the node lines, where a
-value error moves it less along its normal (as 1/sqrt(cos t), up to --slope-limit times).
-Errors are along the node lines: heights on planar grids, distances along the rays of
-central ones. Reads a z-grid (or any mzc file) from INPUT or stdin; writes the compressed
-file to -o or stdout.
+--dwt2d, the default, codes the whole grid with a 2D wavelet and an entropy coder,
+error-bounded: --max-error E holds at every valid node; --rmse E (RMS distance between
+the surfaces) and --size BYTES are targets; without any, --rmse is a tenth of the node
+spacing. With --rmse and --size, steps grow where the surface leans from the node lines,
+where a value error moves it less along its normal (as 1/sqrt(cos t), up to --slope-limit
+times). Errors are along the node lines: heights on planar grids, distances along the rays
+of central ones. The thesis's codecs code each row's valid span on its own: a polynomial
+of a given degree, or the DFT, DCT or DWT with quality Q (the percentage of coefficients
+kept); holes inside a span are recorded and come back invalid. Reads a z-grid (or any mzc
+file) from INPUT or stdin; writes the compressed file to -o or stdout.
 
 \b
+  mzc encode --rmse 0.05 face.zg -o face.mzw2
+  mzc encode --dwt2d --max-error 0.05 < face.zg > face.mzw2
   mzc encode --dct -q 20 face.zg -o face.mzd
-  mzc encode --dwt -q 10 --wavelet db2 < face.zg > face.mzw
-  mzc encode --poly 30 face.zg -o face.mzp
-  mzc encode --dwt2d --max-error 0.05 face.zg -o face.mzw2"""
+  mzc encode --poly 30 face.zg -o face.mzp"""
 SHORT_NAMES = {"quality": "-q"}
 
 
@@ -51,7 +51,9 @@ def click_type(option, others=()):
 
 def codec_flag(codec):
     """The option that selects ``codec``: a flag, or one that takes the selector's value."""
-    text = f"{codec.summary}; {codec.extension}"
+    from mzc.codecs import DEFAULT_CODEC
+
+    text = f"{codec.summary}; {codec.extension}{' [the default]' if codec.name == DEFAULT_CODEC else ''}"
     if codec.selector:
         selector = codec.option(codec.selector)
         return click.Option([flag(codec.name)], type=click_type(selector), metavar=selector.metavar, help=text)
@@ -83,8 +85,12 @@ def tuning_option(name, pairs):
 
 
 def chosen_codec(codecs, values):
-    """The one codec whose flag was given, or a usage error."""
+    """The one codec whose flag was given (none: DEFAULT_CODEC), or a usage error."""
+    from mzc.codecs import DEFAULT_CODEC
+
     chosen = [c for c in codecs if values.get(c.name) not in (None, False)]
+    if not chosen:
+        chosen = [c for c in codecs if c.name == DEFAULT_CODEC]
     if len(chosen) != 1:
         given = ", ".join(flag(c.name) for c in chosen) or "none"
         known = ", ".join(flag(c.name) + (f" {c.option(c.selector).metavar}" if c.selector else "") for c in codecs)
@@ -111,7 +117,8 @@ def codec_options(codec, values):
         return codec.checked(options)
     except MzcError as error:
         where = flag(error.field) if error.field and error.field != codec.name else flag(codec.name)
-        raise click.UsageError(f"{where}: {error.message}") from None
+        spelled = error.spelled({name: flag(name) for name in (*taken, codec.name)})
+        raise click.UsageError(f"{where}: {spelled.message}") from None
 
 
 def build_command():

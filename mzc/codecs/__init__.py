@@ -25,6 +25,7 @@ BUILT_IN = {
     "dwt": "mzc.codecs.rows.dwt",
     "dwt2d": "mzc.codecs.dwt2d",
 }
+DEFAULT_CODEC = "dwt2d"   # the best one: what `mzc encode` and mzc.encode use when none is named
 ENTRY_POINT_GROUP = "mzc.codecs"
 registered: dict[str, Codec] = {}
 

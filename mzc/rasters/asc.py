@@ -168,7 +168,8 @@ def write(grid, float32=False):
     when it has one, then the rows north first, every number in its shortest exact form. Text
     holds no float32 samples: ``float32`` is refused."""
     if float32:
-        raise MzcError("an ESRI ASCII grid is text: float32 is for GeoTIFF samples", field="float32")
+        raise MzcError("an ESRI ASCII grid is text: float32 is for GeoTIFF samples", field="float32",
+                       options=("float32",))
     cells = grid.raster.cells if grid.raster is not None else "area"
     place = layout_of(grid, top=False, centred=cells == "point")
     kind = "corner" if place.cells == "area" else "center"

@@ -60,7 +60,8 @@ GEOGRAPHIC_STEP = 0.1
 SLOPE_LIMIT = 2.0          # steps grow as 1/sqrt(cos(lean)) up to 2x (76 degrees); 1 = equal steps
 APPROXIMATION_GAIN = 0.7   # band 0's step over the finest detail step (measured: 0.5-3% smaller files)
 LEVEL_RATIO = 0.9          # each coarser detail level's step over the next finer one's (measured: 0.4-3.6%)
-TARGETS = ("max_error", "rmse", "size")   # exactly one of them says what the encoder aims at
+TARGETS = ("max_error", "rmse", "size")   # at most one of them says what the encoder aims at...
+DEFAULT_RMSE_SPACING = 0.1   # ...and without one, rmse is a tenth of the grid's node spacing (default_rmse)
 DEADZONE = 0.6             # encoder-only rounding offset; the decoder never sees it
 RMS_GUESS = 20.0           # rmse: the search's first step, times the target (the faces' steps are 5-116 times
                            # their targets of 0.01-0.64 mm, the DEMs' 33-34 times)...
@@ -468,9 +469,16 @@ def band_steps(geometry, steps, shapes, approximation_q, slope_limit):
 
 
 def one_target(options):
-    """Refuse anything but exactly one of max_error, rmse and size."""
-    if sum(options.get(name) is not None for name in TARGETS) != 1:
-        raise MzcError("give exactly one of max_error, rmse or size", field="dwt2d")
+    """Refuse more than one of max_error, rmse and size (none: ``default_rmse``)."""
+    if sum(options.get(name) is not None for name in TARGETS) > 1:
+        raise MzcError("give one of max_error, rmse or size, not several", field="dwt2d", options=TARGETS)
+
+
+def default_rmse(grid):
+    """The target without one given: an RMS surface error of DEFAULT_RMSE_SPACING times the
+    grid's smaller node spacing, well under what sampling the surface at that spacing loses
+    (a face's default grid, 0.75 mm: 0.075 mm; a 1 m DEM: 0.1 m)."""
+    return DEFAULT_RMSE_SPACING * min(grid.d1, grid.d2)
 
 
 def encode_grid(grid, **options):
@@ -480,14 +488,16 @@ def encode_grid(grid, **options):
 
 def encode_grid_with_decoded(grid, max_error=None, rmse=None, size=None, wavelet=DEFAULT_WAVELET, level=None,
                              slope_limit=None):
-    """(bytes, the heights a decoder gets from them) of a ZGrid (options checked by CODEC); exactly
+    """(bytes, the heights a decoder gets from them) of a ZGrid (options checked by CODEC); at most
     one of ``max_error`` (bound at every valid node, grid units), ``rmse`` (target RMS surface
-    error) or ``size`` (target file bytes, not exceeded when reachable).
+    error) or ``size`` (target file bytes, not exceeded when reachable); none is ``default_rmse``.
 
     ``slope_limit`` defaults to SLOPE_LIMIT for ``rmse`` and ``size``, whose errors are
     surface distances, and to 1 (equal steps) for ``max_error``, a bound on heights, where
     slope-scaled steps measured 3% larger files (f18, E = 0.1).
     """
+    if max_error is None and rmse is None and size is None:
+        rmse = default_rmse(grid)
     name, target = next((n, v) for n, v in (("max_error", max_error), ("rmse", rmse), ("size", size)) if v is not None)
     if max_error is None:
         check_shared_unit(grid, name)
@@ -624,7 +634,8 @@ CODEC = Codec(
         Option("max_error", float, None, 0, MAX_MAGNITUDE, min_open=True, metavar="E",
                help="|decoded - input| <= E at every valid node."),
         Option("rmse", float, None, 0, MAX_MAGNITUDE, min_open=True, metavar="E",
-               help="Aim at this RMS surface error (value error times cos of the lean)."),
+               help="Aim at this RMS surface error (value error times cos of the lean) [default without "
+                    "--max-error or --size: a tenth of the node spacing]."),
         Option("size", int, None, 1, metavar="BYTES", help="Aim at this file size."),
         Option("wavelet", w2.TRANSFORMS[VERSION[0]].wavelets, DEFAULT_WAVELET,
                help="Wavelet: bior4.4 (CDF 9/7) or bior2.2 (LeGall 5/3)."),
