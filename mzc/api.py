@@ -12,7 +12,7 @@ points or a path is a surface.
 from __future__ import annotations
 
 import os
-from typing import TYPE_CHECKING, Any, cast
+from typing import TYPE_CHECKING, Any
 
 from mzc.codecs import DEFAULT_CODEC
 from mzc.errors import MzcError
@@ -57,21 +57,61 @@ def given(surface: Any) -> str | ZGrid | Mesh:
 
 
 def mesh_in_memory(surface: Any) -> Mesh:
-    """The ``Mesh`` of a Mesh, a trimesh-like object, a (points, triangles) pair or an array."""
+    """The ``Mesh`` of what Python's geometry libraries hold a surface in: a Mesh; a
+    (points, triangles) pair; an (n, 3) array of points, or (n, 6) of points and normals (an
+    Open3D-style oriented cloud); any object with ``vertices`` or ``points`` and, for a mesh,
+    ``faces`` or ``triangles`` or meshio's ``cells`` (trimesh's Trimesh and PointCloud,
+    meshio.Mesh, Open3D's TriangleMesh and PointCloud), with its ``normals`` when it has them."""
     import numpy as np
 
     from mzc.meshes import Mesh
 
     if isinstance(surface, Mesh):
         return surface
-    if hasattr(surface, "vertices") and hasattr(surface, "faces"):
-        return Mesh(surface.vertices, surface.faces)
     if isinstance(surface, tuple) and len(surface) == 2:
         return Mesh(*surface)
     if isinstance(surface, (np.ndarray, list)):
-        return Mesh(cast("np.ndarray", surface))   # Mesh checks the points are numbers (real_array)
-    raise MzcError(f"cannot read a surface from a {type(surface).__name__}: give a path, a Mesh, "
-                   "an object with vertices and faces, (points, triangles) or an (n, 3) array")
+        return array_cloud(np.asarray(surface))
+    points = next((getattr(surface, name) for name in ("vertices", "points") if hasattr(surface, name)), None)
+    if points is None:
+        raise MzcError(f"cannot read a surface from a {type(surface).__name__}: give a path, a Mesh, an object "
+                       "with vertices or points (and faces or triangles), (points, triangles) or an (n, 3) array")
+    return Mesh(points, object_triangles(surface), normals=object_normals(surface, len(np.asarray(points))))
+
+
+def array_cloud(array: np.ndarray) -> Mesh:
+    """The cloud of an (n, 3) array of points, or of an (n, 6) one of points and their normals."""
+    from mzc.meshes import Mesh
+
+    if array.ndim == 2 and array.shape[1] == 6:
+        return Mesh(array[:, :3], normals=array[:, 3:])
+    return Mesh(array)   # Mesh checks the points are numbers, in threes (real_array)
+
+
+def object_triangles(surface: Any) -> Any:
+    """The triangles of an object's ``faces``, ``triangles`` or meshio ``cells`` (quads and
+    polygons fanned into triangles); none for a point cloud."""
+    import numpy as np
+
+    for name in ("faces", "triangles"):
+        if hasattr(surface, name):
+            return np.asarray(getattr(surface, name))
+    if hasattr(surface, "cells"):
+        from mzc.meshes.meshio_fallback import surface_triangles
+
+        return surface_triangles(surface.cells)
+    return np.empty((0, 3), dtype=np.int64)
+
+
+def object_normals(surface: Any, count: int) -> Any:
+    """An object's per-point ``normals`` (Open3D's, say) when it has one for each point, else None."""
+    import numpy as np
+
+    normals = getattr(surface, "normals", None)
+    if normals is None or callable(normals):
+        return None
+    normals = np.asarray(normals)
+    return normals if normals.size and normals.size == 3 * count else None
 
 
 def number(value: Any, name: str, kind: type = float, low: float | None = None, high: float | None = None,

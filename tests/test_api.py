@@ -59,6 +59,48 @@ def test_surfaces_come_as_trimesh_like_objects_pairs_arrays_and_grids():
     assert report["surface_rms"] < 0.1 and report["count"] > 0
 
 
+def test_surfaces_come_from_trimesh_meshio_open3d_style_objects_and_oriented_arrays():
+    trimesh = pytest.importorskip("trimesh")
+    import meshio
+
+    mesh = mzc.sample("blob")
+    expected = mzc.slice(mesh)
+    assert np.array_equal(mzc.slice(mesh.to_trimesh()).z, expected.z, equal_nan=True)
+    assert np.array_equal(mzc.slice(mesh.to_meshio()).z, expected.z, equal_nan=True)
+    # meshio's quads are two triangles each: a unit square of two quads is four triangles
+    quads = meshio.Mesh([[0, 0, 0], [1, 0, 0], [2, 0, 0], [0, 1, 0], [1, 1, 0], [2, 1, 0]],
+                        [("quad", [[0, 1, 4, 3], [1, 2, 5, 4]])])
+    assert len(mzc.api.mesh_in_memory(quads).triangles) == 4
+    # an oriented cloud: an (n, 6) array, an Open3D-like object and a trimesh PointCloud
+    cloud = mzc.sample("bump")
+    up = np.tile([0.0, 0.0, 1.0], (len(cloud.points), 1))
+    oriented = mzc.api.mesh_in_memory(np.hstack([cloud.points, up]))
+    assert np.array_equal(oriented.points, cloud.points) and np.array_equal(oriented.normals, up)
+
+    class Open3DLike:
+        points, normals = cloud.points, up
+
+    assert np.array_equal(mzc.api.mesh_in_memory(Open3DLike()).normals, up)
+    by_points = mzc.slice(cloud.points)
+    assert np.array_equal(mzc.slice(trimesh.PointCloud(cloud.points)).z, by_points.z, equal_nan=True)
+    with pytest.raises(mzc.MzcError, match="vertices or points"):
+        mzc.slice(object())
+
+
+def test_meshes_go_to_trimesh_and_meshio_as_they_are():
+    trimesh = pytest.importorskip("trimesh")
+    mesh = mzc.triangulate(mzc.slice(mzc.sample("blob")))
+    as_trimesh = mesh.to_trimesh()
+    assert isinstance(as_trimesh, trimesh.Trimesh)
+    assert np.array_equal(as_trimesh.vertices, mesh.points) and np.array_equal(as_trimesh.faces, mesh.triangles)
+    as_meshio = mesh.to_meshio()
+    assert np.array_equal(as_meshio.points, mesh.points)
+    assert np.array_equal(as_meshio.cells_dict["triangle"], mesh.triangles)
+    cloud = mzc.Mesh(np.eye(3), normals=np.eye(3))
+    assert isinstance(cloud.to_trimesh(), trimesh.PointCloud)
+    assert np.array_equal(cloud.to_meshio().point_data["normals"], np.eye(3))
+
+
 def test_a_2d_array_is_a_unit_spaced_grid_and_every_codec_takes_its_options():
     z = np.add.outer(np.sin(np.linspace(0, 3, 40)), np.cos(np.linspace(0, 2, 50))) * 10
     z[5:8, 10:14] = np.nan

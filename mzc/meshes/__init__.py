@@ -77,11 +77,39 @@ class Mesh:
         """True for points alone: no triangles, and not derived from a grid."""
         return len(self.triangles) == 0 and self.grid is None
 
+    def to_trimesh(self) -> Any:
+        """This mesh as a ``trimesh.Trimesh`` (vertices and faces as they are, nothing merged or
+        dropped), or a ``trimesh.PointCloud`` for points alone; trimesh is not one of mzc's
+        dependencies: an MzcError says so when it is missing."""
+        trimesh = optional_module("trimesh")
+        if self.is_point_cloud:
+            return trimesh.PointCloud(self.points)
+        return trimesh.Trimesh(self.points, self.triangles, vertex_normals=self.normals, process=False)
+
+    def to_meshio(self) -> Any:
+        """This mesh as a ``meshio.Mesh``: its points, one triangle cell block (none for a cloud),
+        and its normals as the point data ``normals`` when it has them."""
+        import meshio
+
+        cells = [("triangle", self.triangles)] if len(self.triangles) else []
+        point_data = {"normals": self.normals} if self.normals is not None else {}
+        return meshio.Mesh(self.points, cells, point_data=point_data)
+
     def parts(self) -> tuple:
         """(vertex count, triangle count, the points in chunks, the triangles in chunks): what a
         writer that streams a mesh reads (one chunk each here; a grid's mesh,
         ``mzc.ops.triangulation.GridMesh``, makes them a strip of rows at a time)."""
         return len(self.points), len(self.triangles), [self.points], [self.triangles]
+
+
+def optional_module(name):
+    """The module ``name``, imported now; an MzcError naming it when it is not installed."""
+    import importlib
+
+    try:
+        return importlib.import_module(name)
+    except ImportError:
+        raise MzcError(f"this needs the package {name}: pip install {name}") from None
 
 
 def in_threes(field, rows=None):
