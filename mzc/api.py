@@ -241,10 +241,11 @@ def angle(jump_angle: float | None) -> float | None:
     return number(jump_angle, "jump_angle", float, 0, 90)
 
 
-def compare(a: Any, b: Any, *, surface: bool = False, heightfield: bool = False, samples: int = 100_000,
+def compare(a: Any, b: Any, *, surface: bool = True, heightfield: bool = False, samples: int = 100_000,
             seed: int = 0, d1: float | None = None, d2: float | None = None) -> dict[str, Any]:
-    """How far surface ``b`` is from ``a`` (``mzc diff``): the statistics of B - A along A's node
-    lines, and with ``surface`` the symmetric point-to-surface distance; a dict of name -> value."""
+    """How far surface ``b`` is from ``a`` (``mzc diff``): the symmetric point-to-surface distance
+    (``surface_*``; ``surface=False`` leaves it out on planar grids), then the statistics of B - A
+    along A's node lines (``grid_*``); a dict of name -> value."""
     from mzc.limits import MAX_SAMPLES
     from mzc.measure import compare_surfaces
 

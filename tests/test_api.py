@@ -56,7 +56,7 @@ def test_surfaces_come_as_trimesh_like_objects_pairs_arrays_and_grids():
     cloud = mzc.slice(mzc.sample("bump").points)
     assert cloud.valid.sum() > 1000
     report = mzc.compare(by_pair, mesh, surface=True)
-    assert report["surface_rms"] < 0.1 and report["count"] > 0
+    assert report["surface_rms"] < 0.1 and report["grid_count"] > 0
 
 
 def test_surfaces_come_from_trimesh_meshio_open3d_style_objects_and_oriented_arrays():

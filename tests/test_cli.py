@@ -163,9 +163,9 @@ def test_sample_slice_triangulate_diff_pipeline(mzc, tmp_path):
     rebuilt = tmp_path / "rebuilt.ply"
     mzc("triangulate", "-o", rebuilt, input=grid, check=True)
     report = json.loads(mzc("diff", mesh, rebuilt, "--json", check=True).stdout)
-    assert report["count"] > 10_000
+    assert report["grid_count"] > 10_000
     # A 1 mm slice of a smooth bump, rebuilt linearly, stays within a few hundredths of a mm.
-    assert report["p50"] < 0.01 and report["p95"] < 0.05
+    assert report["grid_p50"] < 0.01 and report["grid_p95"] < 0.05
 
 
 def test_info_describes_a_grid(mzc, tmp_path):
@@ -186,13 +186,13 @@ def test_face_round_trip_meets_the_issue_targets(mzc, tmp_path):
     out = tmp_path / "out.ply"
     mzc("triangulate", "-o", out, input=grid, check=True)
     report = json.loads(mzc("diff", face, out, "--json", check=True).stdout)
-    assert report["p50"] < 0.01 and report["p95"] < 0.1, report
+    assert report["grid_p50"] < 0.01 and report["grid_p95"] < 0.1, report
 
 
 def test_diff_surface_distance_of_a_face_against_itself_is_zero(mzc):
     face = face_path("f18.ply")
     report = json.loads(mzc("diff", face, face, "--surface", "--samples", "20000", "--json", check=True).stdout)
-    assert report["rmse"] == 0 and report["surface_rms"] < 1e-9
+    assert report["grid_rmse"] == 0 and report["surface_rms"] < 1e-9
 
 
 def test_error_grid_is_a_zgrid_of_b_minus_a(mzc, tmp_path):
@@ -201,7 +201,7 @@ def test_error_grid_is_a_zgrid_of_b_minus_a(mzc, tmp_path):
     b.write_bytes(b"mzc-zgrid 1.0\nrows 2\ncols 2\nd1 1\nd2 1\ndata\n1.5 2\n3 nan\n")
     errors = tmp_path / "e.zg"
     report = json.loads(mzc("diff", a, b, "--json", "--error-grid", errors, check=True).stdout)
-    assert report["count"] == 3 and report["max"] == pytest.approx(0.5)
+    assert report["grid_count"] == 3 and report["grid_max"] == pytest.approx(0.5)
     np.testing.assert_array_equal(zgrid.read(errors.read_bytes(), "e.zg").z, [[0.5, 0], [0, np.nan]])
     mzc("diff", a, b, "--plain", "--error-grid", errors, check=True)
     assert errors.read_text().endswith("data\n0.5 0\n0 nan\n")
@@ -217,7 +217,7 @@ def test_encode_dwt2d_holds_its_max_error_through_the_cli(mzc, tmp_path):
     decoded = tmp_path / "back.zg"
     mzc("decode", "-o", decoded, input=packed, check=True)
     report = json.loads(mzc("diff", grid, decoded, "--json", check=True).stdout)
-    assert report["max"] <= 0.02
+    assert report["grid_max"] <= 0.02
     flat = mzc("encode", "--dwt2d", "--rmse", "0.02", "--slope-limit", "1", grid, check=True).stdout
     assert b"\nslope_limit 1\n" in flat
     assert b"slope_limit" not in mzc("encode", "--dwt2d", "--rmse", "0.02", grid).stdout   # the default, 2

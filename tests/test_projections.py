@@ -335,7 +335,7 @@ def test_diff_of_central_grids_measures_in_space(mzc, tmp_path):
     import json
 
     report = json.loads(mzc("diff", grid, packed, "--json", "--samples", "2000", check=True).stdout)
-    assert report["max"] <= 0.1 + 1e-9                  # along the rays, the bound of --max-error
+    assert report["grid_max"] <= 0.1 + 1e-9                  # along the rays, the bound of --max-error
     assert 0 < report["surface_rms"] <= 0.1            # in space, without asking for --surface
     text = mzc("info", grid, check=True).stdout.decode()
     assert "cut by    cylindrical" in text and "full turn" in text

@@ -10,14 +10,17 @@ from mzc.limits import MAX_SAMPLES
 
 @click.command(help="""Compare two surfaces (meshes or mzc files, any mix).
 
-Both are sampled on one common grid over A's extent (A's own nodes when A is a z-grid,
-else 1/1000 of A's longest side; --d1/--d2 override) and compared along its node lines
-(in z, or along the rays of a central grid) over the nodes valid in both: RMSE, max and
-mean absolute error, R^2 = 1 - SSE/SST, the 50/95/99th percentiles of |B - A| and the
-node count. All are printed unless some are chosen. --surface adds the symmetric
-point-to-surface distance (RMS, mean, Hausdorff) on area-weighted samples, which stays
-honest on steep walls where z error explodes; it is on by default when either side is
-a central (cylindrical or spherical) grid, which is compared in space.
+First the whole-surface distance: the symmetric point-to-surface distance (RMS, mean,
+Hausdorff, then each direction) on area-weighted samples of every triangle, in the
+grid's units when a side knows them. Then the grid statistics (grid_*): both surfaces
+sampled on one common grid over A's extent (A's own nodes when A is a z-grid, else
+1/1000 of A's longest side; --d1/--d2 override) and compared along its node lines (in
+z, or along the rays of a central grid) over the nodes valid in both: RMSE, max and mean
+absolute error, R^2 = 1 - SSE/SST, the 50/95/99th percentiles of |B - A| and the node
+count; they grow on steep walls, where a small move of the surface is a long way along
+a node line. All are printed unless some grid statistics are chosen, which leaves the
+whole-surface distance out unless --surface asks for it; --no-surface leaves it out
+(not for central or multi-chart grids, which are compared in space).
 --heightfield adds the same distance over A's height-field part (triangles facing
 within 60 degrees of +z and seen from +z, and the samples of B nearest to them), the
 part a z-grid can represent; the benchmarks report both. With a point cloud on either
@@ -31,7 +34,8 @@ direction on the first line.""")
 @click.option("--r2", is_flag=True, help="R^2 = 1 - SSE/SST.")
 @click.option("--percentiles", is_flag=True, help="50th, 95th and 99th percentiles of |B - A|.")
 @click.option("--count", is_flag=True, help="Number of nodes compared.")
-@click.option("--surface", is_flag=True, help="Also the symmetric point-to-surface distance.")
+@click.option("--surface/--no-surface", default=None,
+              help="The symmetric point-to-surface distance [default: on, unless grid statistics are chosen].")
 @click.option("--heightfield", is_flag=True,
               help="Also the point-to-surface distance over A's height-field part (implies --surface).")
 @click.option("--samples", default=100_000, show_default=True, type=click.IntRange(100, MAX_SAMPLES),
@@ -68,7 +72,7 @@ def command(a, b, rmse, max_, mean, r2, percentiles, count, surface, heightfield
 
 
 def format_report(report):
-    """One ``name value`` line per statistic."""
+    """One ``name value`` line per figure, the whole-surface distances first (mzc.measure)."""
     return "\n".join(f"{name} {value:.6g}" if isinstance(value, float) else f"{name} {value}"
                      for name, value in report.items())
 

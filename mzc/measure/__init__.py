@@ -1,9 +1,10 @@
 """Measuring how far one surface is from another, as ``mzc diff`` and ``mzc.compare`` do.
 
-Both surfaces are sampled on one common grid over A's extent (``sampling``) and compared
-along its node lines; the point-to-surface distances over every triangle (``metrics``) are
-added when asked for, and always for central and multi-chart grids, which are compared in space. A point
-cloud on either side is measured by the distances of its points to the other surface.
+The symmetric point-to-surface distance over every triangle (``metrics``) comes first: it is
+what a user means by "how far", honest on steep walls and folds. Both surfaces are also
+sampled on one common grid over A's extent (``sampling``) and compared along its node lines:
+the grid statistics, named ``grid_*``. A point cloud on either side is measured by the
+distances of its points to the other surface.
 """
 
 from __future__ import annotations
@@ -21,6 +22,7 @@ if TYPE_CHECKING:
 STATISTICS = ("rmse", "max", "mean", "r2", "percentiles", "count")
 KEYS = {"rmse": ["rmse"], "max": ["max"], "mean": ["mean", "bias"], "r2": ["r2"],
         "percentiles": ["p50", "p95", "p99"], "count": ["count"]}
+GRID_PREFIX = "grid_"   # a two-surface report's statistics along the common grid's node lines
 
 
 @dataclass
@@ -34,12 +36,16 @@ class Comparison:
     stats: dict[str, Any] = field(default_factory=dict)
 
 
-def compare_surfaces(first: Mesh, second: Mesh, chosen: tuple[str, ...] | list[str] = (), surface: bool = False,
-                     heightfield: bool = False, samples: int = 100_000, seed: int = 0, d1: float | None = None,
-                     d2: float | None = None, names: tuple[str, str] = ("A", "B")) -> Comparison:
-    """Compare Meshes ``first`` (A) and ``second`` (B): the ``chosen`` statistics (all when none)
-    of B - A along the common grid's node lines, and with ``surface`` or ``heightfield`` the
-    point-to-surface distances; ``names`` name the sides in a point cloud's direction line.
+def compare_surfaces(first: Mesh, second: Mesh, chosen: tuple[str, ...] | list[str] = (),
+                     surface: bool | None = None, heightfield: bool = False, samples: int = 100_000, seed: int = 0,
+                     d1: float | None = None, d2: float | None = None,
+                     names: tuple[str, str] = ("A", "B")) -> Comparison:
+    """Compare Meshes ``first`` (A) and ``second`` (B): the point-to-surface distances first
+    (``surface``; None: unless only some grid statistics are ``chosen``; always for central and
+    multi-chart grids, which are compared in space; and with ``heightfield``), then the ``chosen``
+    statistics (all when none) of B - A along the common grid's node lines, each named
+    ``grid_*``; the length ``units`` when a side is a grid that knows them. ``names`` name the
+    sides in a point cloud's direction line.
     Coordinates beyond mzc.limits' are refused, as ``slice`` refuses them: their squared
     distances overflow (the nearest-triangle search had no bound left to prune with)."""
     from mzc.measure.metrics import grid_error_stats
@@ -56,11 +62,15 @@ def compare_surfaces(first: Mesh, second: Mesh, chosen: tuple[str, ...] | list[s
     if stats["count"] == 0 and list(chosen) != ["count"]:
         raise MzcError(f"no node of the common grid is valid in both {names[0]} and {names[1]}: the surfaces do not "
                        "overlap, so there is nothing to compare", field="diff")
-    report = select(stats, chosen or STATISTICS)
-    if surface or heightfield or any(side.grid is not None and (side.grid.projection != "planar"
-                                                                or side.grid.charts is not None)
-                                     for side in (first, second)):
+    in_space = any(side.grid is not None and (side.grid.projection != "planar" or side.grid.charts is not None)
+                   for side in (first, second))
+    report = {}
+    if (not chosen if surface is None else surface) or heightfield or in_space:
         report.update(surface_report(first, second, heightfield, samples, seed))
+    units = next((side.grid.units for side in (first, second) if side.grid is not None and side.grid.units), None)
+    if units:
+        report["units"] = units
+    report.update({GRID_PREFIX + key: value for key, value in select(stats, chosen or STATISTICS).items()})
     return Comparison(report, reference, errors, stats)
 
 
@@ -86,7 +96,9 @@ def surface_report(first, second, heightfield, samples, seed):
         parts["surface_heightfield_"] = heightfield_filters(first.points, first.triangles)
     distances = surface_distance_parts((first.points, first.triangles), (second.points, second.triangles),
                                        parts, samples=samples, seed=seed)
-    return {f"{prefix}{k}": v for prefix, summary in distances.items() for k, v in summary.items()}
+    # the distances lead and the sample count follows them: a reader's first line is the RMS
+    return {f"{prefix}{k}": v for prefix, summary in distances.items()
+            for k, v in sorted(summary.items(), key=lambda item: item[0] == "samples")}
 
 
 def select(stats, chosen):
