@@ -312,13 +312,16 @@ def write(path: PathLike, item: ZGrid | Mesh | bytes, file_format: str | None = 
 
 
 def batch_encode(sources: Any, dest: PathLike, codec: str = DEFAULT_CODEC, *,
-                 slice_options: dict[str, Any] | None = None, verify: bool = False, scheduler: str | None = None,
+                 slice_options: dict[str, Any] | None = None, verify: bool = False, scheduler: Any = None,
                  workers: int | None = None, chunk_size: int | None = None, listener: Any = None,
                  **codec_options: Any) -> Any:
     """Slice and encode every mesh, cloud and raster of ``sources`` (paths, folders, globs, ``@list``
     files) into the folder ``dest`` on Dask (``mzc batch encode``): ``slice_options`` are :func:`slice`'s,
-    ``codec_options`` :func:`encode`'s. Returns the ``mzc.batch.Summary`` (its ``rows`` are the
-    manifest's, ``dest``/manifest.csv); a bad file is a failed row, never an exception."""
+    ``codec_options`` :func:`encode`'s. It runs on ``scheduler`` (a scheduler's address or a
+    ``distributed.Client``, which is left open), else on the current client when there is one and
+    no ``workers`` are asked for, else on a local cluster of ``workers`` processes. Returns the
+    ``mzc.batch.Summary`` (its ``rows`` are the manifest's, ``dest``/manifest.csv); a bad file is
+    a failed row, never an exception."""
     import inspect
 
     from mzc.codecs import get_codec
@@ -347,11 +350,13 @@ def sliceable_extensions() -> list[str]:
 
 
 def batch_decode(sources: Any, dest: PathLike, *, densify: int = 0, method: str = "biharmonic",
-                 file_format: str = "ply", jump_angle: float | None = None, scheduler: str | None = None,
+                 file_format: str = "ply", jump_angle: float | None = None, scheduler: Any = None,
                  workers: int | None = None, chunk_size: int | None = None, listener: Any = None) -> Any:
     """Decode every mzc file of ``sources`` into a mesh in the folder ``dest`` on Dask (``mzc batch
     decode``): decoded, densified with ``densify`` rows between planes, triangulated into
-    ``file_format``, or written as a raster when it is tif or asc. Returns the ``mzc.batch.Summary``."""
+    ``file_format``, or written as a raster when it is tif or asc; on Dask as :func:`batch_encode`
+    runs (``scheduler``: an address, a ``distributed.Client``, or the current client). Returns the
+    ``mzc.batch.Summary``."""
     from mzc.codecs import codec_names, get_codec
     from mzc.formats import SURFACES, extensions, writable
     from mzc.limits import MAX_INSERTED

@@ -274,6 +274,36 @@ def test_a_local_cluster_encodes_and_decodes_an_archive(tmp_path):
         assert (tmp_path / "meshes" / f"{name}.obj").read_bytes() == mesh_to_bytes(rebuilt, "obj")
 
 
+def test_a_callers_client_is_used_as_it_is_and_its_logging_left_alone(tmp_path):
+    """A distributed.Client given as the scheduler, or the caller's current one, runs the batch;
+    mzc neither closes it nor changes the levels of the host's loggers."""
+    import logging
+
+    from distributed import Client, LocalCluster, get_task_stream
+
+    source = tmp_path / "in"
+    source.mkdir()
+    (source / "bump.obj").write_bytes(mesh_to_bytes(mzc.sample("bump"), "obj"))
+    logging.getLogger("distributed").setLevel(logging.INFO)
+    try:
+        with LocalCluster(n_workers=1, processes=False, dashboard_address=None) as cluster, Client(cluster) as client:
+            with get_task_stream(client) as given_tasks:
+                given = mzc.batch_encode(source, tmp_path / "given", scheduler=client, max_error=0.01)
+            with get_task_stream(client) as current_tasks:
+                current = mzc.batch_encode(source, tmp_path / "current", max_error=0.01)   # the current client
+            assert given_tasks.data and current_tasks.data   # both ran on this cluster, not one of their own
+            assert client.status == "running"
+        assert logging.getLogger("distributed").level == logging.INFO
+    finally:
+        logging.getLogger("distributed").setLevel(logging.NOTSET)
+    assert not given.failed and not current.failed
+    expected = mzc.encode(mzc.slice(source / "bump.obj"), max_error=0.01)
+    assert (tmp_path / "given" / "bump.mzw2").read_bytes() == expected
+    assert (tmp_path / "current" / "bump.mzw2").read_bytes() == expected
+    with pytest.raises(MzcError, match="scheduler"):
+        mzc.batch_encode(source, tmp_path / "bad", scheduler=42, max_error=0.01)
+
+
 def crash_on_poison(job, chunk):
     """run_chunk, except that a worker process dies outright on an item named ``poison``."""
     if any(item.output.startswith("poison") for item, _ in chunk):

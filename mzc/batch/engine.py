@@ -36,6 +36,7 @@ from mzc.errors import MzcError, first_line
 CHUNKS_PER_WORKER = 32
 LOCK_NAME = ".manifest.lock"   # in DEST, while a run holds it
 CONNECT_SECONDS = 10   # to reach a scheduler given by --scheduler
+DASK_LOGGERS = ("distributed", "distributed.client", "tornado", "tornado.application", "asyncio")
 LOST_SECONDS = 10   # without a worker this long, a cluster has lost them for good (a restart takes 1-3 s)
 POLL_SECONDS = 0.1   # how often a run waiting for its tasks looks at the cluster
 MAX_CHUNK = 64
@@ -287,32 +288,65 @@ def completed(client, pending, dest):
 
 @contextmanager
 def dask_client(scheduler=None, workers=None):
-    """A Dask client for the run: to the scheduler at ``scheduler``, or to a local cluster of
-    ``workers`` processes (one per core by default) started and stopped with it."""
+    """A Dask client for the run: ``scheduler`` itself when it is a ``distributed.Client`` (the
+    caller's, left open), a new one to the scheduler at the address ``scheduler``, else the
+    caller's current client when there is one and no ``workers`` are asked for, else one to a
+    local cluster of ``workers`` processes (one per core by default) started and stopped with it."""
     try:
         import dask
         from distributed import Client, LocalCluster
     except ImportError:
         raise MzcError(DASK_MISSING) from None
-    quiet = logging.CRITICAL
-    for name in ("distributed", "distributed.client", "tornado", "tornado.application", "asyncio"):
-        logging.getLogger(name).setLevel(quiet)
-    if scheduler is not None:
-        try:
-            client = Client(scheduler, timeout=CONNECT_SECONDS)
-        except (OSError, TimeoutError, ValueError) as error:
-            raise MzcError(f"cannot reach the Dask scheduler: {error}", source=scheduler) from None
-        with client:
-            yield client
+    if isinstance(scheduler, Client):
+        yield scheduler
         return
-    with dask.config.set({MALLOC_TRIM: None, SATURATION: 1.0}):
-        try:
-            cluster = LocalCluster(n_workers=workers or os.cpu_count() or 1, threads_per_worker=1, processes=True,
-                                   dashboard_address=None, silence_logs=quiet)
-        except (RuntimeError, OSError, TimeoutError) as error:   # a worker process that died as it started
-            raise MzcError(f"the local Dask cluster did not start: {first_line(error)}") from None
-        with cluster, Client(cluster) as client:
-            yield client
+    if scheduler is None and workers is None and (current := current_client(Client)) is not None:
+        yield current
+        return
+    if scheduler is not None and not isinstance(scheduler, str):
+        raise MzcError(f"must be a scheduler's address or a distributed.Client, not a {type(scheduler).__name__}",
+                       field="scheduler")
+    with quiet_logs():
+        if scheduler is not None:
+            try:
+                client = Client(scheduler, timeout=CONNECT_SECONDS)
+            except (OSError, TimeoutError, ValueError) as error:
+                raise MzcError(f"cannot reach the Dask scheduler: {error}", source=scheduler) from None
+            with client:
+                yield client
+            return
+        with dask.config.set({MALLOC_TRIM: None, SATURATION: 1.0}):
+            try:
+                cluster = LocalCluster(n_workers=workers or os.cpu_count() or 1, threads_per_worker=1,
+                                       processes=True, dashboard_address=None, silence_logs=logging.CRITICAL)
+            except (RuntimeError, OSError, TimeoutError) as error:   # a worker process that died as it started
+                raise MzcError(f"the local Dask cluster did not start: {first_line(error)}") from None
+            with cluster, Client(cluster) as client:
+                yield client
+
+
+def current_client(client_type):
+    """The caller's current Dask client (``with Client(...)``, or the last one made), or None."""
+    try:
+        return client_type.current()
+    except ValueError:
+        return None
+
+
+@contextmanager
+def quiet_logs():
+    """Dask's and its event loop's loggers held to CRITICAL while mzc runs its own client or
+    cluster (a worker's restart is not the user's news), then set back as they were: a host
+    program's logging is its own."""
+    loggers = [logging.getLogger(name) for name in DASK_LOGGERS]
+    levels = [logger.level for logger in loggers]
+    for logger in loggers:
+        logger.setLevel(logging.CRITICAL)
+    try:
+        yield
+    finally:
+        for logger, level in zip(loggers, levels):
+            logger.setLevel(level)
 
 
 class Listener:
