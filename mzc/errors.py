@@ -68,9 +68,13 @@ def first_line(error):
 def about(source, step):
     """Let an MzcError raised inside name ``source`` (a file name) when it names none: a
     problem found in the data read from a file is reported as that file's. Running out of
-    memory there becomes an MzcError naming the file and the ``step`` (``decoding it``)."""
+    memory there becomes an MzcError naming the file and the ``step`` (``decoding it``). A
+    long step shows on a terminal as it runs (``mzc.progress``)."""
+    from mzc.progress import step as progress_step
+
     try:
-        yield
+        with progress_step(f"{source}: {step}"):
+            yield
     except MzcError as error:
         raise error.located(source=source) from None
     except MemoryError:

@@ -11,7 +11,7 @@ import pytest
 
 from mzc.formats import zgrid
 
-from conftest import face_path
+from conftest import face_path, run_mzc
 
 
 def test_help_lists_every_command_without_importing_numerics():
@@ -255,6 +255,37 @@ def test_cli_errors_name_the_options_as_the_cli_spells_them(mzc):
     assert text.endswith("--float32: an ESRI ASCII grid is text: --float32 is for GeoTIFF samples\n")
     help_text = mzc("--help", check=True).stdout.decode()
     assert "encode --dwt2d" in help_text and "--dwt -q" not in help_text
+
+
+def test_a_long_step_shows_its_progress_on_a_terminal_and_only_there(tmp_path):
+    """A step past mzc.progress.DELAY (2 s) draws one redrawn line on a terminal's stderr, cleared
+    when it ends; stdout carries the data alone, and a pipe gets no progress at all."""
+    import pty
+
+    mesh = tmp_path / "blob.obj"
+    run_mzc("sample", "blob", "-o", mesh, check=True)
+    command = [sys.executable, "-m", "mzc", "diff", str(mesh), str(mesh), "--samples", "2000000", "--json"]
+    leader, follower = pty.openpty()
+    process = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=follower)
+    os.close(follower)
+    drawn = b""
+    while chunk := read_terminal(leader):
+        drawn += chunk
+    os.close(leader)
+    report = json.loads(process.stdout.read())
+    assert process.wait() == 0 and report["surface_samples"] == 4_000_000
+    assert b"mzc: " + str(mesh).encode() + b" vs " in drawn
+    assert b"comparing them (2000000 samples per surface)... " in drawn
+    assert drawn.endswith(b"\r\x1b[K")   # cleared at the end
+    assert run_mzc(*command[3:6], "--samples", "2000000").stderr == b""   # not a terminal: nothing
+
+
+def read_terminal(fd):
+    """The next bytes a pseudo-terminal's other side wrote, b"" once it is closed."""
+    try:
+        return os.read(fd, 4096)
+    except OSError:   # Linux: EIO when the last writer has gone
+        return b""
 
 
 def test_output_files_follow_the_umask(mzc, tmp_path):

@@ -13,7 +13,7 @@ import warnings
 
 import click
 
-from mzc import __version__
+from mzc import __version__, progress
 from mzc.errors import MzcError, MzcWarning
 
 COMMANDS = {
@@ -71,6 +71,7 @@ def main():
     warnings.simplefilter("ignore")
     warnings.simplefilter("once", MzcWarning)
     warnings.showwarning = show_warning
+    progress.install(sys.stderr)
     try:
         status = group.main(standalone_mode=False, prog_name="mzc")   # a click Exit's status, or None
         if status:
@@ -189,4 +190,5 @@ def range_words(bounds):
 
 def show_warning(message, category, filename, lineno, file=None, line=None):
     """mzc's warnings (the only ones not ignored) as one line on stderr: ``mzc: warning: ...``."""
+    progress.clear()
     click.echo(f"mzc: warning: {message}", err=True)

@@ -65,7 +65,8 @@ def command(a, b, rmse, max_, mean, r2, percentiles, count, surface, heightfield
     if (error_grid or plot) and (first.is_point_cloud or second.is_point_cloud):
         raise MzcError("--error-grid and --plot need two surfaces, not a point cloud", field="diff")
     chosen = [name for name, on in zip(STATISTICS, (rmse, max_, mean, r2, percentiles, count)) if on]
-    with about(f"{a} vs {b}", f"comparing them ({samples} samples per surface)" if surface else "comparing them"):
+    with about(f"{a} vs {b}", f"comparing them ({samples} samples per surface)" if surface is not False
+               else "comparing them"):
         result = compare_surfaces(first, second, chosen, surface, heightfield, samples, seed, d1, d2, names=(a, b))
     write_results(result, error_grid, body, plot)
     click.echo(json.dumps(result.report, indent=2) if as_json else format_report(result.report))

@@ -20,9 +20,12 @@ placed back in the input surface's frame. The output format follows the -o exten
               help="Mesh format (default: from the -o extension; obj on stdout).")
 @jump_angle_option
 def command(input, output, file_format, jump_angle):
+    from mzc.errors import about
     from mzc.meshes import write_mesh
     from mzc.ops.triangulation import mesh_of
-    from mzc.streams import check_not_input
+    from mzc.streams import check_not_input, display_name
 
     check_not_input(output, input)
-    write_mesh(output, mesh_of(read_grid(input), jump_angle), file_format)   # a grid's made as it is written
+    grid = read_grid(input)
+    with about(display_name(input), "triangulating it"):
+        write_mesh(output, mesh_of(grid, jump_angle), file_format)   # a grid's mesh is made as it is written
