@@ -1,4 +1,4 @@
-"""mzc.plots: the three quality panels of the thesis in one PNG."""
+"""mzc.plots: the quality panels of a comparison in one PNG."""
 
 import numpy as np
 import pytest
@@ -37,22 +37,42 @@ def test_png_is_written_and_sensible(tmp_path):
     assert [p.name for p in tmp_path.iterdir()] == ["quality.png"]   # no temporary left
 
 
-def test_figure_has_three_panels_a_colour_bar_and_the_summary():
+def test_figure_has_four_panels_a_colour_bar_and_the_summary_in_units():
     import matplotlib.pyplot as pyplot
 
     error, predicted, xs, ys, stats = example()
-    figure = error_figure(error, predicted, xs, ys, stats, units="mm")
+    distances = (np.abs(np.random.default_rng(1).normal(scale=0.05, size=1000)), np.full(500, 0.02))
+    figure = error_figure(error, predicted, xs, ys, stats, units="mm", distances=distances)
     try:
         panels = [axes for axes in figure.axes if axes.get_label() != "<colorbar>"]
-        assert len(panels) == 3 and len(figure.axes) == 4
-        surface, scatter, probability = panels
+        assert len(panels) == 4 and len(figure.axes) == 5
+        surface, histogram, scatter, probability = panels
         assert surface.get_xlim() == pytest.approx((xs[0] - 0.125, xs[-1] + 0.125))
         assert surface.get_ylim() == pytest.approx((ys[0] - 0.375, ys[-1] + 0.375))
+        assert len(surface.collections) == 2   # the hillshade, and the error over it
         assert "mm" in surface.get_xlabel() and "mm" in figure.axes[-1].get_ylabel()
+        assert sum(patch.get_height() for patch in histogram.patches) == 1500   # every sample, both ways
+        assert "Whole-surface" in histogram.get_title() and "mm" in histogram.get_xlabel()
         assert len(scatter.collections[0].get_offsets()) == stats["count"]
         assert len(probability.lines[0].get_xdata()) == stats["count"]
         title = figure.get_suptitle()
+        rms = np.sqrt(np.mean(np.concatenate(distances) ** 2))
+        assert title.startswith(f"whole surface: RMS {rms:.4g} (mm)")
         assert "RMSE 0.1" in title and "R² 0.99" in title and f"n = {stats['count']}" in title
+    finally:
+        pyplot.close(figure)
+
+
+def test_a_few_spikes_do_not_set_the_residual_axes():
+    import matplotlib.pyplot as pyplot
+
+    error, predicted, xs, ys, stats = example()
+    error[0, :5] = 40.0   # a wall's spikes, as on a steep side of a face
+    figure = error_figure(error, predicted, xs, ys, stats)
+    try:
+        surface, histogram, scatter, probability = [a for a in figure.axes if a.get_label() != "<colorbar>"]
+        assert scatter.get_ylim()[1] < 1 and probability.get_ylim()[1] < 1
+        assert "beyond the axis" in scatter.get_title() and "node lines" in histogram.get_title()   # no distances
     finally:
         pyplot.close(figure)
 
@@ -63,7 +83,8 @@ def test_scatter_is_subsampled_on_large_grids():
     error, predicted, xs, ys, stats = example(rows=300, cols=400)
     figure = error_figure(error, predicted, xs, ys, stats)
     try:
-        assert len(figure.axes[1].collections[0].get_offsets()) == SCATTER_POINTS
+        scatter = [a for a in figure.axes if a.get_label() != "<colorbar>"][2]
+        assert len(scatter.collections[0].get_offsets()) == SCATTER_POINTS
     finally:
         pyplot.close(figure)
 

@@ -48,7 +48,9 @@ direction on the first line.""")
 @click.option("--error-grid", metavar="FILE", help="Write the error surface B - A as a z-grid.")
 @plain_option
 @float32_option
-@click.option("--plot", metavar="FILE.png", help="Write the quality plots (error map, residuals, normal probability).")
+@click.option("--plot", metavar="FILE.png",
+              help="Write the quality plots: the error map over a hillshade, the histogram of the whole-surface "
+                   "distance, residuals and normal probability.")
 def command(a, b, rmse, max_, mean, r2, percentiles, count, surface, heightfield, samples, seed, d1, d2,
             as_json, error_grid, plain, float32, plot):
     from mzc.api import as_mesh
@@ -89,12 +91,14 @@ def write_results(result, error_grid, body, plot):
     if error_grid:
         outputs.append((error_grid, zgrid.write(result.errors, **body)))
     if plot:
-        outputs.append((plot, plot_png(result.reference, result.errors, result.stats)))
+        outputs.append((plot, plot_png(result)))
     write_outputs(*outputs)
 
 
-def plot_png(reference, errors, stats):
-    """The PNG of the three quality panels of the thesis (§6.4) for this comparison."""
+def plot_png(result):
+    """The PNG of the quality panels (mzc.plots) of this comparison (a mzc.measure.Comparison)."""
     from mzc.plots import error_png
 
-    return error_png(errors.z, reference.z + errors.z, reference.xs(), reference.ys(), stats, units=reference.units)
+    reference, errors = result.reference, result.errors
+    return error_png(errors.z, reference.z + errors.z, reference.xs(), reference.ys(), result.stats,
+                     units=reference.units, distances=result.distances)

@@ -16,6 +16,8 @@ from mzc.errors import MzcError
 from mzc.limits import MAX_SAMPLES, check_magnitude
 
 if TYPE_CHECKING:
+    import numpy as np
+
     from mzc.grid import ZGrid
     from mzc.meshes import Mesh
 
@@ -28,12 +30,14 @@ GRID_PREFIX = "grid_"   # a two-surface report's statistics along the common gri
 @dataclass
 class Comparison:
     """The report (statistic name -> value) and, for two surfaces, the common grid of A's values,
-    the error surface B - A on it and all its statistics."""
+    the error surface B - A on it and all its statistics, and the whole surface's sampled
+    distances when they were measured (A's samples to B, B's to A)."""
 
     report: dict[str, Any]
     reference: ZGrid | None = None
     errors: ZGrid | None = None
     stats: dict[str, Any] = field(default_factory=dict)
+    distances: tuple[np.ndarray, np.ndarray] | None = None
 
 
 def compare_surfaces(first: Mesh, second: Mesh, chosen: tuple[str, ...] | list[str] = (),
@@ -64,14 +68,14 @@ def compare_surfaces(first: Mesh, second: Mesh, chosen: tuple[str, ...] | list[s
                        "overlap, so there is nothing to compare", field="diff")
     in_space = any(side.grid is not None and (side.grid.projection != "planar" or side.grid.charts is not None)
                    for side in (first, second))
-    report = {}
+    report, distances = {}, None
     if (not chosen if surface is None else surface) or heightfield or in_space:
-        report.update(surface_report(first, second, heightfield, samples, seed))
+        report, distances = surface_report(first, second, heightfield, samples, seed)
     units = next((side.grid.units for side in (first, second) if side.grid is not None and side.grid.units), None)
     if units:
         report["units"] = units
     report.update({GRID_PREFIX + key: value for key, value in select(stats, chosen or STATISTICS).items()})
-    return Comparison(report, reference, errors, stats)
+    return Comparison(report, reference, errors, stats, distances)
 
 
 def cloud_report(first, second, names, chosen):
@@ -88,17 +92,19 @@ def cloud_report(first, second, names, chosen):
 
 
 def surface_report(first, second, heightfield, samples, seed):
-    """surface_* entries (and surface_heightfield_* ones) of the point-to-surface distance."""
-    from mzc.measure.metrics import heightfield_filters, surface_distance_parts
+    """(surface_* entries, and surface_heightfield_* ones, of the point-to-surface distance; the
+    whole surface's sampled distances, A's samples to B then B's to A)."""
+    from mzc.measure.metrics import distance_summary, heightfield_filters, surface_distance_samples
 
     parts = {"surface_": (None, None)}
     if heightfield:
         parts["surface_heightfield_"] = heightfield_filters(first.points, first.triangles)
-    distances = surface_distance_parts((first.points, first.triangles), (second.points, second.triangles),
-                                       parts, samples=samples, seed=seed)
+    distances = surface_distance_samples((first.points, first.triangles), (second.points, second.triangles),
+                                         parts, samples=samples, seed=seed)
     # the distances lead and the sample count follows them: a reader's first line is the RMS
-    return {f"{prefix}{k}": v for prefix, summary in distances.items()
-            for k, v in sorted(summary.items(), key=lambda item: item[0] == "samples")}
+    report = {f"{prefix}{k}": v for prefix, pair in distances.items()
+              for k, v in sorted(distance_summary(*pair).items(), key=lambda item: item[0] == "samples")}
+    return report, distances["surface_"]
 
 
 def select(stats, chosen):

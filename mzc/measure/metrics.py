@@ -203,6 +203,13 @@ def surface_distance_parts(mesh_a, mesh_b, parts, samples=100_000, seed=0):
     search releases the GIL), so a's search runs while b's samples are drawn and b's beside
     it: the same distances, in little more than the time of the longer search.
     """
+    return {name: distance_summary(*pair) for name, pair in surface_distance_samples(mesh_a, mesh_b, parts, samples,
+                                                                                     seed).items()}
+
+
+def surface_distance_samples(mesh_a, mesh_b, parts, samples=100_000, seed=0):
+    """{name: (the distances of a's kept samples to b, those of b's kept samples to a)} for each
+    of ``parts``, drawn and measured as ``surface_distance_parts`` says (which summarises them)."""
     from concurrent.futures import ThreadPoolExecutor
 
     rng = np.random.default_rng(seed)
@@ -212,7 +219,7 @@ def surface_distance_parts(mesh_a, mesh_b, parts, samples=100_000, seed=0):
             drawn, triangle_index = sample_surface(*source, samples, rng)
             masks = {name: sample_mask(keeps[side], drawn, triangle_index) for name, keeps in parts.items()}
             searches.append((masks, pool.submit(kept_distances, drawn, masks, target)))
-    return {name: distance_summary(*(search.result()[masks[name]] for masks, search in searches)) for name in parts}
+    return {name: tuple(search.result()[masks[name]] for masks, search in searches) for name in parts}
 
 
 def sample_mask(keep, drawn, triangle_index):
