@@ -229,11 +229,20 @@ def densify(grid: ZGrid | np.ndarray, n: int, method: str = "biharmonic", *, ite
                         tol=number(tol, "tol", float, 0, low_open=True), jump_angle=angle(jump_angle))
 
 
-def triangulate(grid: ZGrid | np.ndarray, jump_angle: float | None = None) -> Mesh:
-    """The triangle mesh of a z-grid (or a 2D array) in its input surface's frame (``mzc triangulate``)."""
+def triangulate(grid: ZGrid | np.ndarray, jump_angle: float | None = None, *, vertices: int | None = None) -> Mesh:
+    """The triangle mesh of a z-grid (or a 2D array) in its input surface's frame (``mzc triangulate``):
+    a vertex at every valid node, or about ``vertices`` of them, fewer where the surface is flat
+    (``mzc.ops.simplify``)."""
+    from mzc.limits import MAX_NODES
     from mzc.ops.triangulation import grid_to_mesh
 
-    return grid_to_mesh(as_grid(grid), angle(jump_angle))
+    vertices = number(vertices, "vertices", int, 4, MAX_NODES)
+    mesh = grid_to_mesh(as_grid(grid), angle(jump_angle))
+    if vertices is None:
+        return mesh
+    from mzc.ops.simplify import simplified
+
+    return simplified(mesh, vertices)
 
 
 def angle(jump_angle: float | None) -> float | None:

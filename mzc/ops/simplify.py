@@ -1,0 +1,49 @@
+"""A rebuilt mesh of about the vertex count a user asks for (``triangulate --vertices N``).
+
+A grid's mesh has a vertex at every valid node: a 30,000-vertex face scan sliced at its own
+spacing comes back with 80,000, a 5,000-triangle sphere with a million triangles. Quadric
+edge collapse (Garland and Heckbert 1997; fast-simplification's implementation of
+Fast-Quadric-Mesh-Simplification) takes the vertices away where the surface is flat and keeps
+them where it bends, so the count falls to the one asked for at little cost in distance. At
+the originals' own vertex counts, against the whole-surface RMS distance of the full grid's
+mesh: f18 1.13 times (30,260 vertices from 81,319, 0.35 s), the hand 1.10, the ogre 1.24 (from
+633,219, 3.3 s); a smooth synthetic mesh whose grid is all but exact, the blob sample, 7.5
+times (0.013 mm on a 100 mm ball: a new mesh's facets are not the original's).
+"""
+
+import numpy as np
+
+from mzc.errors import MzcError
+from mzc.meshes import Mesh
+
+PASSES = (5.0, 7.0)   # fast-simplification's aggressiveness (0 careful and slow .. 10 fast; 7 its default):
+                      # a careful pass, then the default one if the count is still over SLACK times the target
+SLACK = 1.2
+
+
+def simplified(mesh: Mesh, vertices: int) -> Mesh:
+    """``mesh`` with about ``vertices`` vertices (quadric edge collapse); a mesh that has no more
+    than that, or no triangles, as it is. The count of triangles asked for keeps the mesh's own
+    ratio of triangles to vertices, so an open grid's mesh and a closed one both land near it."""
+    if vertices < 4:
+        raise MzcError(f"must be at least 4, not {vertices}", field="vertices")
+    if len(mesh.points) <= vertices or not len(mesh.triangles):
+        return mesh
+    import fast_simplification
+
+    target = max(1, int(round(vertices * len(mesh.triangles) / len(mesh.points))))
+    points = np.ascontiguousarray(mesh.points, dtype=np.float64)
+    triangles = np.ascontiguousarray(mesh.triangles, dtype=np.int32)
+    for aggressiveness in PASSES:
+        if len(points) <= SLACK * vertices:
+            break
+        points, triangles = fast_simplification.simplify(points, triangles, target_count=target, agg=aggressiveness)
+    if len(points) > SLACK * vertices:   # far reductions stall (the blob from 180,000 stops near 6,000)
+        import warnings
+
+        from mzc.errors import MzcWarning
+
+        warnings.warn(MzcWarning(f"the mesh keeps {len(points)} vertices of the {vertices} asked for: the "
+                                 "simplifier found no more edges to collapse without folding the surface"),
+                      stacklevel=2)
+    return Mesh(points, np.asarray(triangles, dtype=np.int64))
