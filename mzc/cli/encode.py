@@ -114,6 +114,30 @@ def codec_options(codec, values):
         raise click.UsageError(f"{where}: {error.message}") from None
 
 
+def written_by_windows(codec, path, output, options):
+    """Code a GeoTIFF file window by window when ``codec`` can and does (``Codec.window_writer``: a
+    raster too large to hold, in tiles), writing its file to ``output`` as it is made; False, with
+    nothing done, when the grid is to be read whole."""
+    from mzc.formats import starts_as
+
+    if codec.window_writer is None or not starts_as(path, "tif"):
+        return False
+    from mzc.errors import about
+    from mzc.rasters.windows import GeoTiffSource
+    from mzc.streams import display_name, write_output
+
+    source = GeoTiffSource(path, display_name(path))
+    try:
+        with about(display_name(path), f"encoding it with {codec.name}"):
+            chunks = codec.window_writer(source, options)
+            if chunks is None:
+                return False
+            write_output(output, chunks)
+        return True
+    finally:
+        source.close()
+
+
 def build_command():
     """The ``mzc encode`` command over the codecs registered now."""
     from mzc.codecs import codec_names, get_codec
@@ -130,6 +154,8 @@ def build_command():
             raise MzcError("compressed data is not written to a terminal: redirect it or give -o FILE",
                            source=STDOUT_NAME)
         check_not_input(output, input)
+        if written_by_windows(codec, input, output, options):
+            return
         grid = read_grid(input)
         with about(display_name(input), f"encoding it with {codec.name}"):
             data = codec.encode(grid, **options)
