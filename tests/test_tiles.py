@@ -203,3 +203,18 @@ def test_a_geotiff_is_coded_by_windows_and_decoded_by_tiles_to_a_geotiff(dem, tm
     refused = run_mzc("encode", "--dwt2d", "--size", "3000", "--tile", "32", dem, "-o", tmp_path / "x.mzw2")
     assert refused.returncode == 1 and refused.stderr.decode().count("\n") == 1
     assert not (tmp_path / "x.mzw2").exists()
+
+
+def test_the_tiles_of_a_geotiff_are_coded_as_dask_tasks_into_the_same_bytes(dem, tmp_path):
+    pytest.importorskip("distributed")
+    from distributed import LocalCluster
+
+    here, there = tmp_path / "here.mzw2", tmp_path / "there.mzw2"
+    run_mzc("encode", "--dwt2d", "--rmse", "0.05", "--tile", "32", dem, "-o", here, check=True)
+    with LocalCluster(n_workers=1, threads_per_worker=1, processes=False, protocol="tcp", dashboard_address=None,
+                      silence_logs=50) as cluster:
+        run_mzc("encode", "--dwt2d", "--rmse", "0.05", "--tile", "32", dem, "-o", there, "--scheduler",
+                cluster.scheduler_address, check=True)
+    assert there.read_bytes() == here.read_bytes()
+    refused = run_mzc("encode", "--dwt2d", "--rmse", "0.05", dem, "-o", there, "--scheduler", "tcp://127.0.0.1:1")
+    assert refused.returncode == 2 and "--scheduler codes the tiles" in refused.stderr.decode()

@@ -114,10 +114,10 @@ def codec_options(codec, values):
         raise click.UsageError(f"{where}: {error.message}") from None
 
 
-def written_by_windows(codec, path, output, options):
+def written_by_windows(codec, path, output, options, scheduler=None):
     """Code a GeoTIFF file window by window when ``codec`` can and does (``Codec.window_writer``: a
-    raster too large to hold, in tiles), writing its file to ``output`` as it is made; False, with
-    nothing done, when the grid is to be read whole."""
+    raster too large to hold, in tiles; as Dask tasks on ``scheduler`` when given), writing its file
+    to ``output`` as it is made; False, with nothing done, when the grid is to be read whole."""
     from mzc.formats import starts_as
 
     if codec.window_writer is None or not starts_as(path, "tif"):
@@ -129,7 +129,7 @@ def written_by_windows(codec, path, output, options):
     source = GeoTiffSource(path, display_name(path))
     try:
         with about(display_name(path), f"encoding it with {codec.name}"):
-            chunks = codec.window_writer(source, options)
+            chunks = codec.window_writer(source, options, scheduler)
             if chunks is None:
                 return False
             write_output(output, chunks)
@@ -144,7 +144,7 @@ def build_command():
 
     codecs = [get_codec(name) for name in codec_names()]
 
-    def run(input, output, **values):
+    def run(input, output, scheduler, **values):
         from mzc.errors import MzcError, about
         from mzc.streams import STDOUT_NAME, check_not_input, display_name, is_terminal, write_output
 
@@ -154,15 +154,21 @@ def build_command():
             raise MzcError("compressed data is not written to a terminal: redirect it or give -o FILE",
                            source=STDOUT_NAME)
         check_not_input(output, input)
-        if written_by_windows(codec, input, output, options):
+        if written_by_windows(codec, input, output, options, scheduler):
             return
+        if scheduler is not None:
+            raise click.UsageError("--scheduler codes the tiles of a GeoTIFF file coded in tiles (--dwt2d on a "
+                                   "raster of more than one tile, or with --tile N), not this input")
         grid = read_grid(input)
         with about(display_name(input), f"encoding it with {codec.name}"):
             data = codec.encode(grid, **options)
         write_output(output, data)
 
+    scheduler = click.Option(["--scheduler"], metavar="ADDRESS",
+                             help="Code a tiled GeoTIFF's tiles as tasks of this Dask scheduler (tcp://HOST:8786), "
+                                  "whose workers read the file themselves: they must see the same path.")
     command = click.Command("encode", callback=run, help=HELP,
-                            params=[*[codec_flag(c) for c in codecs], *tuning_options(codecs)])
+                            params=[*[codec_flag(c) for c in codecs], *tuning_options(codecs), scheduler])
     for decorate in (output_option, input_argument):
         command = decorate(command)
     return command

@@ -90,9 +90,10 @@ class Codec:
     ``example`` holds the options of a typical use (the contract tests encode with them);
     ``writer_with_decoded(grid, **options) -> (bytes, heights)``, for a codec that reconstructs
     the grid as it codes, also gives the heights a decoder will get (``encode_with_decoded``);
-    ``window_writer(source, options)``, for a codec that codes a grid too large to hold a window at
-    a time (a raster read by windows, mzc.rasters.windows), gives the file's bytes in chunks, or
-    None when it codes that grid whole (the caller then reads it whole).
+    ``window_writer(source, options, scheduler)``, for a codec that codes a grid too large to hold
+    a window at a time (a raster read by windows, mzc.rasters.windows; on the Dask ``scheduler`` at
+    that address, when not None), gives the file's bytes in chunks, or None when it codes that grid
+    whole (the caller then reads it whole).
     """
 
     name: str
@@ -109,7 +110,7 @@ class Codec:
     example: dict[str, Any] = field(default_factory=dict)
     check_options: Callable[[dict[str, Any]], None] = field(default=lambda options: None)
     writer_with_decoded: Callable[..., tuple[bytes, np.ndarray]] | None = None
-    window_writer: Callable[[Any, dict[str, Any]], Iterator[bytes] | None] | None = None
+    window_writer: Callable[[Any, dict[str, Any], str | None], Iterator[bytes] | None] | None = None
 
     def __post_init__(self) -> None:
         if not self.kind:

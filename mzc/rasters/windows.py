@@ -6,6 +6,7 @@ into a tiled GeoTIFF as they are decoded. GDAL's block cache is held to CACHE_MB
 that of a tile and the cache, whatever the raster's size.
 """
 
+import functools
 import os
 import warnings
 
@@ -54,6 +55,7 @@ class GeoTiffSource:
                 raise error.located(source=source) from None
             raise
         self.frame = Frame(self.dataset.height, self.dataset.width, fields)
+        self.opener = functools.partial(GeoTiffSource, path, source)   # the same source, opened on a Dask worker
 
     def block(self, rows, cols):
         """The heights of grid rows ``rows`` and columns ``cols`` (each a (start, stop)): one window

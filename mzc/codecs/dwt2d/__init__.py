@@ -495,15 +495,18 @@ def encode_grid_with_decoded(grid, tile=None, **options):
     return data, tiles.read(data).z
 
 
-def window_writer(source, options):
+def window_writer(source, options, scheduler=None):
     """The chunks of the file of a grid read window by window (``source``: a Frame and its blocks,
-    mzc.rasters.windows) with CODEC's ``options`` (checked), or None when it is coded whole (read
-    it whole then: the same bytes as ever)."""
+    mzc.rasters.windows) with CODEC's ``options`` (checked), its tiles coded as Dask tasks on the
+    ``scheduler`` at that address when given; or None when it is coded whole (read it whole then:
+    the same bytes as ever)."""
     from mzc.codecs.dwt2d import tiles
 
     options = dict(options)
     side = tiles.tile_side(source.frame.shape, options.pop("tile", None))
-    return None if side is None else tiles.file_chunks(source, side, options, getattr(source, "spill_dir", None))
+    if side is None:
+        return None
+    return tiles.file_chunks(source, side, options, getattr(source, "spill_dir", None), scheduler)
 
 
 def encode_whole(grid, max_error=None, rmse=None, size=None, wavelet=DEFAULT_WAVELET, level=None, slope_limit=None,

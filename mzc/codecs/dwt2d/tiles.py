@@ -36,6 +36,7 @@ HEADER_LIMIT = 1 << 20     # the text header's bytes (a crs line is at most 16 K
 LENGTH = struct.Struct("<Q")
 INDEX_CHECK = struct.Struct("<I")
 COPY_CHUNK = 1 << 22       # bytes of tiles moved at a time from the spill file to the output
+TASKS_AHEAD = 64           # Dask tasks submitted at a time: their results wait, in order, for the spill file
 
 
 def tile_side(shape, tile):
@@ -127,20 +128,47 @@ def check_targets(frame, options):
         check_shared_unit(frame.described(), "rmse")
 
 
-def coded_tiles(source, tile, options):
+def coded_tiles(source, tile, options, client=None):
     """The bytes of every tile of ``source`` (row by row of tiles, from the grid's first row), each
-    a whole dwt2d file of its block coded with the dwt2d ``options`` (checked, without tile)."""
-    from mzc.codecs.dwt2d import encode_whole
-    from mzc.grid import ZGrid
-    from mzc.limits import check_grid_magnitudes
-
+    a whole dwt2d file of its block coded with the dwt2d ``options`` (checked, without tile): here,
+    or as Dask tasks of ``client`` (a distributed.Client), each worker reading its block itself
+    through ``source.opener`` (a source on disk that every worker sees), TASKS_AHEAD at a time."""
     frame = source.frame
     unit_checked = frame.fields.get("crs") is not None
-    for rows in spans(frame.rows, tile):
-        for cols in spans(frame.cols, tile):
-            grid = ZGrid(z=source.block(rows, cols), **frame.block_fields(rows[0], cols[0]))
-            check_grid_magnitudes(grid)
-            yield encode_whole(grid, **options, unit_checked=unit_checked)[0]
+    places = [(rows, cols) for rows in spans(frame.rows, tile) for cols in spans(frame.cols, tile)]
+    if client is None:
+        for rows, cols in places:
+            yield coded_block(source.block(rows, cols), frame, rows, cols, options, unit_checked)
+        return
+    for start in range(0, len(places), TASKS_AHEAD):
+        futures = [client.submit(coded_remotely, source.opener, rows, cols, options, unit_checked, pure=False)
+                   for rows, cols in places[start:start + TASKS_AHEAD]]
+        for future in futures:
+            yield future.result()
+
+
+def coded_block(values, frame, rows, cols, options, unit_checked):
+    """The dwt2d file of the block of ``frame`` at ``rows`` and ``cols`` (each a (start, stop)) holding
+    ``values``, its heights and decoded heights held to mzc.limits as ``Codec.encode`` holds a
+    whole grid's."""
+    from mzc.codecs.dwt2d import encode_whole
+    from mzc.grid import ZGrid
+    from mzc.limits import check_grid_magnitudes, check_magnitude
+
+    grid = ZGrid(z=values, **frame.block_fields(rows[0], cols[0]))
+    check_grid_magnitudes(grid)
+    data, decoded = encode_whole(grid, **options, unit_checked=unit_checked)
+    check_magnitude(decoded, "decoded heights", field="z")
+    return data
+
+
+def coded_remotely(opener, rows, cols, options, unit_checked):
+    """A Dask task: the file of one tile of the source ``opener()`` opens, read and coded here."""
+    source = opener()
+    try:
+        return coded_block(source.block(rows, cols), source.frame, rows, cols, options, unit_checked)
+    finally:
+        source.close()
 
 
 def header_bytes(frame, tile, lengths, options):
@@ -162,16 +190,21 @@ def encode(source, tile, options):
     return header_bytes(source.frame, tile, [len(t) for t in tiles], options) + b"".join(tiles)
 
 
-def file_chunks(source, tile, options, spill_dir=None) -> Iterator[bytes]:
+def file_chunks(source, tile, options, spill_dir=None, scheduler=None) -> Iterator[bytes]:
     """The bytes of a tiled file of ``source`` in chunks, for a source too large to hold: the tiles
-    are coded one at a time into an unnamed spill file (in ``spill_dir``), then the header and the
-    index are given, then the tiles read back a few MB at a time."""
+    are coded one at a time (or as Dask tasks on the ``scheduler`` at that address) into an unnamed
+    spill file (in ``spill_dir``), then the header and the index are given, then the tiles read
+    back a few MB at a time."""
     import tempfile
+    from contextlib import nullcontext
 
     check_targets(source.frame, options)
-    with tempfile.TemporaryFile(dir=spill_dir) as spill:
+    if scheduler is not None:
+        from mzc.batch.engine import dask_client
+    with tempfile.TemporaryFile(dir=spill_dir) as spill, \
+            (nullcontext() if scheduler is None else dask_client(scheduler)) as client:
         lengths = []
-        for data in coded_tiles(source, tile, options):
+        for data in coded_tiles(source, tile, options, client):
             spill.write(data)
             lengths.append(len(data))
         yield header_bytes(source.frame, tile, lengths, options)
