@@ -161,7 +161,7 @@ def test_tiles_in_the_wrong_place_are_refused():
 
 
 def test_a_grid_too_large_to_hold_is_refused_with_the_ways_round_it():
-    with pytest.raises(MzcError, match=r"--window.*--format tif"):
+    with pytest.raises(MzcError, match=r"decode --window.*--format tif"):
         tiles.check_window((12_000, 12_000), (0, 0, 12_000, 12_000))
 
 
@@ -218,3 +218,15 @@ def test_the_tiles_of_a_geotiff_are_coded_as_dask_tasks_into_the_same_bytes(dem,
     assert there.read_bytes() == here.read_bytes()
     refused = run_mzc("encode", "--dwt2d", "--rmse", "0.05", dem, "-o", there, "--scheduler", "tcp://127.0.0.1:1")
     assert refused.returncode == 2 and "--scheduler codes the tiles" in refused.stderr.decode()
+
+
+def test_a_multi_chart_grid_is_coded_whole_unless_told_to_tile(monkeypatch):
+    from mzc.grid import Chart
+
+    monkeypatch.setattr(tiles, "DEFAULT_TILE", 4)
+    z = terrain(6, 9, holes=False)
+    z[:, 4] = np.nan
+    charted = ZGrid(z=z, d1=1.0, d2=1.0, charts=(Chart("+z", 0, 0, 6, 4, 0, 0), Chart("-x", 0, 5, 6, 4, 0, 0)))
+    assert mzc.encode(charted, "dwt2d", max_error=0.05).startswith(b"mzc-dwt2d 4.0\n")
+    with pytest.raises(MzcError, match="multi-chart grid is coded whole"):
+        mzc.encode(charted, "dwt2d", max_error=0.05, tile=4)

@@ -65,8 +65,13 @@ class GeoTiffSource:
         height = self.frame.rows
         first = height - rows[1] if self.layout.rows == "down" else rows[0]
         window = Window(cols[0], first, cols[1] - cols[0], rows[1] - rows[0])
-        values = self.dataset.read(1, window=window)
-        invalid = self.dataset.read_masks(1, window=window) == 0
+        from rasterio.errors import RasterioError
+
+        try:
+            values = self.dataset.read(1, window=window)
+            invalid = self.dataset.read_masks(1, window=window) == 0
+        except RasterioError as error:
+            raise MzcError(f"not a readable GeoTIFF: {one_line(error)}", source=self.source) from None
         if values.dtype.kind == "f":
             invalid |= np.isnan(values)
         return node_values(values, invalid, self.layout)
@@ -88,7 +93,7 @@ def write_tiles(path, tiled, float32=False):
     ``float32``): a lossy file's values fit no smaller type, and the tiles are written before all
     of them are known."""
     from mzc.rasters import check_writable
-    from mzc.streams import forget, is_stdio, remember, write_output
+    from mzc.streams import forget, is_stdio, output_name, remember, write_output
 
     described = tiled.frame.described()
     check_writable_frame(described, check_writable)
@@ -98,10 +103,14 @@ def write_tiles(path, tiled, float32=False):
     handle, temp = tempfile.mkstemp(prefix=".mzc-", suffix=".tif", dir=folder)
     os.close(handle)
     remember(temp)
+    from rasterio.errors import RasterioError
+
     try:
         with settings():
             write_blocks(temp, described, tiled, "float32" if float32 else "float64")
         write_output(path, file_chunks(temp))
+    except RasterioError as error:   # GDAL's own failure to write (a full disk)
+        raise MzcError(f"cannot write the GeoTIFF: {one_line(error)}", source=output_name(path)) from None
     finally:
         os.unlink(temp)
         forget(temp)

@@ -488,7 +488,7 @@ def encode_grid_with_decoded(grid, tile=None, **options):
     (``encode_whole``) or, when ``tile`` or its size says so, in tiles (mzc.codecs.dwt2d.tiles)."""
     from mzc.codecs.dwt2d import tiles
 
-    side = tiles.tile_side(grid.shape, tile)
+    side = tiles.tile_side(grid.shape, tile, charted=grid.charts is not None)
     if side is None:
         return encode_whole(grid, **options)
     data = tiles.encode(tiles.GridSource(grid), side, options)

@@ -39,10 +39,11 @@ COPY_CHUNK = 1 << 22       # bytes of tiles moved at a time from the spill file 
 TASKS_AHEAD = 64           # Dask tasks submitted at a time: their results wait, in order, for the spill file
 
 
-def tile_side(shape, tile):
+def tile_side(shape, tile, charted=False):
     """The side of the tiles of a grid of ``shape`` coded with the ``tile`` option (None: tiles of
-    DEFAULT_TILE for a grid larger than one of them; 0: never), or None when it is coded whole."""
-    if tile == 0 or (tile is None and shape[0] * shape[1] <= DEFAULT_TILE * DEFAULT_TILE):
+    DEFAULT_TILE for a grid larger than one of them, unless it is ``charted``, whose charts are
+    blocks of their own; 0: never), or None when it is coded whole."""
+    if tile == 0 or (tile is None and (charted or shape[0] * shape[1] <= DEFAULT_TILE * DEFAULT_TILE)):
         return None
     return tile or DEFAULT_TILE
 
@@ -371,8 +372,9 @@ def check_window(shape, window, source=None):
     if min(row, col) < 0 or min(rows, cols) < 1 or row + rows > shape[0] or col + cols > shape[1]:
         raise MzcError(f"rows {row}..{row + rows - 1} and columns {col}..{col + cols - 1} are not a window of "
                        f"the grid's {shape[0]} x {shape[1]} nodes", source=source, field="window")
-    check_grid_size(rows, cols, advice="decode a window of it (--window), or write it as a GeoTIFF "
-                                       "(--format tif), which is written tile by tile", source=source, field="window")
+    check_grid_size(rows, cols, advice="decode a window of it (mzc decode --window), or write it as a GeoTIFF "
+                                       "(mzc decode --format tif), which is written tile by tile", source=source,
+                    field="window")
 
 
 def window_grid(frame, z, row, col):
