@@ -230,3 +230,16 @@ def test_a_multi_chart_grid_is_coded_whole_unless_told_to_tile(monkeypatch):
     assert mzc.encode(charted, "dwt2d", max_error=0.05).startswith(b"mzc-dwt2d 4.0\n")
     with pytest.raises(MzcError, match="multi-chart grid is coded whole"):
         mzc.encode(charted, "dwt2d", max_error=0.05, tile=4)
+
+
+def test_a_z_grid_too_large_to_hold_is_refused_in_one_line_before_any_tile_is_decoded(tmp_path):
+    from mzc.codecs.dwt2d.tiles import Frame, header_bytes
+
+    frame = Frame(12_000, 12_000, {"d1": 1.0, "d2": 1.0})
+    path = tmp_path / "huge.mzw2"
+    path.write_bytes(header_bytes(frame, 4096, [1] * 9, {}) + b"\0" * 9)   # tiles of one byte: never read
+    result = run_mzc("decode", path)
+    error = result.stderr.decode()
+    assert result.returncode == 1 and error.count("\n") == 1 and not result.stdout
+    assert "12000 x 12000 nodes is too large" in error and "--window" in error and "--format tif" in error
+    assert "tiles     3 x 3 of 4096 x 4096 nodes" in run_mzc("info", path, check=True).stdout.decode()
