@@ -200,6 +200,13 @@ def test_a_geotiff_is_coded_by_windows_and_decoded_by_tiles_to_a_geotiff(dem, tm
     window = run_mzc("decode", coded, "--window", 3, 4, 10, 12, check=True).stdout
     cut = mzc.decode(window)
     assert np.array_equal(cut.z, mzc.decode(coded.read_bytes()).z[3:13, 4:16], equal_nan=True)
+    assert np.array_equal(mzc.read(coded, window=(3, 4, 10, 12)).z, cut.z, equal_nan=True)
+    assert cut.crs == whole.crs and cut.raster == whole.raster
+    untiled = tmp_path / "untiled.mzw2"
+    mzc.write(untiled, mzc.encode(whole, "dwt2d", max_error=0.05))
+    from_whole = mzc.decode(run_mzc("decode", untiled, "--window", 3, 4, 10, 12, check=True).stdout)
+    assert np.array_equal(from_whole.z, mzc.decode(untiled.read_bytes()).z[3:13, 4:16], equal_nan=True)
+    assert from_whole.origin == cut.origin
     refused = run_mzc("encode", "--dwt2d", "--size", "3000", "--tile", "32", dem, "-o", tmp_path / "x.mzw2")
     assert refused.returncode == 1 and refused.stderr.decode().count("\n") == 1
     assert not (tmp_path / "x.mzw2").exists()
