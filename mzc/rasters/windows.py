@@ -55,7 +55,7 @@ class GeoTiffSource:
                 raise error.located(source=source) from None
             raise
         self.frame = Frame(self.dataset.height, self.dataset.width, fields)
-        self.opener = functools.partial(GeoTiffSource, path, source)   # the same source, opened on a Dask worker
+        self.opener = functools.partial(GeoTiffSource, os.path.abspath(path), source)   # opened on a Dask worker
 
     def block(self, rows, cols):
         """The heights of grid rows ``rows`` and columns ``cols`` (each a (start, stop)): one window
