@@ -201,20 +201,46 @@ def encode(grid: ZGrid | np.ndarray, codec: str = DEFAULT_CODEC, **options: Any)
     return get_codec(codec).encode(as_grid(grid), **options)
 
 
-def decode(data: bytes, legacy: str | None = None) -> ZGrid:
+def decode(data: bytes, legacy: str | None = None, *, window: Any = None) -> ZGrid:
     """The z-grid of any mzc file's bytes, or of a raster's (``mzc decode``); ``legacy`` names the
-    kind of a thesis file (poly, dft, dct, dwt), which has no magic line."""
+    kind of a thesis file (poly, dft, dct, dwt), which has no magic line; ``window`` (row, col,
+    rows, cols) decodes only those rows and columns (of a tiled file, only the tiles they touch)."""
     try:
         contents = bytes(memoryview(data).cast("B"))
     except TypeError:
         raise MzcError(f"must be the bytes of an mzc file, not a {type(data).__name__}", field="data") from None
+    window = window_argument(window)
     if legacy is not None:
         from mzc.codecs.rows.legacy import read_legacy
 
-        return read_legacy(contents, BYTES_SOURCE, legacy)
+        return windowed(read_legacy(contents, BYTES_SOURCE, legacy), window)
+    from mzc.codecs.dwt2d.tiles import Bytes, TiledFile, is_tiled
     from mzc.formats import read_any
 
-    return read_any(contents, BYTES_SOURCE)
+    if window is not None and is_tiled(contents):
+        return TiledFile(Bytes(contents), BYTES_SOURCE).window(*window)
+    return windowed(read_any(contents, BYTES_SOURCE), window)
+
+
+def window_argument(window: Any) -> tuple[int, int, int, int] | None:
+    """A ``window`` argument: None, or four whole numbers (row, col, rows, cols)."""
+    if window is None:
+        return None
+    try:
+        row, col, rows, cols = window
+    except (TypeError, ValueError):
+        raise MzcError(f"must be (row, col, rows, cols), not {window!r}", field="window") from None
+    return (number(row, "window", int, 0), number(col, "window", int, 0), number(rows, "window", int, 1),
+            number(cols, "window", int, 1))
+
+
+def windowed(grid: ZGrid, window: tuple[int, int, int, int] | None) -> ZGrid:
+    """``grid``, or its ``window``."""
+    if window is None:
+        return grid
+    from mzc.codecs.dwt2d.tiles import window_of
+
+    return window_of(grid, window)
 
 
 def densify(grid: ZGrid | np.ndarray, n: int, method: str = "biharmonic", *, iterations: int = 100,
@@ -273,12 +299,25 @@ def sample(name: str = "bump") -> Mesh:
     return sample_mesh(name)
 
 
-def read(path: PathLike) -> ZGrid | Mesh:
+def read(path: PathLike, *, window: Any = None) -> ZGrid | Mesh:
     """Read a file, of any format mzc knows (``mzc.formats``): an mzc file (z-grid or compressed)
-    or a raster (GeoTIFF, ESRI ASCII grid) as its ZGrid, a mesh or cloud as a Mesh."""
-    from mzc.formats import read_file
+    or a raster (GeoTIFF, ESRI ASCII grid) as its ZGrid, a mesh or cloud as a Mesh; ``window``
+    (row, col, rows, cols) reads only those rows and columns of a grid (of a tiled file, seeking
+    only the tiles they touch)."""
+    from mzc.formats import GRIDS, read_file
 
-    return read_file(path_of(path))
+    window = window_argument(window)
+    if window is None:
+        return read_file(path_of(path))
+    from mzc.codecs.dwt2d.tiles import open_tiled
+
+    tiled = open_tiled(path_of(path))
+    if tiled is None:
+        return windowed(read_file(path_of(path), GRIDS), window)
+    try:
+        return tiled.window(*window)
+    finally:
+        tiled.close()
 
 
 def write(path: PathLike, item: ZGrid | Mesh | bytes, file_format: str | None = None,

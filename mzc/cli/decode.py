@@ -11,6 +11,7 @@ from mzc.cli.options import (
     output_option,
     read_grid,
 )
+from mzc.errors import about
 
 LEGACY_KINDS = ("poly", "dft", "dct", "dwt")
 
@@ -29,16 +30,53 @@ which --precision rounds.
 @output_option
 @click.option("--legacy", type=click.Choice(LEGACY_KINDS),
               help="Read a thesis file (Tables 6.1, 7.1, 7.2, §5.3.1) of this kind.")
+@click.option("--window", type=click.IntRange(0), nargs=4, metavar="ROW COL ROWS COLS",
+              help="Decode only rows ROW..ROW+ROWS-1 and columns COL..COL+COLS-1 of the grid (row 0 is its "
+                   "first, a north-up raster's last); of a tiled file only the tiles they touch are read.")
 @grid_output_options
-def command(input, output, legacy, file_format, plain, float32, precision):
+def command(input, output, legacy, window, file_format, plain, float32, precision):
     from mzc.streams import check_not_input, display_name, read_input
 
     write = grid_writer(output, file_format, plain, float32, precision)
     check_not_input(output, input)
+    if not legacy and decoded_by_tiles(input, output, window or None, file_format, write, float32):
+        return
     if legacy:
         from mzc.codecs.rows.legacy import read_legacy
 
         grid = read_legacy(read_input(input), display_name(input), legacy)
     else:
         grid = read_grid(input)
+    if window:
+        from mzc.codecs.dwt2d.tiles import window_of
+
+        with about(display_name(input), "cutting its window"):
+            grid = window_of(grid, window)
     write(grid)
+
+
+def decoded_by_tiles(path, output, window, file_format, write, float32):
+    """Decode a tiled file (mzc-dwt2d 5.0, not on stdin) by its tiles: the ``window``'s alone, or,
+    to a GeoTIFF, every tile straight into its window of the raster; False, with nothing done, for
+    any other file."""
+    from mzc.codecs.dwt2d.tiles import open_tiled
+
+    tiled = open_tiled(path)
+    if tiled is None:
+        return False
+    from mzc.formats import GRIDS, writer_for
+
+    try:
+        row = writer_for(output, file_format, GRIDS)
+        if window is None and row is not None and row.name == "tif":
+            from mzc.rasters.windows import write_tiles
+
+            with about(tiled.source, "decoding it tile by tile"):
+                write_tiles(output, tiled, float32)
+            return True
+        with about(tiled.source, "decoding it"):
+            grid = tiled.window(*window) if window else tiled.window()
+    finally:
+        tiled.close()
+    write(grid)
+    return True

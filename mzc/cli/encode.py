@@ -121,13 +121,37 @@ def codec_options(codec, values):
         raise click.UsageError(f"{where}: {spelled.message}") from None
 
 
+def written_by_windows(codec, path, output, options, scheduler=None):
+    """Code a GeoTIFF file window by window when ``codec`` can and does (``Codec.window_writer``: a
+    raster too large to hold, in tiles; as Dask tasks on ``scheduler`` when given), writing its file
+    to ``output`` as it is made; False, with nothing done, when the grid is to be read whole."""
+    from mzc.formats import starts_as
+
+    if codec.window_writer is None or not starts_as(path, "tif"):
+        return False
+    from mzc.errors import about
+    from mzc.rasters.windows import GeoTiffSource
+    from mzc.streams import display_name, write_output
+
+    source = GeoTiffSource(path, display_name(path))
+    try:
+        with about(display_name(path), f"encoding it with {codec.name}"):
+            chunks = codec.window_writer(source, options, scheduler)
+            if chunks is None:
+                return False
+            write_output(output, chunks)
+        return True
+    finally:
+        source.close()
+
+
 def build_command():
     """The ``mzc encode`` command over the codecs registered now."""
     from mzc.codecs import codec_names, get_codec
 
     codecs = [get_codec(name) for name in codec_names()]
 
-    def run(input, output, **values):
+    def run(input, output, scheduler, **values):
         from mzc.errors import MzcError, about
         from mzc.streams import STDOUT_NAME, check_not_input, display_name, is_terminal, write_output
 
@@ -137,13 +161,21 @@ def build_command():
             raise MzcError("compressed data is not written to a terminal: redirect it or give -o FILE",
                            source=STDOUT_NAME)
         check_not_input(output, input)
+        if written_by_windows(codec, input, output, options, scheduler):
+            return
+        if scheduler is not None:
+            raise click.UsageError("--scheduler codes the tiles of a GeoTIFF file coded in tiles (--dwt2d on a "
+                                   "raster of more than one tile, or with --tile N), not this input")
         grid = read_grid(input)
         with about(display_name(input), f"encoding it with {codec.name}"):
             data = codec.encode(grid, **options)
         write_output(output, data)
 
+    scheduler = click.Option(["--scheduler"], metavar="ADDRESS",
+                             help="Code a tiled GeoTIFF's tiles as tasks of this Dask scheduler (tcp://HOST:8786), "
+                                  "whose workers read the file themselves: they must see the same path.")
     command = click.Command("encode", callback=run, help=HELP,
-                            params=[*[codec_flag(c) for c in codecs], *tuning_options(codecs)])
+                            params=[*[codec_flag(c) for c in codecs], *tuning_options(codecs), scheduler])
     for decorate in (output_option, input_argument):
         command = decorate(command)
     return command

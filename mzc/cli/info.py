@@ -21,9 +21,13 @@ def command(input, decode):
     data = read_input(input)
     source = display_name(input)
     row = identified(data, source, GRIDS)
+    tiles = []
     if row.kind == "raster":
         grid = read_as(row, data, source, input)
         format_line, header, chart_count = f"{row.name} (a raster, read as its grid)", grid_header_lines(grid), None
+    elif row.name == "dwt2d" and data.startswith(b"mzc-dwt2d 5."):
+        grid, format_line, header, tiles = tiled_header(data, source, decode)
+        chart_count = None
     else:
         grid, format_line, header, chart_count = mzc_header(row, data, source, decode)
     rows, cols = grid.shape
@@ -34,6 +38,7 @@ def command(input, decode):
         f"grid      {rows} rows x {cols} cols, d1 {grid.d1:g} d2 {grid.d2:g}{' ' + grid.units if grid.units else ''}",
         f"cut by    {cutting_surfaces(grid, chart_count is not None)}",
         *chart_lines(grid, chart_count),
+        *tiles,
     ]
     if decode:
         lines += decoded_lines(grid, len(data))
@@ -59,6 +64,31 @@ def mzc_header(row, data, source, decode):
     lines = [f"{keyword} {' '.join(values)}" for keyword, (values, _) in header.fields.items()]
     chart_count = " ".join(header.tokens("chart_count")) if header.charted and header.has("chart_count") else None
     return grid, f"mzc-{kind} {major}.{minor}", lines, chart_count
+
+
+def tiled_header(data, source, decode):
+    """(grid, format line, header lines, tile lines) of a tiled dwt2d file from its header and index
+    (their checksums checked), the grid decoded only with ``decode`` (the tiles' checksums then too)."""
+    import numpy as np
+
+    from mzc.codecs.dwt2d.tiles import Bytes, TiledFile
+    from mzc.formats.header import split_magic
+    from mzc.grid import ZGrid
+    from mzc.limits import MAX_NODES
+
+    tiled = TiledFile(Bytes(data), source)
+    rows, cols = tiled.frame.shape
+    if decode:
+        grid = tiled.window()
+    else:   # a header's grid, whose values are never read: one NaN seen as many, or its fields alone
+        grid = (ZGrid(z=np.broadcast_to(np.nan, (rows, cols)), **tiled.frame.fields) if rows * cols <= MAX_NODES
+                else tiled.frame.described())
+    lines = [f"{keyword} {' '.join(values)}" for keyword, (values, _) in tiled.header.fields.items()]
+    (tile_rows, tile_cols), sizes = tiled.counts, np.diff(tiled.offsets)
+    tile_lines = [f"tiles     {tile_rows} x {tile_cols} of {tiled.tile} x {tiled.tile} nodes, each a dwt2d file "
+                  f"of {int(sizes.min())}..{int(sizes.max())} bytes (index {int(tiled.offsets[0])} bytes in)"]
+    _kind, major, minor = split_magic(data, source)
+    return grid, f"mzc-dwt2d {major}.{minor} (tiled)", lines, tile_lines
 
 
 def chart_lines(grid, chart_count=None):

@@ -11,7 +11,7 @@ example, hostile input and its stored fixtures. Adding a codec is one module tha
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
@@ -89,7 +89,11 @@ class Codec:
     ``check_options`` enforces rules between options (dwt2d: exactly one target);
     ``example`` holds the options of a typical use (the contract tests encode with them);
     ``writer_with_decoded(grid, **options) -> (bytes, heights)``, for a codec that reconstructs
-    the grid as it codes, also gives the heights a decoder will get (``encode_with_decoded``).
+    the grid as it codes, also gives the heights a decoder will get (``encode_with_decoded``);
+    ``window_writer(source, options, scheduler)``, for a codec that codes a grid too large to hold
+    a window at a time (a raster read by windows, mzc.rasters.windows; on the Dask ``scheduler`` at
+    that address, when not None), gives the file's bytes in chunks, or None when it codes that grid
+    whole (the caller then reads it whole).
     """
 
     name: str
@@ -106,6 +110,7 @@ class Codec:
     example: dict[str, Any] = field(default_factory=dict)
     check_options: Callable[[dict[str, Any]], None] = field(default=lambda options: None)
     writer_with_decoded: Callable[..., tuple[bytes, np.ndarray]] | None = None
+    window_writer: Callable[[Any, dict[str, Any], str | None], Iterator[bytes] | None] | None = None
 
     def __post_init__(self) -> None:
         if not self.kind:

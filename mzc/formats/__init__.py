@@ -193,6 +193,17 @@ def by_extension(data: bytes, source: str, table: list[Format]) -> Format | None
                  and row.load().sniff(data) is None), None)
 
 
+def starts_as(path: str | os.PathLike | None, name: str) -> bool:
+    """True when ``path`` is a file (not stdin) whose first bytes are the magic of the format called ``name``."""
+    from mzc.streams import is_stdio
+
+    if path is None or is_stdio(path) or not os.path.isfile(path):
+        return False
+    with open(path, "rb") as file:
+        head = file.read(64)
+    return any(head.startswith(magic) for magic in named(name).magic)
+
+
 def is_mzc(data: bytes) -> bool:
     """True when ``data`` starts as an mzc file's magic line does."""
     return data[:4] == MZC_MAGIC

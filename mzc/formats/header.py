@@ -265,14 +265,16 @@ def check_checksum(data, header, span, required):
                        line=header.fields[CHECKSUM][1], field=CHECKSUM)
 
 
-def read_grid_fields(header):
+def read_grid_fields(header, whole=True):
     """The grid header fields as keyword arguments for ZGrid (without z), plus (rows, cols).
 
-    Declared sizes are checked here, before any caller allocates memory for them.
+    Declared sizes are checked here, before any caller allocates memory for them: the sides, and
+    the nodes of a grid read ``whole`` (a tiled file's are bounded by its tiles').
     """
     rows = header.integer("rows", 1, MAX_DIMENSION)
     cols = header.integer("cols", 1, MAX_DIMENSION)
-    check_grid_size(rows, cols, source=header.source, line=header.fields["cols"][1], field="cols")
+    if whole:
+        check_grid_size(rows, cols, source=header.source, line=header.fields["cols"][1], field="cols")
     transform = header.floats("transform", 12, required=False)
     if transform is None:
         transform = IDENTITY_TRANSFORM

@@ -58,19 +58,28 @@ class Layout:
 def grid_of(values, invalid, layout, sample, nodata=None, crs=None):
     """A ZGrid from a raster's ``values`` (its rows in file order), ``invalid`` mask, Layout and
     ``sample`` type, its no-data value ``nodata`` (None when it has none) and ``crs`` (WKT)."""
+    grid = ZGrid(node_values(values, invalid, layout), **grid_fields(layout, values.shape[0], sample, nodata, crs))
+    check_grid_magnitudes(grid)
+    return grid
+
+
+def grid_fields(layout, rows, sample, nodata=None, crs=None):
+    """The fields of the ZGrid (keyword arguments but z) of a raster of ``rows`` rows, as grid_of's."""
     for name in ("d2", "d1"):
         if not getattr(layout, name) > 0:
             raise MzcError(f"its cells are {getattr(layout, name):g} wide along {'x' if name == 'd2' else 'y'}",
                            field="transform")
-    rows = values.shape[0]
-    z = np.where(invalid, np.nan, real_array(values, "data"))
     dx, dy = layout.offsets(rows)
     origin = (node_coordinate(layout.x, dx), node_coordinate(layout.y, dy))
-    raster = Raster(layout.cells, layout.rows, sample)
-    grid = ZGrid(z[::-1] if layout.rows == "down" else z, d1=layout.d1, d2=layout.d2, origin=origin,
-                 nodata=nodata_token(nodata), crs=crs, raster=raster)
-    check_grid_magnitudes(grid)
-    return grid
+    return dict(d1=layout.d1, d2=layout.d2, origin=origin, nodata=nodata_token(nodata), crs=crs,
+                raster=Raster(layout.cells, layout.rows, sample))
+
+
+def node_values(values, invalid, layout):
+    """A raster's ``values`` (rows in file order) as a grid's heights: NaN where ``invalid``, the
+    rows in the grid's order."""
+    z = np.where(invalid, np.nan, real_array(values, "data"))
+    return z[::-1] if layout.rows == "down" else z
 
 
 def node_coordinate(reference, offset):

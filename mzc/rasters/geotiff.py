@@ -16,7 +16,7 @@ import numpy as np
 
 from mzc.errors import MzcError
 from mzc.grid import SAMPLES
-from mzc.limits import check_grid_size
+from mzc.limits import MAX_DIMENSION, check_grid_size
 from mzc.rasters import Layout, grid_of, layout_of, no_data_marker, raster_rows, sample_type
 
 EXTRA = "geo"
@@ -59,9 +59,14 @@ def read(data, source):
         raise error.located(source=source) from None
 
 
-def check_readable(dataset, source):
-    """Refuse what is not one grid of heights, before its values are read."""
-    check_grid_size(dataset.height, dataset.width, source=source, field="size")
+def check_readable(dataset, source, whole=True):
+    """Refuse what is not one grid of heights, before its values are read: read ``whole``, a grid
+    within mzc.limits' nodes (read by windows, within its sides)."""
+    if whole:
+        check_grid_size(dataset.height, dataset.width, source=source, field="size")
+    elif max(dataset.height, dataset.width) > MAX_DIMENSION:
+        raise MzcError(f"{dataset.height} x {dataset.width} cells: this mzc reads at most {MAX_DIMENSION} per side",
+                       source=source, field="size")
     if dataset.count != 1:
         raise MzcError(f"it has {dataset.count} bands: mzc reads a raster of one band of heights (a DEM); "
                        "take the band you mean first (gdal_translate -b N)", source=source, field="bands")

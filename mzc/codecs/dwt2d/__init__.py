@@ -8,7 +8,8 @@ detail steps scaled up where the surface leans from the node lines, magnitudes a
 each with their own contexts), and an optional correction layer of residuals that makes
 ``max_error`` hold at every valid node of the decoder's own reconstruction. All integers
 are entropy coded by mzc.codecs.dwt2d.entropy (magnitude classes through rANS, one model per context),
-and decoded by the C row loop of mzc.codecs.dwt2d._rows.
+and decoded by the C row loop of mzc.codecs.dwt2d._rows. A grid larger than one tile is coded as
+``mzc-dwt2d 5.0``, independent tiles each a file of this kind (mzc.codecs.dwt2d.tiles).
 """
 import functools
 
@@ -35,10 +36,11 @@ VERSION = (3, 1)             # every grid not read from a raster; 3.0 (no crc32 
                              # transform) are still read
 PROJECTED_VERSION = (3, 1)
 GEOREFERENCED_VERSION = (3, 2)   # 3.1 with the crs and raster lines of a grid read from a raster
-GEOREF_SINCE = dict([GEOREFERENCED_VERSION])   # major -> the first minor with the crs and raster lines
+GEOREF_SINCE = dict([GEOREFERENCED_VERSION, (5, 0)])   # major -> the first minor with the crs and raster lines
 CHARTED_VERSION = (4, 0)     # 3.1 with the charts line of a multi-chart grid (its charts side by side)
+TILED_VERSION = (5, 0)       # a grid in independent tiles, each a 3.1 file (mzc.codecs.dwt2d.tiles)
 OLDEST_MAJOR = 2             # 1.x were drafts
-CHECKSUM_SINCE = {3: 1, 4: 0}   # the crc32 line is required from 3.1 on
+CHECKSUM_SINCE = {3: 1, 4: 0, 5: 0}   # the crc32 line is required from 3.1 on
 CODER = "rans-signs-2"     # 2.0 names it on a required line; in 3.0 the version implies it
 # detail contexts, shared by every detail band: activity of parent, siblings, two rows above
 THRESHOLDS = (0.5, 1.0, 1.5, 3.0, 5.0, 8.0, 14.0, 24.0, 40.0, 70.0)
@@ -468,10 +470,14 @@ def band_steps(geometry, steps, shapes, approximation_q, slope_limit):
     return w2.step_maps(expand_steps(steps, len(shapes)), approximation_q, levels, geometry, shapes, slope_limit)
 
 
-def one_target(options):
-    """Refuse more than one of max_error, rmse and size (none: ``default_rmse``)."""
+def check_options(options):
+    """Refuse more than one of max_error, rmse and size (none: ``default_rmse``), and a tile side
+    out of range."""
     if sum(options.get(name) is not None for name in TARGETS) > 1:
         raise MzcError("give one of max_error, rmse or size, not several", field="dwt2d", options=TARGETS)
+    from mzc.codecs.dwt2d.tiles import check_tile_option
+
+    check_tile_option(options.get("tile"))
 
 
 def default_rmse(grid):
@@ -486,11 +492,39 @@ def encode_grid(grid, **options):
     return encode_grid_with_decoded(grid, **options)[0]
 
 
-def encode_grid_with_decoded(grid, max_error=None, rmse=None, size=None, wavelet=DEFAULT_WAVELET, level=None,
-                             slope_limit=None):
-    """(bytes, the heights a decoder gets from them) of a ZGrid (options checked by CODEC); at most
-    one of ``max_error`` (bound at every valid node, grid units), ``rmse`` (target RMS surface
-    error) or ``size`` (target file bytes, not exceeded when reachable); none is ``default_rmse``.
+def encode_grid_with_decoded(grid, tile=None, **options):
+    """(bytes, the heights a decoder gets from them) of a ZGrid (options checked by CODEC): whole
+    (``encode_whole``) or, when ``tile`` or its size says so, in tiles (mzc.codecs.dwt2d.tiles)."""
+    from mzc.codecs.dwt2d import tiles
+
+    side = tiles.tile_side(grid.shape, tile, charted=grid.charts is not None)
+    if side is None:
+        return encode_whole(grid, **options)
+    data = tiles.encode(tiles.GridSource(grid), side, options)
+    return data, tiles.read(data).z
+
+
+def window_writer(source, options, scheduler=None):
+    """The chunks of the file of a grid read window by window (``source``: a Frame and its blocks,
+    mzc.rasters.windows) with CODEC's ``options`` (checked), its tiles coded as Dask tasks on the
+    ``scheduler`` at that address when given; or None when it is coded whole (read it whole then:
+    the same bytes as ever)."""
+    from mzc.codecs.dwt2d import tiles
+
+    options = dict(options)
+    side = tiles.tile_side(source.frame.shape, options.pop("tile", None))
+    if side is None:
+        return None
+    return tiles.file_chunks(source, side, options, getattr(source, "spill_dir", None), scheduler)
+
+
+def encode_whole(grid, max_error=None, rmse=None, size=None, wavelet=DEFAULT_WAVELET, level=None, slope_limit=None,
+                 unit_checked=False):
+    """(bytes, the heights a decoder gets from them) of a ZGrid coded whole; at most one of
+    ``max_error`` (bound at every valid node, grid units), ``rmse`` (target RMS surface error) or
+    ``size`` (target file bytes, not exceeded when reachable), none being ``default_rmse``;
+    ``unit_checked`` when the caller has judged the grid's unit already (a tile, by its tiled
+    grid's CRS).
 
     ``slope_limit`` defaults to SLOPE_LIMIT for ``rmse`` and ``size``, whose errors are
     surface distances, and to 1 (equal steps) for ``max_error``, a bound on heights, where
@@ -499,7 +533,7 @@ def encode_grid_with_decoded(grid, max_error=None, rmse=None, size=None, wavelet
     if max_error is None and rmse is None and size is None:
         rmse = default_rmse(grid)
     name, target = next((n, v) for n, v in (("max_error", max_error), ("rmse", rmse), ("size", size)) if v is not None)
-    if max_error is None:
+    if max_error is None and not unit_checked:
         check_shared_unit(grid, name)
     if slope_limit is None:
         slope_limit = 1.0 if max_error is not None else SLOPE_LIMIT
@@ -594,8 +628,12 @@ def read_codec_fields(header, shape, transform):
 
 
 def read(data, source="<bytes>"):
-    """Decode dwt2d bytes (3.0, or 2.0 with its periodised transform) into a ZGrid; any bad input
-    raises MzcError."""
+    """Decode dwt2d bytes (3.x, 4.0, 2.0 with its periodised transform, or the tiles of 5.0) into a
+    ZGrid; any bad input raises MzcError."""
+    from mzc.codecs.dwt2d import tiles
+
+    if tiles.is_tiled(data):
+        return tiles.read(data, source)
     header, body, _first = read_header(data, source, KIND, CHARTED_VERSION[0], oldest_major=OLDEST_MAJOR,
                                        projected_major=PROJECTED_VERSION[0], checksum_since=CHECKSUM_SINCE,
                                        binary=True, georef_since=GEOREF_SINCE, charted_major=CHARTED_VERSION[0])
@@ -627,9 +665,9 @@ def read(data, source="<bytes>"):
 
 
 CODEC = Codec(
-    "dwt2d", encode_grid, read, writer_with_decoded=encode_grid_with_decoded, version=CHARTED_VERSION,
-    oldest_major=OLDEST_MAJOR, extension=".mzw2", spec="spec/dwt2d.md",
-    summary="2D wavelet of the whole grid, entropy coded, error-bounded", check_options=one_target,
+    "dwt2d", encode_grid, read, writer_with_decoded=encode_grid_with_decoded, version=TILED_VERSION,
+    oldest_major=OLDEST_MAJOR, extension=".mzw2", spec="spec/dwt2d.md", window_writer=window_writer,
+    summary="2D wavelet of the whole grid, entropy coded, error-bounded", check_options=check_options,
     example={"max_error": 0.05}, options=(
         Option("max_error", float, None, 0, MAX_MAGNITUDE, min_open=True, metavar="E",
                help="|decoded - input| <= E at every valid node."),
@@ -644,5 +682,8 @@ CODEC = Codec(
         Option("slope_limit", float, None, 1, metavar="F",
                help="Steps grow as 1/sqrt(cos lean) up to F times; 1 = equal steps [default: 2 for rmse and size, "
                     "1 for max_error]."),
+        Option("tile", int, None, 0, metavar="N",
+               help="Code the grid in independent N x N tiles (4..4096), each decoded on its own; 0 = whole "
+                    "[default: tiles of 1024 above 1024 x 1024 nodes]."),
     ))
 write = CODEC.encode
