@@ -49,8 +49,8 @@ format_option = click.option("--format", "file_format", type=click.Choice(("zg",
 RASTER_OUTPUT_HELP = """--format tif or asc (or an -o name ending in .tif, .tiff or .asc) writes a planar grid
 as a GeoTIFF or an ESRI ASCII grid instead (an ESRI grid's CRS in a .prj beside it), with
 the georeferencing and no-data value of the raster it was read from, if any; the GeoTIFF's
-samples keep the raster's type when it holds every value exactly, else float64 (--float32
-for float32)."""
+samples keep the raster's type when it holds every value exactly (an integer raster coded
+with --max-error decodes to integers), else float64 (--float32 for float32)."""
 
 
 def grid_output_options(command):
