@@ -157,3 +157,145 @@ def test_the_spec_example_of_5_0_is_its_input_rounded_back_within_its_bound():
     back = api.decode(data).z
     assert np.array_equal(back, expected, equal_nan=True)
     assert np.nanmax(np.abs(back - z)) == 1
+
+
+# --- GeoTIFF creation options and Cloud Optimized GeoTIFFs --------------------------------
+
+
+def large_int16_dem(path):
+    """A 700 x 900 int16 DEM with no-data cells: big enough for the COG driver's overviews."""
+    rng = np.random.default_rng(5)
+    r, c = np.mgrid[0:700, 0:900]
+    z = np.round(1500 + 300 * np.sin(r / 60) * np.cos(c / 85) + 20 * np.sin(r / 7 + c / 11)
+                 + rng.normal(0, 2, r.shape)).astype("int16")
+    z[300:340, 100:180] = -32768
+    profile = {"driver": "GTiff", "width": 900, "height": 700, "count": 1, "dtype": "int16", "nodata": -32768,
+               "transform": Affine(30, 0, 440720, 0, -30, 3751320), "crs": CRS.from_epsg(32611)}
+    with rasterio.open(path, "w", **profile) as dataset:
+        dataset.write(z, 1)
+    return path
+
+
+@pytest.fixture(scope="module")
+def coded_dem(tmp_path_factory):
+    """(the large DEM, its --dwt2d --max-error 1 file)."""
+    from conftest import run_mzc
+
+    folder = tmp_path_factory.mktemp("cog")
+    source, coded = large_int16_dem(folder / "dem.tif"), folder / "dem.mzw2"
+    run_mzc("encode", "--dwt2d", "--max-error", "1", source, "-o", coded, check=True)
+    return source, coded
+
+
+def structure(path):
+    """(tiled, block shape, overview factors, GDAL's IMAGE_STRUCTURE tags, profile) of a GeoTIFF."""
+    with rasterio.open(path) as dataset:
+        return (dataset.profile.get("tiled", False), dataset.block_shapes[0], dataset.overviews(1),
+                dataset.tags(ns="IMAGE_STRUCTURE"), dataset.profile)
+
+
+def test_creation_options_reach_gdal(mzc, coded_dem, tmp_path):
+    _, coded = coded_dem
+    plain, zstd = tmp_path / "plain.tif", tmp_path / "zstd.tif"
+    mzc("decode", coded, "-o", plain, check=True)
+    mzc("decode", coded, "-o", zstd, "--co", "COMPRESS=ZSTD", "--co", "zstd_level=9", "--co", "TILED=YES",
+        "--co", "BLOCKXSIZE=256", "--co", "BLOCKYSIZE=256", check=True)
+    tiled, block, _, tags, _ = structure(zstd)
+    assert tiled and block == (256, 256) and tags["COMPRESSION"] == "ZSTD"
+    assert structure(plain)[3]["COMPRESSION"] == "DEFLATE"
+    assert read_tif(zstd)[0].tobytes() == read_tif(plain)[0].tobytes()
+
+
+def test_cog_is_tiled_with_overviews_and_the_same_raster(mzc, coded_dem, tmp_path):
+    source, coded = coded_dem
+    plain, cog = tmp_path / "plain.tif", tmp_path / "cog.tif"
+    mzc("decode", coded, "-o", plain, check=True)
+    mzc("decode", coded, "--format", "tif", "--cog", "-o", cog, check=True)
+    tiled, block, overviews, tags, profile = structure(cog)
+    assert tiled and block == (512, 512) and overviews == [2] and tags["LAYOUT"] == "COG"
+    assert tags["COMPRESSION"] == "DEFLATE" and tags["PREDICTOR"] == "2"
+    plain_profile = structure(plain)[4]
+    for key in ("dtype", "nodata", "crs", "transform", "width", "height"):
+        assert profile[key] == plain_profile[key], key
+    assert profile["dtype"] == "int16" and profile["nodata"] == -32768
+    assert read_tif(cog)[0].tobytes() == read_tif(plain)[0].tobytes()
+    assert np.array_equal(read_tif(cog)[1], read_tif(source)[1])
+    with rasterio.open(cog) as dataset:   # the overview holds the terrain, not no-data or zeros
+        overview = dataset.read(1, out_shape=(350, 450), masked=True)
+        assert abs(float(overview.mean()) - float(read_tif(source)[0][read_tif(source)[1]].mean())) < 5
+
+
+def test_cog_takes_creation_options_of_the_cog_driver(mzc, tmp_path):
+    coded, cog = tmp_path / "dem.mzw2", tmp_path / "cog.tif"
+    mzc("encode", "--dwt2d", "--max-error", "1", SRTM, "-o", coded, check=True)
+    mzc("decode", coded, "-o", cog, "--cog", "--co", "BLOCKSIZE=128", "--co", "COMPRESS=LZW", check=True)
+    tiled, block, overviews, tags, _ = structure(cog)
+    assert tiled and block == (128, 128) and overviews == [2] and tags["COMPRESSION"] == "LZW"
+
+
+@pytest.mark.parametrize("args, message", [
+    (("--co", "FOO=1"), "co: GDAL: driver GTiff does not support creation option FOO"),
+    (("--co", "COMPRESS=SQUEEZE"), "co: GDAL: 'SQUEEZE' is an unexpected value for COMPRESS"),
+    (("--co", "PREDICTOR=3"), "co: GDAL: cannot write it: PREDICTOR=3 is only supported with Float32 or Float64"),
+    (("--co", "NODATA=0"), "co: NODATA is not a GeoTIFF creation option"),
+    (("--co", "COMPRESS"), "co: 'COMPRESS' is not KEY=VALUE"),
+    (("--cog", "--co", "BLOCKSIZE=7"), "co: GDAL: '7' is an unexpected value for BLOCKSIZE"),
+    (("--format", "asc", "--co", "DECIMALS=2"), "co: creation options and --cog are a GeoTIFF's; asc takes none"),
+    (("--format", "zg", "--cog"), "cog: creation options and --cog are a GeoTIFF's; zgrid takes none"),
+])
+def test_bad_geotiff_options_are_refused_in_one_line_and_nothing_is_written(mzc, tmp_path, args, message):
+    coded, out = tmp_path / "dem.mzw2", tmp_path / "out.tif"
+    mzc("encode", "--dwt2d", "--max-error", "1", SRTM, "-o", coded, check=True)
+    result = mzc("decode", coded, "-o", out, *args)
+    error = result.stderr.decode()
+    assert result.returncode == 1 and error.count("\n") == 1 and message in error, error
+    assert "Traceback" not in error and not list(tmp_path.glob("out*"))
+
+
+def test_the_api_and_batch_decode_write_what_decode_writes(mzc, tmp_path):
+    """One home: decode --cog --co, mzc.write(creation_options=, cog=) and batch decode --cog --co
+    give the same bytes, and a batch records its options in its settings."""
+    archive = tmp_path / "archive"
+    archive.mkdir()
+    coded = archive / "dem.mzw2"
+    mzc("encode", "--dwt2d", "--max-error", "1", SRTM, "-o", coded, check=True)
+    mzc("decode", coded, "-o", tmp_path / "cli.tif", "--cog", "--co", "COMPRESS=ZSTD", check=True)
+    api.write(tmp_path / "api.tif", api.decode(coded.read_bytes()), creation_options={"compress": "zstd"}, cog=True)
+    mzc("batch", "decode", archive, "-o", tmp_path / "batch", "--format", "tif", "--cog", "--co", "COMPRESS=ZSTD",
+        "--workers", "1", check=True)
+    cli = (tmp_path / "cli.tif").read_bytes()
+    assert (tmp_path / "api.tif").read_bytes() == cli == (tmp_path / "batch" / "dem.tif").read_bytes()
+    assert '""co"":{""COMPRESS"":""ZSTD""},""cog"":true' in (tmp_path / "batch" / "manifest.csv").read_text()
+    with pytest.raises(MzcError, match="asc takes none"):
+        api.batch_decode([archive], tmp_path / "b2", file_format="asc", creation_options=["COMPRESS=ZSTD"])
+    with pytest.raises(MzcError, match="must be True or False"):
+        api.write(tmp_path / "x.tif", api.decode(coded.read_bytes()), cog="yes")
+    assert not (tmp_path / "x.tif").exists() and not (tmp_path / "b2").exists()
+
+
+def test_values_at_the_ends_of_their_type_come_back_in_it():
+    """uint8 zeros and 255s coded at E = 3 would round to -3 or 258 without the clamp."""
+    z = np.where(np.indices((40, 50)).sum(axis=0) % 7 < 3, 0.0, 255.0)
+    grid = ZGrid(z, d1=1.0, d2=1.0, raster=Raster(sample="uint8"))
+    back = api.decode(api.encode(grid, "dwt2d", max_error=3.0)).z
+    assert back.min() >= 0 and back.max() <= 255 and np.abs(back - z).max() <= 3
+
+
+def test_a_rounding_line_needs_a_raster_of_integers():
+    data = api.encode(api.read(SRTM), "dwt2d", max_error=1.0)
+    for edit in (b"raster area down float32\n", b""):
+        bad = rechecksummed(data.replace(b"raster area down int16\n", edit, 1))
+        with pytest.raises(MzcError, match="rounds a raster of integer samples") as error:
+            api.decode(bad)
+        assert error.value.field == "rounding"
+
+
+@pytest.mark.parametrize("command", [("slice",), ("densify", "-n", "1")])
+def test_slice_and_densify_take_the_geotiff_options_too(mzc, tmp_path, command):
+    source = SRTM if command[0] == "slice" else tmp_path / "dem.zg"
+    if command[0] == "densify":
+        mzc("slice", SRTM, "-o", source, check=True)
+    out = tmp_path / "out.tif"
+    mzc(*command, source, "-o", out, "--co", "COMPRESS=LZW", "--cog", check=True)
+    tiled, _, _, tags, _ = structure(out)
+    assert tiled and tags["LAYOUT"] == "COG" and tags["COMPRESSION"] == "LZW"

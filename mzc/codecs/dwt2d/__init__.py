@@ -397,7 +397,7 @@ class Prepared:
         if self.grid.charts is not None:
             encode_charts(encoder, self.grid.charts)
         if rounded is not None:
-            decoded[self.valid] = np.rint(decoded[self.valid])   # as the decoder rounds them
+            decoded[self.valid] = rounded_values(decoded[self.valid], self.grid.raster.sample)   # as the decoder
             max_error = rounded
         decoded[~self.valid] = np.nan
         lines = self.header_lines(step, correction, max_error, rounded is not None)
@@ -544,6 +544,14 @@ def rounding_bounds(grid, max_error):
     return kept + 0.5 - ROUNDING_ULPS * float(np.spacing(largest)), kept
 
 
+def rounded_values(values, sample):
+    """``values`` rounded to the nearest integer (ties to even) and held to the range of the
+    integer type ``sample``, as a 5.0 decoder gives them (spec/dwt2d.md, Rounding): the input's
+    integers lie in that range, so neither step takes a value farther from its own."""
+    info = np.iinfo(sample)
+    return np.clip(np.rint(values), info.min, info.max)
+
+
 def keeping_best(work, measure, target):
     """(cost, kept) for a search of the largest x whose cost meets ``target``: cost(x) is
     measure(work(x)), and ``kept`` holds {x: work(x)} of the largest x so far whose cost met
@@ -627,6 +635,8 @@ def read(data, source="<bytes>"):
     rounding = (header.major, header.minor) >= ROUNDED_VERSION and header.has("rounding")
     if rounding:
         header.word("rounding", (ROUNDING,))
+        if "raster" not in fields or np.dtype(fields["raster"].sample).kind not in "iu":
+            raise header.error("rounding", "rounds a raster of integer samples: the raster line names none")
     geometry = w2.Geometry.of(fields["d1"], fields["d2"], fields["origin"], (rows, cols),
                               fields.get("projection", "planar"), fields.get("radius"))
     from mzc.codecs.dwt2d.entropy import Decoder
@@ -643,7 +653,7 @@ def read(data, source="<bytes>"):
             k = decoder.read_rows(valid, np.zeros(valid.shape), CORRECTION_THRESHOLDS, correction_model(0))
             z[valid] += correction * k[valid]
         if rounding:
-            z[valid] = np.rint(z[valid])
+            z[valid] = rounded_values(z[valid], fields["raster"].sample)
     if header.charted and header.has("chart_count"):
         fields["charts"] = decode_charts(decoder, header.integer("chart_count", 1, MAX_CHARTS))
     decoder.check_end()
