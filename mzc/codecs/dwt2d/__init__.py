@@ -669,7 +669,8 @@ CODEC = Codec(
     summary="2D wavelet of the whole grid, entropy coded, error-bounded", check_options=one_target,
     example={"max_error": 0.05}, options=(
         Option("max_error", float, None, 0, MAX_MAGNITUDE, min_open=True, metavar="E",
-               help="|decoded - input| <= E at every valid node."),
+               help="|decoded - input| <= E at every valid node (a raster of integers: integers within "
+                    "floor(E))."),
         Option("rmse", float, None, 0, MAX_MAGNITUDE, min_open=True, metavar="E",
                help="Aim at this RMS surface error (value error times cos of the lean)."),
         Option("size", int, None, 1, metavar="BYTES", help="Aim at this file size."),
