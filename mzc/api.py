@@ -321,12 +321,14 @@ def read(path: PathLike, *, window: Any = None) -> ZGrid | Mesh:
 
 
 def write(path: PathLike, item: ZGrid | Mesh | bytes, file_format: str | None = None,
-          precision: int | None = None, *, plain: bool = False, float32: bool = False) -> None:
+          precision: int | None = None, *, plain: bool = False, float32: bool = False,
+          creation_options: Any = None, cog: bool = False) -> None:
     """Write a ZGrid as a z-grid, or as a raster when ``path`` ends in .tif, .tiff or .asc (or
-    ``file_format`` is tif or asc: mzc.rasters, ``float32`` samples for GeoTIFF), a Mesh in the
-    format of ``path``'s extension (or ``file_format``), each format chosen from the table of
-    formats (``mzc.formats``), or bytes (a compressed file) as they are; atomically: nothing is
-    left on failure.
+    ``file_format`` is tif or asc: mzc.rasters, ``float32`` samples for GeoTIFF, GDAL's
+    ``creation_options`` ({KEY: value} or KEY=VALUE strings, as gdal_translate -co) and, with
+    ``cog``, a Cloud Optimized GeoTIFF), a Mesh in the format of ``path``'s extension (or
+    ``file_format``), each format chosen from the table of formats (``mzc.formats``), or bytes
+    (a compressed file) as they are; atomically: nothing is left on failure.
 
     A z-grid's heights are written raw by default (``mzc-zgrid 3.0``: exact little-endian
     float64, or float32 with ``float32``); ``plain`` writes them as text rows (1.0, 2.0), which
@@ -337,6 +339,8 @@ def write(path: PathLike, item: ZGrid | Mesh | bytes, file_format: str | None = 
     from mzc.streams import write_output
 
     path, precision = path_of(path), number(precision, "precision", int, 0, MAX_PRECISION)
+    row = writer_for(path, file_format, GRIDS) if isinstance(item, ZGrid) else None
+    geotiff = geotiff_settings(creation_options, cog, row.name if row is not None else file_format)
     if isinstance(item, (bytes, bytearray)):
         write_output(path, bytes(item))
         return
@@ -345,11 +349,10 @@ def write(path: PathLike, item: ZGrid | Mesh | bytes, file_format: str | None = 
 
         write_mesh(path, as_mesh(item), file_format)
         return
-    row = writer_for(path, file_format, GRIDS)
     if row is not None and row.kind == "raster":
         from mzc.rasters import write_raster
 
-        write_raster(path, item, row.name, float32=float32)
+        write_raster(path, item, row.name, float32=float32, options=geotiff.get("co"), cog="cog" in geotiff)
         return
     from mzc.formats import zgrid
 
@@ -398,12 +401,15 @@ def sliceable_extensions() -> list[str]:
 
 
 def batch_decode(sources: Any, dest: PathLike, *, densify: int = 0, method: str = "biharmonic",
-                 file_format: str = "ply", jump_angle: float | None = None, scheduler: Any = None,
-                 workers: int | None = None, chunk_size: int | None = None, listener: Any = None) -> Any:
+                 file_format: str = "ply", jump_angle: float | None = None, creation_options: Any = None,
+                 cog: bool = False, scheduler: Any = None, workers: int | None = None,
+                 chunk_size: int | None = None, listener: Any = None) -> Any:
     """Decode every mzc file of ``sources`` into a mesh in the folder ``dest`` on Dask (``mzc batch
     decode``): decoded, densified with ``densify`` rows between planes, triangulated into
-    ``file_format``, or written as a raster when it is tif or asc; on Dask as :func:`batch_encode`
-    runs (``scheduler``: an address, a ``distributed.Client``, or the current client). Returns the
+    ``file_format``, or written as a raster when it is tif or asc (a GeoTIFF with GDAL's
+    ``creation_options`` and Cloud Optimized with ``cog``, as ``write``); on Dask as
+    :func:`batch_encode` runs (``scheduler``: an address, a ``distributed.Client``, or the current
+    client). Returns the
     ``mzc.batch.Summary``."""
     from mzc.codecs import codec_names, get_codec
     from mzc.formats import SURFACES, extensions, writable
@@ -413,10 +419,24 @@ def batch_decode(sources: Any, dest: PathLike, *, densify: int = 0, method: str 
     if file_format not in known:
         raise MzcError(f"cannot write format {file_format!r} (known: {', '.join(known)})", field="file_format")
     densify = number(densify, "densify", int, 0, MAX_INSERTED)
-    settings = {"densify": densify, "method": method, "format": file_format, "jump_angle": jump_angle}
+    settings = {"densify": densify, "method": method, "format": file_format, "jump_angle": jump_angle,
+                **geotiff_settings(creation_options, cog, file_format)}
     decoded = [*extensions(("grid",)), *(get_codec(name).extension for name in codec_names())]
     return run_batch_job("decode", sources, dest, settings, decoded, "." + file_format, scheduler=scheduler,
                          workers=workers, chunk_size=chunk_size, listener=listener)
+
+
+def geotiff_settings(creation_options: Any, cog: Any, file_format: str | None) -> dict[str, Any]:
+    """{"co": {KEY: value}, "cog": True} of a GeoTIFF's creation options and COG layout, each only
+    when asked (a batch's settings name what shapes its outputs), checked now
+    (mzc.rasters.geotiff_options)."""
+    if not creation_options and cog is False:
+        return {}
+    from mzc.rasters import geotiff_options
+
+    options, cog = geotiff_options(creation_options, cog, file_format)
+    settings: dict[str, Any] = {"co": options} if options else {}
+    return {**settings, "cog": True} if cog else settings
 
 
 def run_batch_job(action: str, sources: Any, dest: PathLike, settings: dict[str, Any], extensions: list[str],

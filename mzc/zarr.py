@@ -1,9 +1,16 @@
-"""A numcodecs codec for 2D arrays in Zarr stores: mzc's ``--dwt2d`` with a max-error bound.
+"""A numcodecs codec for arrays in Zarr stores: mzc's ``--dwt2d`` with a max-error bound.
 
-``Dwt2d(max_error=E)`` stores each 2D chunk (float32 or float64; NaN = no data) as one
+``Dwt2d(max_error=E)`` stores each 2D float chunk (float32 or float64; NaN = no data) as one
 ``mzc-dwt2d`` file behind a one-byte code of its dtype and byte order, so that every
 valid value comes back within E (for float32, within E plus the rounding to float32)
-and no-data stays NaN. It is registered under the codec id ``mzc_dwt2d`` through the
+and no-data stays NaN. A chunk of integers (8 to 32 bits) or of any other number of
+dimensions (a time stack of DEMs: time x rows x columns) is a stack of 2D slices along its
+last two axes, each its own ``mzc-dwt2d`` file (``STACK``); integers are coded as a raster
+of integer samples, so they come back integers within floor(E) <= E of their own, in their
+type (spec/dwt2d.md, Rounding). Every chunk is coded on its own, so ``dask.array.to_zarr``
+codes a store of any size chunk by chunk on a cluster.
+
+It is registered under the codec id ``mzc_dwt2d`` through the
 ``numcodecs.codecs`` entry point, so ``numcodecs.get_codec({"id": "mzc_dwt2d",
 "max_error": 0.01})`` finds it and a Zarr store that names it opens wherever mzc is
 installed.
@@ -35,6 +42,7 @@ first use, so importing this module imports neither zarr nor its base class.
 
 from __future__ import annotations
 
+import struct
 from typing import Any
 
 import numpy as np
@@ -48,6 +56,12 @@ from mzc.errors import MzcError
 DTYPES: dict[bytes, np.dtype] = {b"f": np.dtype("<f4"), b"d": np.dtype("<f8"),
                                  b"F": np.dtype(">f4"), b"D": np.dtype(">f8")}
 CODES = {dtype: code for code, dtype in DTYPES.items()}
+# any other chunk: STACK, its dtype as numpy spells it (3 ASCII bytes, "<i2"), its number of
+# dimensions (1 byte) and its shape (a little-endian uint32 each), then each 2D slice along its
+# last two axes (a 1D chunk: one row), in C order, as a uint32 length and an mzc-dwt2d file
+STACK = b"N"
+STACKED = ("uint8", "int8", "uint16", "int16", "uint32", "int32", "float32", "float64")   # mzc.grid.SAMPLES
+MAX_DIMENSIONS = 32
 
 
 class Dwt2d(Codec):
@@ -74,43 +88,94 @@ class Dwt2d(Codec):
         return {"max_error": self.max_error, "wavelet": self.wavelet, "level": self.level}
 
     def encode(self, buf: Any) -> bytes:
-        """One 2D float chunk as a dtype code and an mzc-dwt2d file."""
-        import mzc
-
+        """One chunk as a dtype code and an mzc-dwt2d file (2D floats), else as a STACK."""
         array = np.asarray(buf)
-        if array.ndim != 2 or array.dtype not in CODES:
-            raise MzcError(f"mzc_dwt2d codes 2D float32 or float64 chunks, not {array.ndim}D {array.dtype}")
+        if array.dtype.name not in STACKED or not 1 <= array.ndim <= MAX_DIMENSIONS:
+            raise MzcError(f"mzc_dwt2d codes chunks of 1 to {MAX_DIMENSIONS} dimensions of {', '.join(STACKED)}, "
+                           f"not {array.ndim}D {array.dtype}")
         if array.size == 0:   # the file format has at least one row and column
-            raise MzcError(f"mzc_dwt2d cannot code an empty {array.shape[0]} x {array.shape[1]} chunk")
-        return CODES[array.dtype] + mzc.encode(array.astype(np.float64), "dwt2d", **self.options())
+            raise MzcError(f"mzc_dwt2d cannot code an empty {' x '.join(map(str, array.shape))} chunk")
+        if array.ndim == 2 and array.dtype in CODES:   # as it always was: a store's chunks read the same
+            return CODES[array.dtype] + self.slice_file(array)
+        slices = array.reshape((-1, *array.shape[-2:]) if array.ndim > 1 else (1, 1, -1))
+        files = [self.slice_file(values) for values in slices]
+        head = STACK + array.dtype.str.encode() + struct.pack(f"<B{array.ndim}I", array.ndim, *array.shape)
+        return head + b"".join(struct.pack("<I", len(file)) + file for file in files)
+
+    def slice_file(self, values: np.ndarray) -> bytes:
+        """The mzc-dwt2d file of one 2D slice: a grid of float values, or of a raster's integer
+        samples, which the encoder keeps integers (spec/dwt2d.md, Rounding)."""
+        import mzc
+        from mzc.grid import Raster, ZGrid
+
+        raster = Raster(sample=values.dtype.name) if values.dtype.kind in "iu" else None
+        return mzc.encode(ZGrid(values.astype(np.float64), d1=1.0, d2=1.0, raster=raster), "dwt2d", **self.options())
 
     def decode(self, buf: Any, out: Any = None) -> np.ndarray:
-        """The chunk back, in its dtype, into ``out`` when given: an array of its shape and type,
-        a flat one of its type and size, or bytes of its size."""
-        import mzc
-
+        """The chunk back, in its dtype and shape, into ``out`` when given: an array of its shape
+        and type, a flat one of its type and size, or bytes of its size."""
         data = ensure_bytes(buf)
-        if data[:1] not in DTYPES:
+        if data[:1] in DTYPES:
+            values = slice_values(data[1:]).astype(DTYPES[data[:1]], order="C")   # zarr flattens in memory order
+        elif data[:1] == STACK:
+            values = stack_values(data)
+        else:
             raise MzcError("not an mzc_dwt2d chunk (no dtype code)")
-        grid = mzc.decode(data[1:])
-        if grid.charts is not None:
-            raise MzcError(f"the chunk holds a multi-chart grid ({len(grid.charts)} charts): a Zarr chunk is one "
-                           "grid of values", field="charts")
-        values = grid.z.astype(DTYPES[data[:1]], order="C")   # zarr flattens in memory order
         if out is not None:
             out = ensure_ndarray_like(out)
             check_fits(values, out.shape, out.dtype)
         return ndarray_copy(values, out)
 
 
+def slice_values(data: bytes) -> np.ndarray:
+    """The values of one mzc-dwt2d file of a chunk: one grid, not a multi-chart one."""
+    import mzc
+
+    grid = mzc.decode(data)
+    if grid.charts is not None:
+        raise MzcError(f"the chunk holds a multi-chart grid ({len(grid.charts)} charts): a Zarr chunk is one "
+                       "grid of values", field="charts")
+    return grid.z
+
+
+def stack_values(data: bytes) -> np.ndarray:
+    """The chunk of a STACK: its header checked, each slice decoded and checked against its shape,
+    integers cast exactly (their files decode to integers in their type's range)."""
+    try:
+        dtype, ndim = np.dtype(data[1:4].decode("ascii")), data[4]
+        shape = struct.unpack_from(f"<{ndim}I", data, 5)
+    except (ValueError, TypeError, IndexError, UnicodeDecodeError, struct.error):
+        raise MzcError("not an mzc_dwt2d chunk (a bad stack header)") from None
+    if dtype.name not in STACKED or not 1 <= ndim <= MAX_DIMENSIONS or 0 in shape:
+        raise MzcError(f"not an mzc_dwt2d chunk (a stack of {ndim}D {dtype})")
+    plane = tuple(shape[-2:]) if ndim > 1 else (1, shape[0])
+    count, position = int(np.prod(shape[:-2])) if ndim > 2 else 1, 5 + 4 * ndim
+    slices: list[np.ndarray] = []
+    for _ in range(count):
+        (length,) = struct.unpack_from("<I", data, position) if position + 4 <= len(data) else (None,)
+        if length is None or position + 4 + length > len(data):
+            raise MzcError(f"the chunk is cut short: {len(slices)} of its {count} slices are there")
+        values = slice_values(data[position + 4:position + 4 + length])
+        if values.shape != plane:
+            raise MzcError(f"a slice of the chunk is {values.shape[0]} x {values.shape[1]}, not "
+                           f"{plane[0]} x {plane[1]}")
+        slices.append(values)
+        position += 4 + length
+    if position != len(data):
+        raise MzcError(f"the chunk has {len(data) - position} bytes after its {count} slices")
+    return np.stack(slices).astype(dtype, order="C").reshape(shape)   # zarr flattens in memory order
+
+
 def check_fits(values: np.ndarray, shape: tuple[int, ...], dtype: np.dtype) -> None:
     """Refuse to put a decoded chunk ``values`` where an array of ``shape`` and ``dtype`` goes when
-    it has another size, float type or 2D shape: numcodecs' copy and zarr's reshape would
-    silently lay it out as another grid or read its bytes as other numbers."""
-    same_type = dtype.kind not in "fc" or dtype.newbyteorder("=") == values.dtype.newbyteorder("=")
+    it has another size, type or shape (a flat buffer of its type, or of bytes, is zarr's own):
+    numcodecs' copy and zarr's reshape would silently lay it out as another grid or read its
+    bytes as other numbers."""
+    same_type = dtype.newbyteorder("=") == values.dtype.newbyteorder("=") or (
+        dtype.itemsize == 1 and values.dtype.itemsize > 1 and len(shape) <= 1)
     size = int(np.prod(shape)) * dtype.itemsize
     if size != values.nbytes or not same_type or (len(shape) > 1 and tuple(shape) != values.shape):
-        raise MzcError(f"the chunk is {values.shape[0]} x {values.shape[1]} {values.dtype}, not the "
+        raise MzcError(f"the chunk is {' x '.join(map(str, values.shape))} {values.dtype}, not the "
                        f"{' x '.join(map(str, shape))} {dtype} it is decoded into")
 
 

@@ -228,7 +228,7 @@ def test_variants_record_their_layout(generated):
 @pytest.mark.parametrize("codec", [("--dwt2d", "--max-error", "0.25"), ("--dct", "-q", "100", "--precision", "6")])
 def test_tif_slice_encode_decode_tif_keeps_the_georeferencing(mzc, generated, tmp_path, variant, codec):
     """tif -> slice -> encode -> decode --format tif: the same cells, no-data cells, georeferencing and
-    CRS, each value within the codec's error (float64 samples: the decoded values are not int16's)."""
+    CRS, each value within the codec's error."""
     coded, back = tmp_path / "dem.mzc", tmp_path / "back.tif"
     sliced = mzc("slice", generated[variant])
     assert mzc("encode", *codec, "-o", coded, input=sliced.stdout).returncode == 0

@@ -202,7 +202,8 @@ def decode_item(job, item, data, row, timings):
         from mzc.rasters import raster_files
 
         with timings.stage("raster"), about(source, f"writing it as {settings['format']}"):
-            return raster_files(item.output, grid, settings["format"])
+            return raster_files(item.output, grid, settings["format"], options=settings.get("co"),
+                                cog=settings.get("cog", False))
     from mzc.meshes import mesh_to_bytes
     from mzc.ops.triangulation import grid_to_mesh
 

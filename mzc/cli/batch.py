@@ -3,7 +3,14 @@
 import click
 
 from mzc.cli.densify import DEFAULT_METHOD, METHODS
-from mzc.cli.options import RASTER_FORMATS, jump_angle_option, with_options
+from mzc.cli.options import (
+    RASTER_FORMATS,
+    co_option,
+    cog_option,
+    given_geotiff_options,
+    jump_angle_option,
+    with_options,
+)
 from mzc.cli.triangulate import FORMATS
 from mzc.limits import MAX_INSERTED
 
@@ -98,12 +105,15 @@ decode --format' writes the grids of rasters.
 @click.option("--format", "file_format", type=click.Choice([*FORMATS, *RASTER_FORMATS]), default="ply",
               show_default=True, help="Mesh format of the outputs, or tif or asc: rasters.")
 @jump_angle_option
+@co_option
+@cog_option
 def decode(densify, method, file_format, jump_angle, sources, dest, scheduler, workers, chunk_size):
     from mzc.api import batch_decode
 
+    co, cog = given_geotiff_options()
     report(batch_decode(sources, dest, densify=densify, method=method, file_format=file_format,
-                        jump_angle=jump_angle, scheduler=scheduler, workers=workers, chunk_size=chunk_size,
-                        listener=terminal_progress()))
+                        jump_angle=jump_angle, creation_options=co, cog=cog, scheduler=scheduler, workers=workers,
+                        chunk_size=chunk_size, listener=terminal_progress()))
 
 
 decode = with_options(batch_options, decode)

@@ -49,13 +49,34 @@ format_option = click.option("--format", "file_format", type=click.Choice(("zg",
 RASTER_OUTPUT_HELP = """--format tif or asc (or an -o name ending in .tif, .tiff or .asc) writes a planar grid
 as a GeoTIFF or an ESRI ASCII grid instead (an ESRI grid's CRS in a .prj beside it), with
 the georeferencing and no-data value of the raster it was read from, if any; the GeoTIFF's
-samples keep the raster's type when it holds every value exactly, else float64 (--float32
-for float32)."""
+samples keep the raster's type when it holds every value exactly (an integer raster coded
+with --max-error decodes to integers), else float64 (--float32 for float32)."""
+
+
+def keep_geotiff_option(context, parameter, value):
+    """Keep --co or --cog in the context for grid_writer, which alone reads them: the commands
+    that write a grid pass their options on without naming these."""
+    context.meta[f"mzc.{parameter.name}"] = value
+
+
+co_option = click.option("--co", multiple=True, metavar="KEY=VALUE", expose_value=False, callback=keep_geotiff_option,
+                         help="A GeoTIFF creation option, as gdal_translate -co (COMPRESS=ZSTD, TILED=YES, "
+                              "BLOCKXSIZE=256, ...); repeatable. GDAL refuses a key or value it does not take.")
+cog_option = click.option("--cog", is_flag=True, expose_value=False, callback=keep_geotiff_option,
+                          help="Write a Cloud Optimized GeoTIFF (GDAL's COG driver: tiles, overviews, the IFDs "
+                               "first), DEFLATE with a predictor unless --co says otherwise.")
+
+
+def given_geotiff_options():
+    """(--co's KEY=VALUE strings, --cog) of the running command (co_option, cog_option)."""
+    meta = click.get_current_context().meta
+    return meta.get("mzc.co", ()), meta.get("mzc.cog", False)
 
 
 def grid_output_options(command):
-    """``command`` with --format, --plain, --float32 and --precision: how it writes its grid."""
-    return format_option(plain_option(float32_option(precision_option(command))))
+    """``command`` with --format, --plain, --float32 and --precision: how it writes its grid, and
+    --co and --cog for a GeoTIFF (kept for grid_writer)."""
+    return format_option(plain_option(float32_option(precision_option(co_option(cog_option(command))))))
 
 
 def grid_writer(output, file_format, plain, float32, precision):
@@ -66,24 +87,29 @@ def grid_writer(output, file_format, plain, float32, precision):
 
     from mzc.formats import GRIDS, writer_for
 
+    co, cog = given_geotiff_options()
     row = writer_for(output, file_format, GRIDS)
+    if co or cog:
+        from mzc.rasters import geotiff_options as checked
+
+        co, cog = checked(co, cog, row.name if row is not None else "zgrid")
     if row is None or row.kind != "raster":
         return partial(write_grid, path=output, body=zgrid_body(plain, float32, precision))
     if plain or precision is not None:
         raise click.UsageError(f"--plain and --precision shape a z-grid's body; --format {row.name} writes a raster")
-    return partial(write_raster_output, output=output, raster=row.name, float32=float32)
+    return partial(write_raster_output, output=output, raster=row.name, float32=float32, options=co, cog=cog)
 
 
-def write_raster_output(grid, output, raster, float32):
-    """Write ``grid`` as a ``raster``, a refusal naming the output; a GeoTIFF is binary, so not
-    on a terminal."""
+def write_raster_output(grid, output, raster, float32, options=(), cog=False):
+    """Write ``grid`` as a ``raster`` (a GeoTIFF with GDAL's creation ``options`` and, with ``cog``,
+    Cloud Optimized), a refusal naming the output; a GeoTIFF is binary, so not on a terminal."""
     from mzc.rasters import write_raster
     from mzc.streams import is_terminal, output_name
 
     if raster == "tif" and is_terminal(output):
         raise MzcError("a GeoTIFF is not written to a terminal: redirect it or give -o FILE", field="format")
     with about(output_name(output), f"writing it as {raster}"):
-        write_raster(output, grid, raster, float32=float32)
+        write_raster(output, grid, raster, float32=float32, options=options, cog=cog)
 
 
 def zgrid_body(plain, float32, precision=None):

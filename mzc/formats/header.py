@@ -85,15 +85,15 @@ def magic_line(kind, version):
 class Header:
     """The keyword lines of a header, with the line number of each for error messages.
 
-    ``major`` is the file's major version; ``projected`` is True when it may hold a central
+    ``major`` and ``minor`` are the file's version; ``projected`` is True when it may hold a central
     projection, ``georeferenced`` when its version reads the ``crs`` and ``raster`` lines,
     ``charted`` when it may hold charts.
     """
 
-    def __init__(self, source, major=1, projected=False, georeferenced=False, charted=False):
+    def __init__(self, source, major=1, projected=False, georeferenced=False, charted=False, minor=0):
         self.source = source
         self.fields = {}
-        self.major = major
+        self.major, self.minor = major, minor
         self.projected = projected
         self.georeferenced = georeferenced
         self.charted = charted
@@ -199,7 +199,7 @@ def read_header(data, source, kind, supported_major, oldest_major=1, projected_m
     since = (georef_since or {}).get(major)
     header = Header(source, major, projected=projected_major is not None and major >= projected_major,
                     georeferenced=since is not None and minor >= since,
-                    charted=charted_major is not None and major >= charted_major)
+                    charted=charted_major is not None and major >= charted_major, minor=minor)
     position = data.index(b"\n") + 1 if b"\n" in data else len(data)
     line_number = 1
     checksum_line = None

@@ -21,6 +21,7 @@ in up to 15 significant digits.
 """
 
 import os
+import re
 from dataclasses import dataclass, replace
 
 import numpy as np
@@ -178,24 +179,60 @@ def holds(sample, values):
     return bool(np.all((values == np.round(values)) & (values >= info.min) & (values <= info.max)))
 
 
-def write_raster(path, grid, file_format, float32=False):
+def write_raster(path, grid, file_format, float32=False, options=None, cog=False):
     """Write ``grid`` as the raster format ``file_format`` (tif or asc) to ``path`` (or stdout),
     atomically with its sidecar when it has one (``raster_files``)."""
     from mzc.streams import write_outputs
 
-    write_outputs(*raster_files(path, grid, file_format, float32))
+    write_outputs(*raster_files(path, grid, file_format, float32, options, cog))
 
 
-def raster_files(path, grid, file_format, float32=False):
+def geotiff_options(pairs, cog, file_format):
+    """({KEY: value}, cog) of a GeoTIFF's creation options, given as ``KEY=VALUE`` strings
+    (gdal_translate's -co; mzc's --co) or as a dict, keys in upper case as GDAL spells them,
+    and its Cloud Optimized layout ``cog``; both refused for a ``file_format`` other than tif
+    (an ESRI grid or z-grid has none). GDAL itself refuses, when writing, a key or value it
+    does not take (mzc.rasters.geotiff)."""
+    if not isinstance(cog, bool):
+        raise MzcError(f"must be True or False, not {cog!r}", field="cog")
+    if (pairs or cog) and file_format != "tif":
+        raise MzcError(f"creation options and --cog are a GeoTIFF's; {file_format} takes none",
+                       field="co" if pairs else "cog")
+    return creation_options(pairs or {}), cog
+
+
+def creation_options(pairs):
+    """{KEY: value} of creation options given as KEY=VALUE strings or a dict (geotiff_options)."""
+    items = pairs.items() if isinstance(pairs, dict) else (split_option(pair) for pair in pairs)
+    options = {}
+    for key, value in items:
+        if not isinstance(key, str) or not re.fullmatch(r"[A-Za-z][A-Za-z0-9_]*", key):
+            raise MzcError(f"{key!r} is not a creation option's name (KEY=VALUE, as gdal_translate -co)", field="co")
+        options[key.upper()] = str(value)
+    return options
+
+
+def split_option(pair):
+    """(KEY, VALUE) of one ``KEY=VALUE`` creation option."""
+    if not isinstance(pair, str) or "=" not in pair:
+        raise MzcError(f"{pair!r} is not KEY=VALUE (as gdal_translate -co)", field="co")
+    key, value = pair.split("=", 1)
+    return key.strip(), value.strip()
+
+
+def raster_files(path, grid, file_format, float32=False, options=None, cog=False):
     """[(path, bytes)] of ``grid`` as the raster format ``file_format`` (tif or asc; mzc.formats) at
     ``path``: the raster, then the sidecar beside it that holds the grid's CRS, for a format that
-    keeps it there (an ESRI grid's .prj; not on stdout; a GeoTIFF holds its own)."""
+    keeps it there (an ESRI grid's .prj; not on stdout; a GeoTIFF holds its own). A GeoTIFF takes
+    GDAL's creation ``options`` and, with ``cog``, is Cloud Optimized (geotiff_options)."""
     from mzc.formats import named
     from mzc.streams import is_stdio
 
+    options, cog = geotiff_options(options, cog, file_format)
     check_writable(grid)
     row = named(file_format)
-    files = [(path, row.load().write(grid, float32))]
+    extras = {"options": options, "cog": cog} if options or cog else {}
+    files = [(path, row.load().write(grid, float32, **extras))]
     if row.sidecar and grid.crs is not None and not is_stdio(path):
         files.append((os.path.splitext(os.fspath(path))[0] + row.sidecar, (grid.crs + "\n").encode("utf-8")))
     return files

@@ -8,8 +8,10 @@ both kinds of cell reach mzc.rasters as a corner and a cell kind. Its messages g
 logging (a NullHandler here keeps them off stderr: mzc reports a failure itself, in one line).
 """
 
+import contextlib
 import logging
 import re
+import threading
 import warnings
 
 import numpy as np
@@ -23,6 +25,9 @@ EXTRA = "geo"
 EXTENSIONS = (".tif", ".tiff")
 MEMORY_NAME = re.compile(r"[\w/.-]*[0-9a-f]{8}(?:-[0-9a-f]{4}){3}-[0-9a-f]{12}[\w.]*:?\s*")   # a MemoryFile's name
 PREDICTORS = {"f": 3, "i": 2, "u": 2}   # floating-point and horizontal differencing: smaller DEFLATE files
+COG_DEFAULTS = {"compress": "deflate", "predictor": "yes"}   # the COG driver's own default is LZW, no predictor
+PROFILE_KEYS = ("driver", "width", "height", "count", "dtype", "crs", "transform", "nodata")   # rasterio's, not GDAL's
+COMPLAINTS = ("CPLE_NotSupported", "CPLE_IllegalArg")   # GDAL's warnings about a creation option it then ignores
 
 
 def rasterio():
@@ -88,10 +93,11 @@ def layout_from(dataset, source):
     return Layout(x, y, step_x, abs(step_y), cells, "down" if step_y < 0 else "up", top=step_y < 0)
 
 
-def write(grid, float32=False):
+def write(grid, float32=False, options=None, cog=False):
     """The bytes of ``grid`` as a GeoTIFF (DEFLATE with a predictor): its raster's cells, row
     order, sample type (float64 when that type cannot hold its values: sample_type) and
-    no-data value, its CRS."""
+    no-data value, its CRS; with GDAL's creation ``options`` ({KEY: value}, as
+    mzc.rasters.geotiff_options gives them) and, with ``cog``, as a Cloud Optimized GeoTIFF."""
     module = rasterio()
     from affine import Affine
 
@@ -111,13 +117,72 @@ def write(grid, float32=False):
                "compress": "deflate", "predictor": PREDICTORS[np.dtype(sample).kind]}
     if grid.crs is not None:
         profile["crs"] = module.crs.CRS.from_wkt(grid.crs)
-    with warnings.catch_warnings(), module.MemoryFile() as memory:
+    if cog:   # the COG driver copies a plain GeoTIFF, compressing it and its overviews itself
+        profile.update(compress="none", predictor=1)
+    else:
+        profile.update(creation_profile(options))
+    checked = refusing_complaints() if options or cog else contextlib.nullcontext()
+    with warnings.catch_warnings(), module.MemoryFile() as memory, checked:
         warnings.simplefilter("ignore")
         with memory.open(**profile) as dataset:
             if place.cells == "point":
                 dataset.update_tags(AREA_OR_POINT="Point")
             dataset.write(samples, 1)
-        return memory.read()
+        return cloud_optimized(memory, options) if cog else memory.read()
+
+
+def creation_profile(options):
+    """rasterio's keyword arguments for GDAL's creation ``options`` ({KEY: value}); a key that
+    rasterio takes as the dataset's own (its size, type, georeferencing: mzc sets those from
+    the grid) is refused, so that no option silently changes what the raster holds."""
+    profile = {}
+    for key, value in (options or {}).items():
+        if key.lower() in PROFILE_KEYS:
+            raise MzcError(f"{key} is not a GeoTIFF creation option: mzc writes the grid's own {key.lower()}",
+                           field="co")
+        profile[key.lower()] = value
+    return profile
+
+
+def cloud_optimized(memory, options):
+    """The bytes of the GeoTIFF in ``memory`` as a Cloud Optimized GeoTIFF (GDAL's COG driver:
+    tiles, overviews down to one tile, the IFDs first), DEFLATE with a predictor unless the
+    creation ``options`` say otherwise."""
+    from rasterio.shutil import copy
+
+    with memory.open() as source, rasterio().MemoryFile() as out:
+        copy(source, out.name, driver="COG", **{**COG_DEFAULTS, **creation_profile(options)})
+        return out.read()
+
+
+@contextlib.contextmanager
+def refusing_complaints():
+    """Run a GeoTIFF's writing, and refuse it in one line when GDAL complained about a creation
+    option (an unknown key, a value it does not take), which it otherwise ignores, or failed
+    on one; only this thread's complaints count (a batch writes on several threads)."""
+    # GDAL's own errors, which rasterio raises as they are (a COG's bad tile size)
+    from rasterio._err import CPLE_BaseError
+    from rasterio.errors import RasterioError
+
+    complaints, thread = [], threading.get_ident()
+
+    class Complaints(logging.Handler):
+        def emit(self, record):
+            message = record.getMessage()
+            if record.thread == thread and record.levelno >= logging.WARNING and message.startswith(COMPLAINTS):
+                complaints.append(message.split(" in ", 1)[-1])
+
+    handler, logger = Complaints(), logging.getLogger("rasterio._env")
+    logger.addHandler(handler)
+    try:
+        yield
+    except (RasterioError, CPLE_BaseError) as error:   # its complaint, which came first, says why
+        complaint = " ".join(complaints[0].split()) if complaints else f"cannot write it: {one_line(error)}"
+        raise MzcError(f"GDAL: {complaint}", field="co") from None
+    finally:
+        logger.removeHandler(handler)
+    if complaints:
+        raise MzcError(f"GDAL: {' '.join(complaints[0].split())}", field="co")
 
 
 def one_line(error):

@@ -1,5 +1,5 @@
-"""The wavelet z-grid codec (``mzc-dwt2d 3.1``, 3.2 with a raster's crs and raster lines; 3.0 and 2.0 are
-read; extension ``.mzw2``): see spec/dwt2d.md.
+"""The wavelet z-grid codec (``mzc-dwt2d 3.1``, 3.2 with a raster's crs and raster lines, 4.0 with charts, 6.0
+for a raster of integers that decodes to integers; 3.0 and 2.0 are read; extension ``.mzw2``): see spec/dwt2d.md.
 
 Text header (grid fields with the projection, wavelet, levels, steps, slope limit,
 correction step), a ``data`` line, then a binary payload: the validity mask as row spans,
@@ -36,11 +36,17 @@ VERSION = (3, 1)             # every grid not read from a raster; 3.0 (no crc32 
                              # transform) are still read
 PROJECTED_VERSION = (3, 1)
 GEOREFERENCED_VERSION = (3, 2)   # 3.1 with the crs and raster lines of a grid read from a raster
-GEOREF_SINCE = dict([GEOREFERENCED_VERSION, (5, 0)])   # major -> the first minor with the crs and raster lines
 CHARTED_VERSION = (4, 0)     # 3.1 with the charts line of a multi-chart grid (its charts side by side)
 TILED_VERSION = (5, 0)       # a grid in independent tiles, each a 3.1 file (mzc.codecs.dwt2d.tiles)
+ROUNDED_VERSION = (6, 0)     # 4.0 with the crs and raster lines and ``rounding integer``: a raster of integers
+                             # coded with max_error, whose decoded values are rounded to integers (a new major:
+                             # a 4.0 reader, ignoring the line, would decode other values)
+GEOREF_SINCE = dict([GEOREFERENCED_VERSION, TILED_VERSION, ROUNDED_VERSION])   # major -> first minor with crs, raster
+ROUNDING = "integer"         # the one value of the rounding line
+ROUNDING_ULPS = 16           # the coded bound stays this many units in the last place of the largest value below
+                             # floor(E) + 1/2, more than the float noise of a decoded value
 OLDEST_MAJOR = 2             # 1.x were drafts
-CHECKSUM_SINCE = {3: 1, 4: 0, 5: 0}   # the crc32 line is required from 3.1 on
+CHECKSUM_SINCE = {3: 1, 4: 0, 5: 0, 6: 0}   # the crc32 line is required from 3.1 on
 CODER = "rans-signs-2"     # 2.0 names it on a required line; in 3.0 the version implies it
 # detail contexts, shared by every detail band: activity of parent, siblings, two rows above
 THRESHOLDS = (0.5, 1.0, 1.5, 3.0, 5.0, 8.0, 14.0, 24.0, 40.0, 70.0)
@@ -373,10 +379,11 @@ class Prepared:
                                    self.geometry.periodic)
         return qflat, z
 
-    def encode(self, step, max_error=None, decoded=None):
+    def encode(self, step, max_error=None, decoded=None, rounded=None):
         """(file bytes, the heights a decoder gets from them) for one detail step; with ``max_error``
         a correction layer bounds every valid node. ``decoded``: what ``decoded(step)`` gives, when
-        the caller has it already (it is changed)."""
+        the caller has it already (it is changed). ``rounded``: the integer bound of a grid of
+        integer samples coded at ``max_error`` (rounding_bounds), whose decoded values are rounded."""
         from mzc.codecs.dwt2d.entropy import Encoder  # here, not at the top: `mzc encode` builds this
                                                        # module's CODEC whatever codec it runs
         qflat, decoded = self.decoded(step) if decoded is None else decoded
@@ -392,15 +399,19 @@ class Prepared:
             decoded[self.valid] += correction * k[self.valid]   # as the decoder adds them
         if self.grid.charts is not None:
             encode_charts(encoder, self.grid.charts)
+        if rounded is not None:
+            decoded[self.valid] = rounded_values(decoded[self.valid], self.grid.raster.sample)   # as the decoder
+            max_error = rounded
         decoded[~self.valid] = np.nan
-        return file_bytes(self.header_lines(step, correction, max_error), encoder.finish()), decoded
+        lines = self.header_lines(step, correction, max_error, rounded is not None)
+        return file_bytes(lines, encoder.finish()), decoded
 
-    def header_lines(self, step, correction, max_error):
+    def header_lines(self, step, correction, max_error, rounded=False):
         """The lines of the text header, the magic line to the ``data`` line."""
         # lines at their defaults are left out: a face's file can be 1.5 KB, and they were 50 B of it
-        lines = [magic_line(KIND, file_version(self.grid, VERSION, PROJECTED_VERSION, GEOREFERENCED_VERSION,
-                                               CHARTED_VERSION)),
-                 *grid_header_lines(self.grid, write_defaults=False, chart_records=False)]
+        version = ROUNDED_VERSION if rounded else file_version(self.grid, VERSION, PROJECTED_VERSION,
+                                                               GEOREFERENCED_VERSION, CHARTED_VERSION)
+        lines = [magic_line(KIND, version), *grid_header_lines(self.grid, write_defaults=False, chart_records=False)]
         if self.grid.charts is not None:   # their records are in the payload: 8-10 bytes a chart, not 25
             lines.append(f"chart_count {len(self.grid.charts)}")
         if self.wavelet != DEFAULT_WAVELET:
@@ -412,6 +423,8 @@ class Prepared:
             lines.append(f"slope_limit {format_number(self.slope_limit)}")
         if correction > 0:
             lines.append(f"correction {format_number(correction)}")
+        if rounded:
+            lines.append(f"rounding {ROUNDING}")
         if max_error is not None:
             lines.append(f"max_error {format_number(max_error)}")
         return [*lines, "data"]
@@ -539,8 +552,9 @@ def encode_whole(grid, max_error=None, rmse=None, size=None, wavelet=DEFAULT_WAV
         slope_limit = 1.0 if max_error is not None else SLOPE_LIMIT
     prepared = Prepared(grid, wavelet, level, slope_limit)
     if max_error is not None:
+        bound, rounded = rounding_bounds(grid, max_error) or (max_error, None)
         # the smallest file, except that a finer step (lower RMS error) wins within ALPHA_SLACK of it
-        files = [prepared.encode(w2.round_step(a * target), target) for a in ALPHAS]
+        files = [prepared.encode(w2.round_step(a * bound), bound, rounded=rounded) for a in ALPHAS]
         smallest = min(len(data) for data, _ in files)
         return next(file for file in files if len(file[0]) <= smallest * (1 + ALPHA_SLACK))
     span = prepared.height_range()
@@ -554,6 +568,32 @@ def encode_whole(grid, max_error=None, rmse=None, size=None, wavelet=DEFAULT_WAV
     inverse = w2.search_step(cost, target, 1.0 / (4.0 * span), 1.0 / finest, SIZE_GUESS / span, SIZE_SLOPE,
                              snap=lambda inv: 1.0 / w2.round_step(1.0 / inv))
     return kept.get(inverse) or prepared.encode(w2.round_step(1.0 / inverse))
+
+
+def rounding_bounds(grid, max_error):
+    """(the bound to code at, the bound kept) for a grid of a raster's integer samples (its raster's
+    sample type is an integer type that holds every valid value), else None. Its decoded values
+    are rounded to integers (``rounding integer``, spec/dwt2d.md, Rounding), so a value coded
+    within floor(E) + 1/2 of its integer comes back within floor(E) <= E of it, exactly an
+    integer: the int16 DEM decodes to int16 samples, and E = 1 codes at 1.5, below 1 losslessly."""
+    if grid.raster is None or np.dtype(grid.raster.sample).kind not in "iu":
+        return None
+    from mzc.rasters import holds
+
+    values = grid.z[grid.valid]
+    if not holds(grid.raster.sample, values):
+        return None
+    kept = float(np.floor(max_error))
+    largest = float(np.abs(values).max(initial=0.0)) + kept + 1.0
+    return kept + 0.5 - ROUNDING_ULPS * float(np.spacing(largest)), kept
+
+
+def rounded_values(values, sample):
+    """``values`` rounded to the nearest integer (ties to even) and held to the range of the
+    integer type ``sample``, as a 6.0 decoder gives them (spec/dwt2d.md, Rounding): the input's
+    integers lie in that range, so neither step takes a value farther from its own."""
+    info = np.iinfo(sample)
+    return np.clip(np.rint(values), info.min, info.max)
 
 
 def keeping_best(work, measure, target):
@@ -628,18 +668,23 @@ def read_codec_fields(header, shape, transform):
 
 
 def read(data, source="<bytes>"):
-    """Decode dwt2d bytes (3.x, 4.0, 2.0 with its periodised transform, or the tiles of 5.0) into a
-    ZGrid; any bad input raises MzcError."""
+    """Decode dwt2d bytes (3.x, 4.0, 6.0, 2.0 with its periodised transform, or the tiles of 5.0)
+    into a ZGrid; any bad input raises MzcError."""
     from mzc.codecs.dwt2d import tiles
 
     if tiles.is_tiled(data):
         return tiles.read(data, source)
-    header, body, _first = read_header(data, source, KIND, CHARTED_VERSION[0], oldest_major=OLDEST_MAJOR,
+    header, body, _first = read_header(data, source, KIND, ROUNDED_VERSION[0], oldest_major=OLDEST_MAJOR,
                                        projected_major=PROJECTED_VERSION[0], checksum_since=CHECKSUM_SINCE,
                                        binary=True, georef_since=GEOREF_SINCE, charted_major=CHARTED_VERSION[0])
     fields, rows, cols = read_grid_fields(header)
     transform = w2.TRANSFORMS[header.major]
     wavelet, levels, steps, slope_limit, correction = read_codec_fields(header, (rows, cols), transform)
+    rounding = (header.major, header.minor) >= ROUNDED_VERSION and header.has("rounding")
+    if rounding:
+        header.word("rounding", (ROUNDING,))
+        if "raster" not in fields or np.dtype(fields["raster"].sample).kind not in "iu":
+            raise header.error("rounding", "rounds a raster of integer samples: the raster line names none")
     geometry = w2.Geometry.of(fields["d1"], fields["d2"], fields["origin"], (rows, cols),
                               fields.get("projection", "planar"), fields.get("radius"))
     from mzc.codecs.dwt2d.entropy import Decoder
@@ -655,6 +700,8 @@ def read(data, source="<bytes>"):
         if correction > 0:
             k = decoder.read_rows(valid, np.zeros(valid.shape), CORRECTION_THRESHOLDS, correction_model(0))
             z[valid] += correction * k[valid]
+        if rounding:
+            z[valid] = rounded_values(z[valid], fields["raster"].sample)
     if header.charted and header.has("chart_count"):
         fields["charts"] = decode_charts(decoder, header.integer("chart_count", 1, MAX_CHARTS))
     decoder.check_end()
@@ -665,12 +712,13 @@ def read(data, source="<bytes>"):
 
 
 CODEC = Codec(
-    "dwt2d", encode_grid, read, writer_with_decoded=encode_grid_with_decoded, version=TILED_VERSION,
+    "dwt2d", encode_grid, read, writer_with_decoded=encode_grid_with_decoded, version=ROUNDED_VERSION,
     oldest_major=OLDEST_MAJOR, extension=".mzw2", spec="spec/dwt2d.md", window_writer=window_writer,
     summary="2D wavelet of the whole grid, entropy coded, error-bounded", check_options=check_options,
     example={"max_error": 0.05}, options=(
         Option("max_error", float, None, 0, MAX_MAGNITUDE, min_open=True, metavar="E",
-               help="|decoded - input| <= E at every valid node."),
+               help="|decoded - input| <= E at every valid node (a raster of integers: integers within "
+                    "floor(E))."),
         Option("rmse", float, None, 0, MAX_MAGNITUDE, min_open=True, metavar="E",
                help="Aim at this RMS surface error (value error times cos of the lean) [default without "
                     "--max-error or --size: a tenth of the node spacing]."),
