@@ -40,6 +40,23 @@ def as_mesh(surface: Any) -> Mesh:
     return triangulate(item) if isinstance(item, ZGrid) else item
 
 
+def as_meshes(first: Any, second: Any) -> tuple[Mesh, Mesh]:
+    """The ``Mesh`` of each of two surfaces to compare (``as_mesh``), with two geographic grids
+    placed in metres about one centre, the first's (``mzc.georef.metric_frame``): each about its
+    own would shift one against the other by the distance between their centres."""
+    from mzc.formats import read_file
+    from mzc.georef import centre_of, is_geographic, metric_frame
+    from mzc.grid import ZGrid
+
+    items = [given(surface) for surface in (first, second)]
+    items = [read_file(item) if isinstance(item, str) else item for item in items]
+    geographic = [item for item in items if isinstance(item, ZGrid) and is_geographic(item)]
+    if len(geographic) == 2:
+        centre = centre_of(items[0])
+        items = [metric_frame(item, centre) for item in items]
+    return as_mesh(items[0]), as_mesh(items[1])
+
+
 def given(surface: Any) -> str | ZGrid | Mesh:
     """A surface as it was given, before any file is read: a path as a str (``path_of``), a ZGrid as
     it is, and anything else as a Mesh held to what a mesh file is (``mzc.meshes.checked``: points,
@@ -209,7 +226,7 @@ def compare(a: Any, b: Any, *, surface: bool = False, heightfield: bool = False,
 
     samples, seed = number(samples, "samples", int, 100, MAX_SAMPLES), number(seed, "seed", int, 0, 2**63 - 1)
     d1, d2 = (number(value, name, float, 0, low_open=True) for value, name in ((d1, "d1"), (d2, "d2")))
-    return compare_surfaces(as_mesh(a), as_mesh(b), surface=surface, heightfield=heightfield,
+    return compare_surfaces(*as_meshes(a, b), surface=surface, heightfield=heightfield,
                             samples=samples, seed=seed, d1=d1, d2=d2).report
 
 
