@@ -25,6 +25,10 @@ DATA_SPACING_FRACTION = 0.5   # default spacing: half the median edge of the sur
 MIN_NODES_ACROSS = 200        # and at least 200 nodes along the longest side
 SNAP_TOLERANCE = 1e-3       # a spacing this close (relative) to a lattice's own step snaps to it
 LATTICE_TOLERANCE = 1e-6    # coordinates this close (in steps) to a multiple of the step lie on a lattice
+PRINTED_TOLERANCE = 0.05    # a lon/lat export's: 6 decimals of a degree are 0.011 of a 1/3 arc-second step
+LONLAT_RELIEF = 1000        # a lon/lat lattice: z spans at least 1000 of its steps and its whole width
+MIN_NODES = 4               # a cloud of MIN_CLOUD_POINTS points or more gridded to fewer nodes on an axis
+MIN_CLOUD_POINTS = 1000     # is refused (its spacing is not the cloud's)
 LATTICE_FILL = 0.1          # and the points fill at least this share of its nodes (not a LAS cloud's 0.01 quanta)
 BIN_POINTS = 100_000        # clouds of more points are binned (mzc.ops.binning) when dense at the grid's spacing
 CLOUD_METHODS = ("auto", "bin", "delaunay")
@@ -83,7 +87,10 @@ def slice_surface(surface, d1=None, d2=None, rows=None, cols=None, align="none",
     (across u), else from the data (``spacings``); ``thesis_grid``: 72 rows, as the
     thesis's ~70 planes, and d2 = d1/10. ``classes`` (ASPRS codes) keeps only the points of
     those classes of a LAS/LAZ cloud (``Mesh.with_classes``); ``cloud`` says how a cloud
-    becomes a surface (``slice_in_frame``). A planar grid keeps the cloud's CRS (``grid_crs``).
+    becomes a surface (``slice_in_frame``). A planar grid keeps the cloud's CRS (``grid_crs``);
+    a cloud without one that is terrain in longitude and latitude (``lonlat_lattice``) is
+    gridded at its own steps in WGS 84 (``lonlat_grid``). A cloud gridded to fewer than
+    MIN_NODES nodes along an axis is refused (``check_cloud_grid``).
 
     ``charts``: 1 for one grid, N for a multi-chart grid of at most N charts (``mzc.ops.charts``),
     ``auto`` for one grid when it holds SINGLE_COVER of the surface's area (a face, terrain, a
@@ -103,6 +110,11 @@ def slice_surface(surface, d1=None, d2=None, rows=None, cols=None, align="none",
                                 charts=None if charts in ("auto", 1) else charts)
     mesh = surface if classes is None else surface.with_classes(classes)
     check_magnitude(mesh.points, "coordinates")
+    lonlat = lonlat_lattice(mesh)
+    if lonlat is not None:
+        return lonlat_grid(mesh, lonlat, units, d1=d1, d2=d2, rows=rows, cols=cols, thesis_grid=thesis_grid,
+                           align=align, projection=projection, view=view, center=center, axis=axis, charts=charts,
+                           cloud=cloud)
     one_grid = one_grid_option(projection=projection != "auto", view=view != "auto", center=center is not None,
                                axis=axis is not None, thesis_grid=thesis_grid, rows=rows is not None,
                                cols=cols is not None)
@@ -113,6 +125,7 @@ def slice_surface(surface, d1=None, d2=None, rows=None, cols=None, align="none",
     grid = slice_in_frame(mesh, chosen.rotation, chosen.shift, d1=d1, d2=d2, rows=rows, cols=cols, units=units,
                           projection=chosen.projection, radius=chosen.radius, full_turn=chosen.full_turn,
                           thesis_grid=thesis_grid, cloud=cloud)
+    check_cloud_grid(mesh, grid)
     if np.isnan(grid.z).all():
         raise MzcError("no grid node meets the surface (seen edge-on? try --view or --align pca)")
     if count is None and not one_grid and (single_grid_cover(grid, mesh) or 1.0) < SINGLE_COVER:
@@ -130,6 +143,60 @@ def slice_surface(surface, d1=None, d2=None, rows=None, cols=None, align="none",
             f"60 degrees of its node lines; the rest comes back coarse or not at all (try --projection auto, "
             f"--view or --align pca)"), stacklevel=2)
     return grid
+
+
+def lonlat_lattice(mesh):
+    """(step in longitude, step in latitude) of a point cloud without a CRS that is terrain in
+    degrees: a GIS export of a geographic DEM as x y z. Its x lie within [-180, 360] and its y
+    within [-90, 90], its (x, y) on a lattice (``lattice_steps``, within PRINTED_TOLERANCE of a
+    step: the export rounds the coordinates it prints), and its heights span at least its
+    width and LONLAT_RELIEF of its steps: a metre of relief a degree, where a lattice in one
+    unit spanning as much in z as across is no terrain. Else None."""
+    if not mesh.is_point_cloud or mesh.crs is not None or len(mesh.points) < 4:
+        return None
+    x, y, z = np.asarray(mesh.points, dtype=float).T
+    if x.min() < -180 or x.max() > 360 or y.min() < -90 or y.max() > 90:
+        return None
+    steps = lattice_steps(np.column_stack([x, y]), PRINTED_TOLERANCE)
+    relief = float(np.ptp(z))
+    if steps is None or relief < max(np.ptp(x), np.ptp(y)) or relief < LONLAT_RELIEF * max(steps):
+        return None
+    return steps
+
+
+def lonlat_grid(mesh, steps, units, d1=None, d2=None, rows=None, cols=None, **cutting):
+    """The planar grid of a lon/lat cloud (``lonlat_lattice``'s ``steps``), looking down z, in
+    WGS 84 (``georef.WGS84_WKT``; the export names no datum, and the ellipsoids of the others
+    move its metres by under 0.1%): node for node at its own steps unless spacings or counts
+    are given. An option that would cut it otherwise (``cutting``, not at its default) is
+    refused: it is terrain."""
+    from mzc.georef import WGS84_WKT
+
+    defaults = {"thesis_grid": False, "align": "none", "projection": ("auto", "planar"), "view": ("auto", "+z"),
+                "center": None, "axis": None, "charts": ("auto", 1), "cloud": ("auto",)}
+    refused = next((name for name, value in cutting.items()
+                    if value != defaults[name] and not (isinstance(defaults[name], tuple) and value in defaults[name])),
+                   None)
+    if refused:
+        raise MzcError("the cloud is terrain in longitude and latitude (a lattice in degrees, heights spanning "
+                       "thousands of its steps), gridded looking down z at its own steps or --d1/--d2 in degrees: "
+                       "this option does not apply", field=refused)
+    grid = slice_in_frame(mesh, np.eye(3), np.zeros(3), d1=d1, d2=d2, rows=rows, cols=cols, units=units,
+                          lattice=steps)
+    check_cloud_grid(mesh, grid)
+    return grid.with_z(grid.z, crs=WGS84_WKT)
+
+
+def check_cloud_grid(mesh, grid):
+    """Refuse a point cloud of MIN_CLOUD_POINTS or more gridded to fewer than MIN_NODES nodes
+    along an axis: its spacing is not the cloud's (say, one taken from heights in metres over
+    x and y in degrees), and such a grid would hold almost nothing of it."""
+    if not mesh.is_point_cloud or len(mesh.points) < MIN_CLOUD_POINTS or min(grid.shape) >= MIN_NODES:
+        return
+    rows, cols = grid.shape
+    raise MzcError(f"{len(mesh.points)} points gridded to {rows} x {cols} nodes at spacings d1 {grid.d1:.6g} and "
+                   f"d2 {grid.d2:.6g}: the spacing is not the cloud's (x and y in degrees and z in metres? "
+                   f"give --d1 and --d2 in the unit of x and y)", field="d1")
 
 
 def one_grid_option(**given):
@@ -181,7 +248,7 @@ def grid_as_sliced(grid, units, **given):
 
 
 def slice_in_frame(mesh, rotation, shift, d1=None, d2=None, rows=None, cols=None, units=None,
-                   projection="planar", radius=None, full_turn=False, thesis_grid=False, cloud="auto"):
+                   projection="planar", radius=None, full_turn=False, thesis_grid=False, cloud="auto", lattice=None):
     """The z-grid of ``mesh`` in the frame where input = rotation @ p + shift, over its (u, v) extent.
 
     Shared by ``slice_surface`` and ``mzc diff``, which samples surfaces in a given frame.
@@ -190,7 +257,8 @@ def slice_in_frame(mesh, rotation, shift, d1=None, d2=None, rows=None, cols=None
     triangulated in (u, v) (Delaunay) or binned (``mzc.ops.binning``), as ``cloud`` says:
     ``auto`` bins a cloud of more than BIN_POINTS points that is dense at the grid's spacing
     (``binning.window_radius``), whose default spacing is then its own median point spacing
-    (a node per point, where Delaunay's grid takes half of it).
+    (a node per point, where Delaunay's grid takes half of it). ``lattice``: the cloud's lattice
+    steps when the caller has found them (``lonlat_lattice``).
     """
     from mzc.projections import to_nodes
 
@@ -199,7 +267,8 @@ def slice_in_frame(mesh, rotation, shift, d1=None, d2=None, rows=None, cols=None
     local = rotated(mesh.points - shift, rotation.T)
     nodes = to_nodes(projection, radius, local)
     low, high = nodes[:, :2].min(axis=0), nodes[:, :2].max(axis=0)
-    lattice = lattice_steps(nodes[:, :2]) if projection == "planar" else None
+    if lattice is None and projection == "planar":
+        lattice = lattice_steps(nodes[:, :2])
     binned = mesh.is_point_cloud and lattice is None and \
         (cloud == "bin" or (cloud == "auto" and len(mesh.points) > BIN_POINTS))
     triangles = mesh.triangles
@@ -301,9 +370,9 @@ def within_longest_side(spacing, points):
     return float(min(spacing, float(np.ptp(points, axis=0).max()) / MIN_NODES_ACROSS))
 
 
-def lattice_steps(uv):
+def lattice_steps(uv, tolerance=LATTICE_TOLERANCE):
     """(step in u, step in v) when every point's u and v lie on a regular lattice (within
-    LATTICE_TOLERANCE of a step; whole lines may be missing) whose nodes the points fill to
+    ``tolerance`` of a step; whole lines may be missing) whose nodes the points fill to
     at least LATTICE_FILL (a DEM with its holes; not a LiDAR cloud, whose coordinates are
     all multiples of its file's 0.01 m quantum), else None."""
     steps, nodes = [], 1.0
@@ -320,7 +389,7 @@ def lattice_steps(uv):
             return None
         step = extent / count
         position = (distinct - distinct[0]) / step
-        if np.abs(position - np.round(position)).max() > LATTICE_TOLERANCE:
+        if np.abs(position - np.round(position)).max() > tolerance:
             return None
         steps.append(float(step))
     return tuple(steps)

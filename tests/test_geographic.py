@@ -1,0 +1,180 @@
+"""Terrain the way GIS users have it (issue 30): a DEM in longitude and latitude takes --rmse,
+--size and --max-error as vertical errors in its height unit, and its `x y z` export (a GIS
+"export to xyz", coordinates printed to a few decimals) slices back to its own lattice in
+degrees, never to a handful of nodes."""
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+import mzc
+from mzc.errors import MzcError
+from mzc.georef import crs_kind
+from mzc.meshes import Mesh
+from mzc.ops.slicing import lonlat_lattice, slice_surface
+
+from conftest import run_mzc
+from test_cli import assert_one_line_error
+
+PUBLIC = Path(__file__).resolve().parent / "data" / "public"
+BIJOU = PUBLIC / "west_bijou_escarpment_snippet.asc"   # 1 arc-second cells, WGS 84 (its .prj)
+
+
+def export_points(grid):
+    """The valid nodes of ``grid`` as (lon, lat, height) rows, as a GIS writes them."""
+    xs, ys = np.meshgrid(grid.xs(), grid.ys())
+    valid = grid.valid
+    return np.column_stack([xs[valid], ys[valid], grid.z[valid]])
+
+
+def export_text(grid, decimals=6):
+    """``grid``'s valid nodes as `x y z` text with ``decimals`` decimals of a degree (GDAL's XYZ
+    driver and most GIS exports round so)."""
+    return "".join(f"{x:.{decimals}f} {y:.{decimals}f} {z:.0f}\n" for x, y, z in export_points(grid)).encode()
+
+
+def valid_box(grid):
+    """``grid``'s values over the box of its valid nodes (what an export of them can give back)."""
+    rows, cols = np.flatnonzero(grid.valid.any(axis=1)), np.flatnonzero(grid.valid.any(axis=0))
+    return grid.z[rows[0]:rows[-1] + 1, cols[0]:cols[-1] + 1]
+
+
+# --- the codec: vertical errors ---------------------------------------------------------------
+
+
+@pytest.mark.parametrize("target", [0.5, 2.0, 8.0])
+def test_rmse_of_a_geographic_dem_is_its_vertical_rmse_as_diff_reports_it(tmp_path, target):
+    """ASPRS and USGS state a DEM's accuracy as a vertical RMSE in metres: --rmse of a lon/lat grid
+    is that, and `mzc diff` (whose rmse is along z) measures it just under the target (within 5%)."""
+    coded, decoded = tmp_path / "b.mzw2", tmp_path / "b.zg"
+    run_mzc("encode", "--dwt2d", "--rmse", target, BIJOU, "-o", coded, check=True)
+    assert b"\nslope_limit 1\n" in coded.read_bytes()   # equal steps: the lean means nothing in degrees
+    run_mzc("decode", coded, "-o", decoded, check=True)
+    report = dict(line.split() for line in run_mzc("diff", BIJOU, decoded, check=True).stdout.decode().splitlines())
+    assert 0.95 * target <= float(report["rmse"]) <= target
+
+
+def test_size_of_a_geographic_dem_is_met_and_slope_scaled_steps_are_refused():
+    grid = mzc.read(BIJOU)
+    sizes = [len(mzc.encode(grid, size=size)) for size in (1500, 4000)]
+    assert sizes[0] <= 1500 < sizes[1] <= 4000
+    with pytest.raises(MzcError, match="degrees and metres") as error:
+        mzc.encode(grid, rmse=1.0, slope_limit=2.0)
+    assert error.value.field == "slope_limit"
+
+
+def test_a_projected_dem_keeps_its_surface_rmse(tmp_path):
+    """Only a geographic CRS makes the error vertical: the same heights in a projected CRS (the
+    UTM of the same place) are measured across the surface, as before, and code differently."""
+    from mzc.georef import WGS84_WKT
+
+    grid = mzc.read(BIJOU)
+    utm = ('PROJCS["WGS 84 / UTM zone 13N",GEOGCS["WGS 84",DATUM["WGS_1984",SPHEROID["WGS 84",6378137,'
+           '298.257223563]],PRIMEM["Greenwich",0],UNIT["degree",0.0174532925199433]],PROJECTION["Transverse_Mercator"],'
+           'UNIT["metre",1]]')
+    metric = grid.with_z(grid.z, d1=30.86, d2=23.86, origin=(0.0, 0.0), crs=utm)
+    geographic = grid.with_z(grid.z, crs=WGS84_WKT)
+    assert b"slope_limit" not in mzc.encode(metric, rmse=1.0)
+    assert mzc.encode(metric, rmse=1.0) != mzc.encode(geographic, rmse=1.0)
+
+
+# --- x y z exports: recognised, never collapsed -----------------------------------------------
+
+
+def test_a_lonlat_xyz_export_slices_to_its_own_lattice_in_degrees(tmp_path):
+    """The 1 arc-second DEM printed to 6 decimals (0.0018 of a step off the lattice) comes back
+    node for node at its step, in WGS 84; it was a 1 x 1 grid of spacing 0.5, from the metres of z."""
+    grid = mzc.read(BIJOU)
+    source, sliced = tmp_path / "bijou.xyz", tmp_path / "bijou.zg"
+    source.write_bytes(export_text(grid))
+    run_mzc("slice", source, "-o", sliced, check=True)
+    back = mzc.read(sliced)
+    assert back.shape == valid_box(grid).shape
+    assert np.array_equal(back.z, valid_box(grid), equal_nan=True)
+    assert (back.d1, back.d2) == pytest.approx((1 / 3600, 1 / 3600), rel=1e-4)
+    assert crs_kind(back.crs) == "geographic" and "WGS 84" in back.crs
+    mesh = mzc.triangulate(back)   # in metres about its centre: 1 arc-second is 30.9 m of latitude
+    assert np.ptp(mesh.points[:, 1]) == pytest.approx((back.shape[0] - 1) * 30.86, rel=2e-3)
+
+
+def test_the_srtm_tile_exported_as_xyz_codes_to_a_vertical_rmse(tmp_path):
+    """The SRTM tile in EPSG:4326 (int16 metres) as x y z: sliced, coded at --rmse 3 and decoded,
+    its heights are 3 m RMS from the tile's."""
+    pytest.importorskip("rasterio")
+    tile = mzc.read(PUBLIC / "srtm_blurred_res.tif")
+    source = tmp_path / "srtm.xyz"
+    source.write_bytes(export_text(tile, decimals=4))
+    grid = mzc.slice(source)
+    assert grid.shape == tile.shape and np.array_equal(grid.z, tile.z)
+    error = mzc.decode(mzc.encode(grid, rmse=3.0)).z - tile.z
+    assert float(np.sqrt(np.mean(error ** 2))) == pytest.approx(3.0, rel=0.03)
+
+
+def test_a_scattered_lonlat_cloud_is_refused_saying_why_not_collapsed(tmp_path):
+    """Off any lattice (points moved by up to a fifth of a step), the cloud is not recognised and
+    its default spacing comes from the metres of z: a grid of 1 x 1 nodes is refused in one line,
+    and no file is written."""
+    points = export_points(mzc.read(BIJOU))
+    points[:, :2] += np.random.default_rng(1).uniform(-5e-5, 5e-5, (len(points), 2))
+    source, sliced = tmp_path / "moved.xyz", tmp_path / "moved.zg"
+    np.savetxt(source, points, fmt="%.7f %.7f %.1f")
+    assert_one_line_error(run_mzc("slice", source, "-o", sliced), "8643 points gridded to 1 x 1 nodes", "degrees")
+    assert not sliced.exists()
+
+
+def test_options_that_would_cut_terrain_otherwise_are_refused():
+    cloud = Mesh(export_points(mzc.read(BIJOU)))
+    for option in ({"view": "+x"}, {"projection": "spherical"}, {"align": "pca"}, {"charts": 4}):
+        with pytest.raises(MzcError, match="longitude and latitude") as error:
+            slice_surface(cloud, **option)
+        assert error.value.field == next(iter(option))
+    coarse = slice_surface(cloud, d1=1 / 1200, d2=1 / 1200)   # 3 arc-seconds: spacings in degrees are taken
+    assert coarse.shape == (23, 43) and crs_kind(coarse.crs) == "geographic"
+
+
+def test_lattices_in_one_unit_are_not_taken_for_degrees():
+    """A metric DEM near the origin (relief under its width) and a steep lattice object whose
+    heights span fewer than 1000 steps keep the rules of any cloud: no CRS is made up."""
+    y, x = np.mgrid[0:40, 0:60].astype(float)
+    dem = np.column_stack([x.ravel(), y.ravel(), (20 * np.sin(x / 9) + y / 3).ravel()])
+    tower = np.column_stack([x.ravel() * 0.1, y.ravel() * 0.1, (2 * np.hypot(x - 30, y - 20)).ravel()])
+    for points in (dem, tower):
+        assert lonlat_lattice(Mesh(points)) is None
+        assert slice_surface(Mesh(points)).crs is None
+
+
+@settings(max_examples=40, deadline=None)
+@given(seconds=st.sampled_from([1 / 3, 1, 3, 7.5, 15, 30]), decimals=st.integers(6, 9),
+       west=st.floats(-179, 170), south=st.floats(-80, 70), rows=st.integers(5, 40), cols=st.integers(5, 40))
+def test_any_printed_lonlat_lattice_is_recognised_at_its_step(seconds, decimals, west, south, rows, cols):
+    """Every arc-second step of the DEMs users have, printed to 6-9 decimals anywhere on the globe,
+    is recognised at its step (the relief: 5 km a degree)."""
+    step = seconds / 3600
+    y, x = np.mgrid[0:rows, 0:cols]
+    lon, lat = np.round(west + x * step, decimals), np.round(south + y * step, decimals)
+    points = np.column_stack([lon.ravel(), lat.ravel(), 5000 * step * (x + y).ravel()])
+    found = lonlat_lattice(Mesh(points))
+    assert found == pytest.approx((step, step), rel=2 * 10.0 ** -decimals / (step * min(rows, cols) - step) + 1e-9)
+
+
+# --- diff: one frame for two geographic grids -------------------------------------------------
+
+
+def test_diff_of_a_geographic_dem_against_its_own_crop_is_zero(tmp_path):
+    """Both grids are placed in metres about the first one's centre: each about its own put the crop
+    hundreds of metres off (432 m RMS before), in heights and in --surface alike."""
+    from mzc.formats import zgrid
+
+    grid = mzc.read(BIJOU)
+    crop = grid.with_z(grid.z[10:50, 20:100].copy(), origin=(grid.origin[0] + 20 * grid.d2,
+                                                             grid.origin[1] + 10 * grid.d1))
+    (tmp_path / "crop.zg").write_bytes(zgrid.write(crop))
+    report = mzc.compare(BIJOU, tmp_path / "crop.zg", surface=True)
+    assert report["count"] == crop.valid.sum() and report["rmse"] < 1e-6
+    assert report["surface_b_to_a_rms"] < 1e-6   # every point of the crop lies on the whole
+    cli = dict(line.split() for line in run_mzc("diff", tmp_path / "crop.zg", BIJOU, "--rmse", "--count",
+                                                check=True).stdout.decode().splitlines())
+    assert float(cli["rmse"]) < 1e-6 and int(cli["count"]) == crop.valid.sum()
