@@ -128,12 +128,13 @@ def slice(surface: Any, d1: float | None = None, d2: float | None = None, *, row
           cols: int | None = None, align: str = "none", projection: str = "auto", view: str = "auto",
           center: tuple[float, float, float] | None = None, axis: tuple[float, float, float] | None = None,
           units: str | None = None, thesis_grid: bool = False, classes: Sequence[int] | None = None,
-          cloud: str = "auto", charts: str | int = "auto") -> ZGrid:
+          cloud: str = "auto", charts: str | int = "auto", tap: bool = False) -> ZGrid:
     """Cut a surface into a z-grid (``mzc slice``): spacings d1 (rows) and d2 (columns) default to
     the data's own, the cutting surfaces (``projection``) to the ones that see it best; ``classes``
     keeps those ASPRS classes of a LAS/LAZ cloud (2: ground), ``cloud`` (auto, bin, delaunay)
     says how a point cloud becomes a surface; ``charts`` (1, N or auto) whether a closed or
-    many-part object is cut into charts, planar grids each seeing its own piece (``ZGrid.charts``).
+    many-part object is cut into charts, planar grids each seeing its own piece (``ZGrid.charts``);
+    ``tap`` aligns the cells of a map grid on whole multiples of the spacing (gdalwarp's -tap).
 
     A grid (a ZGrid, or a path of a z-grid, a compressed file or a raster: a GeoTIFF or ESRI ASCII
     grid) already is one: it is returned as it is, node for node (with ``units`` when given), and
@@ -143,7 +144,7 @@ def slice(surface: Any, d1: float | None = None, d2: float | None = None, *, row
     from mzc.ops.slicing import slice_surface
 
     numbers = slicing_numbers({"d1": d1, "d2": d2, "rows": rows, "cols": cols, "center": center, "axis": axis,
-                               "classes": classes})
+                               "classes": classes, "tap": tap})
     surface = given(surface)
     return slice_surface(read_file(surface) if isinstance(surface, str) else surface, align=align, units=units,
                          projection=projection, view=view, thesis_grid=thesis_grid, cloud=cloud, charts=charts,
@@ -162,6 +163,8 @@ def slicing_numbers(options: dict[str, Any]) -> dict[str, Any]:
             checked[name] = number(value, name, int)
         elif name in ("center", "axis"):
             checked[name] = vector(value, name)
+        elif name == "tap" and not isinstance(value, bool):
+            raise MzcError(f"must be True or False, not {value!r}", field="tap")
         elif name == "classes" and value is not None:
             if isinstance(value, (str, bytes)) or not hasattr(value, "__iter__"):
                 raise MzcError(f"must be ASPRS class codes (say [2, 9]), not {value!r}", field="classes")

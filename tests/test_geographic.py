@@ -94,7 +94,8 @@ def test_a_lonlat_xyz_export_slices_to_its_own_lattice_in_degrees(tmp_path):
     back = mzc.read(sliced)
     assert back.shape == valid_box(grid).shape
     assert np.array_equal(back.z, valid_box(grid), equal_nan=True)
-    assert (back.d1, back.d2) == pytest.approx((1 / 3600, 1 / 3600), rel=1e-4)
+    assert (back.d1, back.d2) == (1 / 3600, 1 / 3600)   # the round angle printed, not 0.000277773
+    assert back.origin == pytest.approx(grid.origin, abs=1e-9)   # nodes where the DEM had them, not where printed
     assert crs_kind(back.crs) == "geographic" and "WGS 84" in back.crs
     mesh = mzc.triangulate(back)   # in metres about its centre: 1 arc-second is 30.9 m of latitude
     assert np.ptp(mesh.points[:, 1]) == pytest.approx((back.shape[0] - 1) * 30.86, rel=2e-3)
@@ -151,13 +152,12 @@ def test_lattices_in_one_unit_are_not_taken_for_degrees():
        west=st.floats(-179, 170), south=st.floats(-80, 70), rows=st.integers(5, 40), cols=st.integers(5, 40))
 def test_any_printed_lonlat_lattice_is_recognised_at_its_step(seconds, decimals, west, south, rows, cols):
     """Every arc-second step of the DEMs users have, printed to 6-9 decimals anywhere on the globe,
-    is recognised at its step (the relief: 5 km a degree)."""
+    is recognised at its exact step, not the one its printed ends give (the relief: 5 km a degree)."""
     step = seconds / 3600
     y, x = np.mgrid[0:rows, 0:cols]
     lon, lat = np.round(west + x * step, decimals), np.round(south + y * step, decimals)
     points = np.column_stack([lon.ravel(), lat.ravel(), 5000 * step * (x + y).ravel()])
-    found = lonlat_lattice(Mesh(points))
-    assert found == pytest.approx((step, step), rel=2 * 10.0 ** -decimals / (step * min(rows, cols) - step) + 1e-9)
+    assert lonlat_lattice(Mesh(points)) == pytest.approx((step, step), rel=1e-12)   # the round angle itself
 
 
 # --- diff: one frame for two geographic grids -------------------------------------------------
@@ -178,3 +178,93 @@ def test_diff_of_a_geographic_dem_against_its_own_crop_is_zero(tmp_path):
     cli = dict(line.split() for line in run_mzc("diff", tmp_path / "crop.zg", BIJOU, "--rmse", "--count",
                                                 check=True).stdout.decode().splitlines())
     assert float(cli["rmse"]) < 1e-6 and int(cli["count"]) == crop.valid.sum()
+
+
+# --- map grids: --tap and round default spacings ----------------------------------------------
+
+
+def terrain_cloud(count=4000, seed=3, west=635_601.37, south=848_887.91):
+    """Scattered ground points of a hill over 300 m x 200 m of a projected CRS (metres)."""
+    rng = np.random.default_rng(seed)
+    x, y = west + 300 * rng.random(count), south + 200 * rng.random(count)
+    return np.column_stack([x, y, 120 + 15 * np.sin((x - west) / 40) * np.cos((y - south) / 30)])
+
+
+@pytest.mark.parametrize("spacing", [None, 2.0, 0.7])
+def test_tap_puts_cell_edges_on_whole_multiples_of_the_spacing(spacing):
+    """As gdalwarp -tap: each node is its cell's centre, the cells' edges on multiples of the
+    spacing (given, or the round default), and the cells hold every point."""
+    points = terrain_cloud()
+    grid = slice_surface(Mesh(points), d1=spacing, tap=True)
+    d = grid.d1
+    assert grid.d2 == d and (spacing == d if spacing else d in (2.0, 2.5, 5.0))
+    corner = np.array(grid.origin) - d / 2
+    assert np.allclose(corner / d, np.round(corner / d), rtol=0, atol=1e-6)
+    far = corner + np.array([grid.shape[1], grid.shape[0]]) * d
+    assert (corner <= points[:, :2].min(axis=0)).all() and (far >= points[:, :2].max(axis=0)).all()
+    assert (far - d < points[:, :2].max(axis=0)).all()   # no column or row of cells beyond the points
+    assert np.isfinite(grid.z).mean() > 0.9
+
+
+def test_a_cloud_with_a_crs_takes_a_round_default_spacing():
+    """A LAS cloud in EPSG:2994 (feet): 20 where the data's own spacing was 21.92; without a CRS and
+    without --tap the data's spacing is kept as it was."""
+    pytest.importorskip("laspy")
+    from mzc.meshes import read_mesh
+
+    cloud = read_mesh(PUBLIC / "autzen_geo_proj.las")
+    assert slice_surface(cloud).d1 == 20.0
+    bare = Mesh(cloud.points)
+    assert slice_surface(bare).d1 == pytest.approx(21.9229, rel=1e-5)
+    assert slice_surface(bare, tap=True).d1 == 20.0
+
+
+def test_tap_keeps_a_lattice_already_aligned_and_resamples_one_that_is_not():
+    """Nodes at cell centres of multiples of the step (a GeoTIFF's export) stay node for node; nodes
+    on the multiples themselves move half a step, their values interpolated between the points."""
+    y, x = np.mgrid[0:30, 0:40].astype(float)
+    height = (20 * np.sin(x / 7) + 3 * y).ravel()
+    centres = Mesh(np.column_stack([(x.ravel() + 0.5) * 5, (y.ravel() + 0.5) * 5, height]))
+    aligned = slice_surface(centres, tap=True)
+    assert aligned.shape == (30, 40) and aligned.d1 == 5.0 and aligned.origin == (2.5, 2.5)
+    assert np.array_equal(aligned.z.ravel(), height)
+    corners = Mesh(np.column_stack([x.ravel() * 5, y.ravel() * 5, height]))
+    moved = slice_surface(corners, tap=True)
+    assert moved.origin == (2.5, 2.5) and moved.shape == (29, 39)
+    between = (height.reshape(30, 40)[:-1, :-1] + height.reshape(30, 40)[1:, 1:]) / 2
+    assert np.allclose(moved.z, between, atol=2.0)
+
+
+def test_tap_is_refused_where_cells_cannot_be_aligned(tmp_path):
+    cloud = Mesh(terrain_cloud())
+    for option in ({"rows": 20}, {"projection": "spherical"}, {"view": "+x"}, {"align": "pca"}, {"charts": 3}):
+        with pytest.raises(MzcError, match="--tap aligns") as error:
+            slice_surface(cloud, tap=True, **option)
+        assert error.value.field == "tap"
+    result = run_mzc("slice", BIJOU, "--tap", "-o", tmp_path / "x.zg")
+    assert_one_line_error(result, "a raster is sliced as its own grid", "-tap")
+    with pytest.raises(MzcError, match="True or False"):
+        mzc.slice(cloud, tap="yes")
+
+
+def test_tap_of_a_lonlat_export_aligns_on_whole_arc_seconds(tmp_path):
+    """The West Bijou export (nodes at whole arc-seconds) with --tap: cells from whole arc-second to
+    whole arc-second, each node a half-second, every one inside the DEM's extent."""
+    source = tmp_path / "bijou.xyz"
+    source.write_bytes(export_text(mzc.read(BIJOU)))
+    run_mzc("slice", source, "--tap", "-o", tmp_path / "t.zg", check=True)
+    grid = mzc.read(tmp_path / "t.zg")
+    assert grid.d1 == grid.d2 == 1 / 3600 and crs_kind(grid.crs) == "geographic"
+    seconds = np.array(grid.origin) * 3600
+    assert np.allclose(seconds - 0.5, np.round(seconds - 0.5), rtol=0, atol=1e-6)
+    assert grid.shape == (66, 128) and np.isfinite(grid.z).mean() > 0.95
+
+
+@given(st.floats(1e-6, 1e6))
+def test_round_spacing_is_one_two_two_and_a_half_or_five_times_a_power_of_ten(spacing):
+    from mzc.ops.slicing import round_spacing
+
+    rounded = round_spacing(spacing)
+    mantissa, exponent = f"{rounded:e}".split("e")
+    assert float(mantissa) in (1.0, 2.0, 2.5, 5.0) and rounded == float(f"{float(mantissa):g}e{int(exponent)}")
+    assert max(rounded / spacing, spacing / rounded) <= 2 ** 0.5 * (1 + 1e-12)
