@@ -114,6 +114,17 @@ def test_the_srtm_tile_exported_as_xyz_codes_to_a_vertical_rmse(tmp_path):
     assert float(np.sqrt(np.mean(error ** 2))) == pytest.approx(3.0, rel=0.03)
 
 
+def test_a_tile_export_starts_on_its_whole_degree():
+    """A 3 arc-second tile from 7 E, 45 N printed to 6 decimals: origin 7 45 and step 1/1200
+    exactly, as the tile's own header has them (the printed digits give 7.000000 and 0.000833)."""
+    y, x = np.mgrid[0:50, 0:60]
+    points = np.column_stack([np.round(7 + x.ravel() / 1200, 6), np.round(45 + y.ravel() / 1200, 6),
+                              1500 + 100 * np.sin(x.ravel() / 5) + y.ravel()])
+    grid = slice_surface(Mesh(points))
+    assert grid.origin == (7.0, 45.0) and (grid.d1, grid.d2) == (3 / 3600, 3 / 3600) and grid.shape == (50, 60)
+    assert np.array_equal(grid.z.ravel(), points[:, 2])
+
+
 def test_a_scattered_lonlat_cloud_is_refused_saying_why_not_collapsed(tmp_path):
     """Off any lattice (points moved by up to a fifth of a step), the cloud is not recognised and
     its default spacing comes from the metres of z: a grid of 1 x 1 nodes is refused in one line,

@@ -208,11 +208,20 @@ def onto_lattice(points, steps):
     for axis, step in enumerate(steps):
         values = moved[:, axis]
         low = float(values.min())
-        aligned = float(np.round(low / (step / 2))) * (step / 2)
+        aligned = shortest(float(np.round(low / (step / 2))) * (step / 2))
         if abs(aligned - low) <= spread(np.unique(values), step) * step + 1e-12 * abs(low):
             low = aligned
         moved[:, axis] = low + np.round((values - low) / step) * step
     return moved
+
+
+def shortest(value):
+    """The decimal with the fewest significant digits within 4 ulp of ``value`` (7 for the
+    7.000000000000001 that 16800 half-steps of 3 arc-seconds make), else ``value``."""
+    import math
+
+    return next((short for digits in range(1, 18) if abs((short := float(f"{value:.{digits}g}")) - value)
+                 <= 4 * math.ulp(value)), value)
 
 
 def lonlat_grid(mesh, steps, units, d1=None, d2=None, rows=None, cols=None, tap=False, **cutting):
