@@ -328,3 +328,15 @@ def test_a_three_arc_second_tile_export_slices_in_seconds(tmp_path):
     grid = mzc.slice(source)
     assert time.process_time() - started < 6
     assert grid.shape == (1201, 1201) and grid.origin == (7.0, 45.0) and np.allclose(grid.z, heights, atol=0.05)
+
+
+def test_info_gives_a_geographic_grids_spacings_in_metres_from_its_header(tmp_path):
+    """1 arc-second at 39.5 degrees north is 30.84 m of latitude and 23.89 m of longitude on WGS 84,
+    for the raster and for its compressed file read from the header alone (whose crs line the
+    header-only grid had ignored); a projected grid gets no such line."""
+    coded = tmp_path / "b.mzw2"
+    run_mzc("encode", "--dwt2d", "--max-error", "1", BIJOU, "-o", coded, check=True)
+    for source in (BIJOU, coded):
+        lines = run_mzc("info", source, check=True).stdout.decode().splitlines()
+        assert lines[4].split()[:6] == ["in", "metres", "d1", "30.84", "d2", "23.89"]
+    assert "in metres" not in run_mzc("info", PUBLIC / "hugo_site.asc", check=True).stdout.decode()
