@@ -125,6 +125,18 @@ def test_a_tile_export_starts_on_its_whole_degree():
     assert np.array_equal(grid.z.ravel(), points[:, 2])
 
 
+def test_a_dense_lonlat_cloud_gridded_coarser_is_binned_with_its_jumps_in_metres():
+    """160,000 points of a 3 arc-second lattice at 9 arc-seconds are binned; a depth jump of 19
+    spacings measured in degrees (0.05) had hidden every point but the front-most of each window,
+    leaving 0.002% of the nodes valid; in metres the terrain is one layer and every node is there."""
+    y, x = np.mgrid[0:400, 0:400]
+    heights = 1500 + 800 * np.sin(x / 97.0) * np.cos(y / 61.0)
+    points = np.column_stack([np.round(7 + x.ravel() / 1200, 6), np.round(45 + y.ravel() / 1200, 6), heights.ravel()])
+    coarse = slice_surface(Mesh(points), d1=3 / 1200, d2=3 / 1200)
+    assert coarse.shape == (134, 134) and np.isfinite(coarse.z).mean() > 0.99
+    assert np.sqrt(np.nanmean((coarse.z - heights[::3, ::3]) ** 2)) < 0.5
+
+
 def test_a_scattered_lonlat_cloud_is_refused_saying_why_not_collapsed(tmp_path):
     """Off any lattice (points moved by up to a fifth of a step), the cloud is not recognised and
     its default spacing comes from the metres of z: a grid of 1 x 1 nodes is refused in one line,

@@ -229,9 +229,10 @@ def lonlat_grid(mesh, steps, units, d1=None, d2=None, rows=None, cols=None, tap=
     WGS 84 (``georef.WGS84_WKT``; the export names no datum, and the ellipsoids of the others
     move its metres by under 0.1%): its points moved onto the nodes they were printed from
     (``onto_lattice``), node for node at its own steps unless spacings or counts
-    are given (``tap`` aligns its cells, ``slice_surface``). An option that would cut it
+    are given (``tap`` aligns its cells, ``slice_surface``; a dense one is then binned with its
+    depth jumps measured in metres at its middle latitude). An option that would cut it
     otherwise (``cutting``, not at its default) is refused: it is terrain."""
-    from mzc.georef import WGS84_WKT
+    from mzc.georef import WGS84_WKT, metres_per_unit
 
     defaults = {"thesis_grid": False, "align": "none", "projection": ("auto", "planar"), "view": ("auto", "+z"),
                 "center": None, "axis": None, "charts": ("auto", 1), "cloud": ("auto",)}
@@ -245,8 +246,9 @@ def lonlat_grid(mesh, steps, units, d1=None, d2=None, rows=None, cols=None, tap=
     from mzc.meshes import Mesh
 
     mesh = Mesh(onto_lattice(mesh.points, steps))
+    latitude = float(mesh.points[:, 1].min() + np.ptp(mesh.points[:, 1]) / 2)   # binning's jumps in metres there
     grid = slice_in_frame(mesh, np.eye(3), np.zeros(3), d1=d1, d2=d2, rows=rows, cols=cols, units=units,
-                          lattice=steps, tap=tap)
+                          lattice=steps, tap=tap, cell_metres=metres_per_unit(WGS84_WKT, latitude))
     check_cloud_grid(mesh, grid)
     return grid.with_z(grid.z, crs=WGS84_WKT)
 
@@ -343,7 +345,7 @@ def grid_as_sliced(grid, units, **given):
 
 def slice_in_frame(mesh, rotation, shift, d1=None, d2=None, rows=None, cols=None, units=None,
                    projection="planar", radius=None, full_turn=False, thesis_grid=False, cloud="auto", lattice=None,
-                   tap=False, round_default=False):
+                   tap=False, round_default=False, cell_metres=None):
     """The z-grid of ``mesh`` in the frame where input = rotation @ p + shift, over its (u, v) extent.
 
     Shared by ``slice_surface`` and ``mzc diff``, which samples surfaces in a given frame.
@@ -355,7 +357,9 @@ def slice_in_frame(mesh, rotation, shift, d1=None, d2=None, rows=None, cols=None
     (a node per point, where Delaunay's grid takes half of it). ``lattice``: the cloud's lattice
     steps when the caller has found them (``lonlat_lattice``). ``round_default``: a spacing from
     the data is made round (``round_spacing``); ``tap``: the cells are aligned (``tap_extent``),
-    and a lattice cloud whose points then miss the nodes is triangulated.
+    and a lattice cloud whose points then miss the nodes is triangulated. ``cell_metres``: the
+    metres of a unit of u and of v where they are not lengths in the values' unit (degrees of a
+    lon/lat cloud), for binning's depth-jump height.
     """
     from mzc.projections import to_nodes
 
@@ -396,9 +400,10 @@ def slice_in_frame(mesh, rotation, shift, d1=None, d2=None, rows=None, cols=None
     if on_lattice:
         z = lattice_values(nodes, low, d1, d2, (n_rows, n_cols))
     elif window is not None:
-        from mzc.ops.binning import binned_values
+        from mzc.ops.binning import JUMP_RISE, binned_values
 
-        z = binned_values(nodes, low, d1, d2, (n_rows, n_cols), window)
+        rise = None if cell_metres is None else JUMP_RISE * max(d2 * cell_metres[0], d1 * cell_metres[1])
+        z = binned_values(nodes, low, d1, d2, (n_rows, n_cols), window, rise)
     else:
         if not len(triangles):
             triangles = triangulate_point_cloud(nodes[:, :2])
