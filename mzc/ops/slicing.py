@@ -181,15 +181,27 @@ def lonlat_lattice(mesh):
 def round_angle(values, step):
     """The angle with the fewest significant digits in degrees, arc-seconds or ninths of an
     arc-second (0.006 degrees, 1", 1/3", 7.5") that puts the printed ``values`` on a lattice as
-    well as the measured ``step`` does (their deviations from it spread at most twice as far,
-    ``spread``: the printed digits tell the step no closer), else ``step``."""
-    limit = 2 * spread(values, step) + 1e-9
+    well as the measured ``step`` does or as their printed digits allow (their deviations from
+    it spread at most twice as far as from ``step``, ``spread``, or at most their last printed
+    digit, ``printed_quantum``: the digits tell the step no closer), else ``step``."""
+    limit = max(2 * spread(values, step), printed_quantum(values, step) / step) + 1e-9
     for digits in range(1, 10):
         for scale in (1, 3600, 32400):
             candidate = float(f"{step * scale:.{digits}g}") / scale
             if spread(values, candidate) <= limit:
                 return candidate
     return step
+
+
+def printed_quantum(values, step):
+    """10^-D, under ``step``, for the fewest decimals D (up to 12) that every one of ``values`` was
+    printed with (each within 0.001 of a whole number of them), or 0: each value is then off its
+    node by up to half of it, and two values' deviations lie at most this far apart."""
+    for decimals in range(13):
+        scaled = values * 10.0 ** decimals
+        if 10.0 ** -decimals < step and np.abs(scaled - np.round(scaled)).max() < 1e-3:
+            return 10.0 ** -decimals
+    return 0.0
 
 
 def spread(values, step):
