@@ -41,6 +41,23 @@ def as_mesh(surface: Any) -> Mesh:
     return triangulate(item) if isinstance(item, ZGrid) else item
 
 
+def as_meshes(first: Any, second: Any) -> tuple[Mesh, Mesh]:
+    """The ``Mesh`` of each of two surfaces to compare (``as_mesh``), with two geographic grids
+    placed in metres about one centre, the first's (``mzc.georef.metric_frame``): each about its
+    own would shift one against the other by the distance between their centres."""
+    from mzc.formats import read_file
+    from mzc.georef import centre_of, is_geographic, metric_frame
+    from mzc.grid import ZGrid
+
+    items = [given(surface) for surface in (first, second)]
+    items = [read_file(item) if isinstance(item, str) else item for item in items]
+    geographic = [item for item in items if isinstance(item, ZGrid) and is_geographic(item)]
+    if len(geographic) == 2:
+        centre = centre_of(items[0])
+        items = [metric_frame(item, centre) for item in items]
+    return as_mesh(items[0]), as_mesh(items[1])
+
+
 def given(surface: Any) -> str | ZGrid | Mesh:
     """A surface as it was given, before any file is read: a path as a str (``path_of``), a ZGrid as
     it is, and anything else as a Mesh held to what a mesh file is (``mzc.meshes.checked``: points,
@@ -152,12 +169,13 @@ def slice(surface: Any, d1: float | None = None, d2: float | None = None, *, row
           cols: int | None = None, align: str = "none", projection: str = "auto", view: str = "auto",
           center: tuple[float, float, float] | None = None, axis: tuple[float, float, float] | None = None,
           units: str | None = None, thesis_grid: bool = False, classes: Sequence[int] | None = None,
-          cloud: str = "auto", charts: str | int = "auto") -> ZGrid:
+          cloud: str = "auto", charts: str | int = "auto", tap: bool = False) -> ZGrid:
     """Cut a surface into a z-grid (``mzc slice``): spacings d1 (rows) and d2 (columns) default to
     the data's own, the cutting surfaces (``projection``) to the ones that see it best; ``classes``
     keeps those ASPRS classes of a LAS/LAZ cloud (2: ground), ``cloud`` (auto, bin, delaunay)
     says how a point cloud becomes a surface; ``charts`` (1, N or auto) whether a closed or
-    many-part object is cut into charts, planar grids each seeing its own piece (``ZGrid.charts``).
+    many-part object is cut into charts, planar grids each seeing its own piece (``ZGrid.charts``);
+    ``tap`` aligns the cells of a map grid on whole multiples of the spacing (gdalwarp's -tap).
 
     A grid (a ZGrid, or a path of a z-grid, a compressed file or a raster: a GeoTIFF or ESRI ASCII
     grid) already is one: it is returned as it is, node for node (with ``units`` when given), and
@@ -167,7 +185,7 @@ def slice(surface: Any, d1: float | None = None, d2: float | None = None, *, row
     from mzc.ops.slicing import slice_surface
 
     numbers = slicing_numbers({"d1": d1, "d2": d2, "rows": rows, "cols": cols, "center": center, "axis": axis,
-                               "classes": classes})
+                               "classes": classes, "tap": tap})
     surface = given(surface)
     return slice_surface(read_file(surface) if isinstance(surface, str) else surface, align=align, units=units,
                          projection=projection, view=view, thesis_grid=thesis_grid, cloud=cloud, charts=charts,
@@ -186,6 +204,8 @@ def slicing_numbers(options: dict[str, Any]) -> dict[str, Any]:
             checked[name] = number(value, name, int)
         elif name in ("center", "axis"):
             checked[name] = vector(value, name)
+        elif name == "tap" and not isinstance(value, bool):
+            raise MzcError(f"must be True or False, not {value!r}", field="tap")
         elif name == "classes" and value is not None:
             if isinstance(value, (str, bytes)) or not hasattr(value, "__iter__"):
                 raise MzcError(f"must be ASPRS class codes (say [2, 9]), not {value!r}", field="classes")
@@ -286,7 +306,7 @@ def compare(a: Any, b: Any, *, surface: bool = True, heightfield: bool = False, 
 
     samples, seed = number(samples, "samples", int, 100, MAX_SAMPLES), number(seed, "seed", int, 0, 2**63 - 1)
     d1, d2 = (number(value, name, float, 0, low_open=True) for value, name in ((d1, "d1"), (d2, "d2")))
-    return compare_surfaces(as_mesh(a), as_mesh(b), surface=surface, heightfield=heightfield,
+    return compare_surfaces(*as_meshes(a, b), surface=surface, heightfield=heightfield,
                             samples=samples, seed=seed, d1=d1, d2=d2).report
 
 

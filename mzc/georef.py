@@ -7,10 +7,11 @@ in degrees, the heights in metres). That is read from the WKT's own keywords, so
 library is loaded to encode, densify or triangulate a grid (only a cloud's EPSG code is
 spelled out as WKT by one, ``grid_crs``).
 
-A geographic grid is never measured as if degrees were metres. The operations that need
-lengths either refuse it (``check_lengths``: the rate control of ``--rmse`` and ``--size``,
-whose decoder would have to agree on any metric) or measure it in metres through a local
-projection (``metric_frame``): an equirectangular projection about the grid's centre on the
+A geographic grid is never measured as if degrees were metres. Its errors are vertical, in
+the height unit (a DEM's accuracy is stated so: the rate control of ``--rmse`` and ``--size``
+measures its heights alone, whose decoder needs no metric), and the operations that need
+lengths across x, y and z measure it in metres through a local projection
+(``metric_frame``): an equirectangular projection about the grid's centre on the
 CRS's ellipsoid, x = (lon - lon0) N cos(lat0), y = (lat - lat0) M, with M and N the
 ellipsoid's meridional and prime-vertical radii of curvature at lat0. It keeps the grid a
 regular grid (each axis scales by one factor), so densify and triangulate run on the same
@@ -38,6 +39,11 @@ ELLIPSOID = re.compile(r"\b(?:SPHEROID|ELLIPSOID)\s*\[\s*\"[^\"]*\"\s*,\s*([-+0-
 ANGLE_UNIT = re.compile(r"\bANGLEUNIT\s*\[\s*\"[^\"]*\"\s*,\s*([-+0-9.eE]+)", re.IGNORECASE)
 WKT1_UNIT = re.compile(r"\bUNIT\s*\[\s*\"[^\"]*\"\s*,\s*([-+0-9.eE]+)", re.IGNORECASE)
 WGS84 = (6378137.0, 298.257223563)   # when the WKT names no ellipsoid
+# the CRS of a cloud recognised as longitude and latitude (mzc.ops.slicing.lonlat_lattice), as GDAL writes EPSG:4326
+WGS84_WKT = ('GEOGCS["WGS 84",DATUM["WGS_1984",SPHEROID["WGS 84",6378137,298.257223563,AUTHORITY["EPSG","7030"]],'
+             'AUTHORITY["EPSG","6326"]],PRIMEM["Greenwich",0,AUTHORITY["EPSG","8901"]],'
+             'UNIT["degree",0.0174532925199433,AUTHORITY["EPSG","9122"]],AXIS["Latitude",NORTH],'
+             'AXIS["Longitude",EAST],AUTHORITY["EPSG","4326"]]')
 
 
 def crs_kind(wkt):
@@ -89,14 +95,6 @@ def is_geographic(grid):
     return grid.crs is not None and crs_kind(grid.crs) == "geographic"
 
 
-def check_lengths(grid, field, advice):
-    """Refuse an operation that measures ``grid`` in one unit across x, y and z when its x and y
-    are degrees; ``advice`` says what to do instead."""
-    if is_geographic(grid):
-        raise MzcError(f"the grid's x and y are longitude and latitude in degrees (its CRS is geographic) and "
-                       f"its heights are lengths: {advice}", field=field)
-
-
 def ellipsoid(wkt):
     """(semi-major axis, inverse flattening) of the WKT's ellipsoid, WGS 84's when it names none."""
     found = ELLIPSOID.search(wkt)
@@ -136,10 +134,11 @@ def metres_per_unit(wkt, latitude):
     return prime_vertical * elementary.cos(phi) * unit, meridional * unit
 
 
-def metric_frame(grid):
+def metric_frame(grid, centre=None):
     """``grid`` itself, or for a geographic grid the same nodes and values in metres of the local
-    equirectangular projection about its centre (module docstring), without its CRS, so that
-    lengths mean one thing across x, y and z."""
+    equirectangular projection about ``centre`` (longitude, latitude; by default the grid's own
+    centre, ``centre_of``; module docstring), without its CRS, so that lengths mean one thing
+    across x, y and z. Two grids compared are placed about one centre (``mzc.api.as_meshes``)."""
     if not is_geographic(grid):
         return grid
     import numpy as np
@@ -148,8 +147,13 @@ def metric_frame(grid):
 
     if not np.array_equal(grid.transform, IDENTITY_TRANSFORM):
         raise MzcError("a geographic grid turned by a transform cannot be measured in metres", field="transform")
-    rows, cols = grid.shape
-    centre = (grid.origin[0] + grid.d2 * (cols - 1) / 2, grid.origin[1] + grid.d1 * (rows - 1) / 2)
+    centre = centre_of(grid) if centre is None else centre
     east, north = metres_per_unit(grid.crs, centre[1])
     origin = ((grid.origin[0] - centre[0]) * east, (grid.origin[1] - centre[1]) * north)
     return grid.with_z(grid.z, d1=grid.d1 * north, d2=grid.d2 * east, origin=origin, crs=None, raster=None)
+
+
+def centre_of(grid):
+    """(x, y) of the middle of ``grid``'s nodes: its longitude and latitude on a geographic grid."""
+    rows, cols = grid.shape
+    return grid.origin[0] + grid.d2 * (cols - 1) / 2, grid.origin[1] + grid.d1 * (rows - 1) / 2

@@ -53,7 +53,7 @@ direction on the first line.""")
                    "distance, residuals and normal probability.")
 def command(a, b, rmse, max_, mean, r2, percentiles, count, surface, heightfield, samples, seed, d1, d2,
             as_json, error_grid, plain, float32, plot):
-    from mzc.api import as_mesh
+    from mzc.api import as_meshes
     from mzc.errors import MzcError, about
     from mzc.measure import STATISTICS, compare_surfaces
     from mzc.streams import check_distinct, check_not_input
@@ -63,7 +63,7 @@ def command(a, b, rmse, max_, mean, r2, percentiles, count, surface, heightfield
     for output in (error_grid, plot):
         if output:
             check_not_input(output, a, b)
-    first, second = as_mesh(a), as_mesh(b)
+    first, second = as_meshes(a, b)
     if (error_grid or plot) and (first.is_point_cloud or second.is_point_cloud):
         raise MzcError("--error-grid and --plot need two surfaces, not a point cloud", field="diff")
     chosen = [name for name, on in zip(STATISTICS, (rmse, max_, mean, r2, percentiles, count)) if on]

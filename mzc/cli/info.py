@@ -36,6 +36,7 @@ def command(input, decode):
         f"format    {format_line}",
         f"bytes     {len(data)}",
         f"grid      {rows} rows x {cols} cols, d1 {grid.d1:g} d2 {grid.d2:g}{' ' + grid.units if grid.units else ''}",
+        *metric_lines(grid),
         f"cut by    {cutting_surfaces(grid, chart_count is not None)}",
         *chart_lines(grid, chart_count),
         *tiles,
@@ -45,6 +46,19 @@ def command(input, decode):
     lines.append("header")
     lines += [f"  {line}" for line in header]
     click.echo("\n".join(lines))
+
+
+def metric_lines(grid):
+    """For a geographic grid, its spacings in metres at its centre on its CRS's ellipsoid
+    (``mzc.georef``): what a degree of it is on the ground; else none."""
+    from mzc.georef import centre_of, is_geographic, metres_per_unit
+
+    if not is_geographic(grid):
+        return []
+    latitude = centre_of(grid)[1]
+    east, north = metres_per_unit(grid.crs, latitude)
+    return [f"          in metres d1 {grid.d1 * north:.4g} d2 {grid.d2 * east:.4g} at its centre "
+            f"(longitude and latitude, at latitude {latitude:.4f} on the CRS's ellipsoid)"]
 
 
 def mzc_header(row, data, source, decode):

@@ -77,6 +77,10 @@ SLICE_OPTIONS = [   # the grid's options, shared with 'mzc batch encode'
                  help="1: one grid; N: at most N charts, planar grids along the frame's six axes, each seeing its "
                       "own piece of the surface within 60 degrees (a closed or many-part object); auto: charts "
                       "when one grid would hold less than 90% of the surface's area (spec/zgrid.md, Charts)."),
+    click.option("--tap", is_flag=True,
+                 help="Target-aligned cells, as gdalwarp -tap: one planar grid looking down z whose cells (a node "
+                      "at each one's centre) have their edges on whole multiples of the spacing; the default "
+                      "spacing is then round (1, 2, 2.5 or 5 times a power of ten)."),
     click.option("--cloud", type=click.Choice(["auto", "bin", "delaunay"]), default="auto", show_default=True,
                  help="How a point cloud becomes a surface: bin (a local plane fit at each node, for dense clouds) "
                       "or delaunay (triangles between its points); auto bins clouds of over 100,000 points that "
@@ -114,7 +118,7 @@ that would cut it otherwise are refused.
 @slice_options
 @grid_output_options
 def command(input, output, d1, d2, rows, cols, thesis_grid, align, projection, view, center, axis, units,
-            classes, charts, cloud, file_format, plain, float32, precision):
+            classes, charts, tap, cloud, file_format, plain, float32, precision):
     from mzc.api import slice as slice_surface
     from mzc.errors import about
     from mzc.streams import check_not_input, display_name
@@ -125,5 +129,5 @@ def command(input, output, d1, d2, rows, cols, thesis_grid, align, projection, v
     with about(display_name(input), "slicing it"):
         grid = slice_surface(input, d1=d1, d2=d2, rows=rows, cols=cols, align=align, units=units,
                              projection=projection, center=center, axis=axis, view=view,
-                             thesis_grid=thesis_grid, classes=classes, charts=charts, cloud=cloud)
+                             thesis_grid=thesis_grid, classes=classes, charts=charts, cloud=cloud, tap=tap)
     write(grid)

@@ -78,11 +78,12 @@ def node_bins(nodes, low, d1, d2, shape):
             nodes[inside, 2])
 
 
-def binned_values(nodes, low, d1, d2, shape, radius=None):
+def binned_values(nodes, low, d1, d2, shape, radius=None, rise=None):
     """Values (rows, cols) of the grid with node (0, 0) at ``low`` and spacings d1 (rows), d2
     (columns) from a dense cloud's grid-frame ``nodes`` (u, v, value): each node the tent-weighted
     plane through the front-most points of the (2r+1)^2 bins around it, NaN where they do not
-    surround it. ``radius`` r defaults to ``window_radius`` of the cloud's density."""
+    surround it. ``radius`` r defaults to ``window_radius`` of the cloud's density; ``rise``, the
+    height of a depth jump across one cell, to JUMP_RISE spacings (u, v and values in one unit)."""
     row, col, du, dv, value = node_bins(nodes, low, d1, d2, shape)
     if radius is None:
         radius = window_radius(density(row, col, shape))
@@ -91,7 +92,8 @@ def binned_values(nodes, low, d1, d2, shape, radius=None):
     flat = row * shape[1] + col
     front = np.full(shape[0] * shape[1], -np.inf)
     np.maximum.at(front, flat, value)
-    keep = value >= window_maximum(front.reshape(shape), radius).ravel()[flat] - JUMP_RISE * max(d1, d2)
+    rise = JUMP_RISE * max(d1, d2) if rise is None else rise
+    keep = value >= window_maximum(front.reshape(shape), radius).ravel()[flat] - rise
     reference = float(np.median(value)) if len(value) else 0.0
     sums = bin_sums(flat[keep], du[keep], dv[keep], value[keep] - reference, shape)
     totals = window_sums(sums, radius)

@@ -25,9 +25,15 @@ DATA_SPACING_FRACTION = 0.5   # default spacing: half the median edge of the sur
 MIN_NODES_ACROSS = 200        # and at least 200 nodes along the longest side
 SNAP_TOLERANCE = 1e-3       # a spacing this close (relative) to a lattice's own step snaps to it
 LATTICE_TOLERANCE = 1e-6    # coordinates this close (in steps) to a multiple of the step lie on a lattice
+PRINTED_TOLERANCE = 0.05    # a lon/lat export's: 6 decimals of a degree are 0.011 of a 1/3 arc-second step
+LONLAT_RELIEF = 1000        # a lon/lat lattice: z spans at least 1000 of its steps and its whole width
+MIN_NODES = 4               # a cloud of MIN_CLOUD_POINTS points or more gridded to fewer nodes on an axis
+MIN_CLOUD_POINTS = 1000     # is refused (its spacing is not the cloud's)
 LATTICE_FILL = 0.1          # and the points fill at least this share of its nodes (not a LAS cloud's 0.01 quanta)
 BIN_POINTS = 100_000        # clouds of more points are binned (mzc.ops.binning) when dense at the grid's spacing
 CLOUD_METHODS = ("auto", "bin", "delaunay")
+TAP_TOLERANCE = 1e-9        # steps: a point this close to a cell's edge is on it (--tap)
+ROUND_STEPS = ("1", "2", "2.5", "5")   # a map grid's default spacing: one of these times a power of ten
 
 
 # --------------------------------------------------------------------------- alignment
@@ -70,7 +76,7 @@ def facing_direction(points, triangles):
 
 def slice_surface(surface, d1=None, d2=None, rows=None, cols=None, align="none", units=None,
                   projection="auto", center=None, axis=None, view="auto", thesis_grid=False, classes=None,
-                  cloud="auto", charts="auto"):
+                  cloud="auto", charts="auto", tap=False):
     """Cut ``surface`` (a Mesh; no triangles = point cloud) into a ZGrid; a ZGrid (a raster's, or
     one read from a z-grid or compressed file) is its own grid (``grid_as_sliced``).
 
@@ -83,13 +89,21 @@ def slice_surface(surface, d1=None, d2=None, rows=None, cols=None, align="none",
     (across u), else from the data (``spacings``); ``thesis_grid``: 72 rows, as the
     thesis's ~70 planes, and d2 = d1/10. ``classes`` (ASPRS codes) keeps only the points of
     those classes of a LAS/LAZ cloud (``Mesh.with_classes``); ``cloud`` says how a cloud
-    becomes a surface (``slice_in_frame``). A planar grid keeps the cloud's CRS (``grid_crs``).
+    becomes a surface (``slice_in_frame``). A planar grid keeps the cloud's CRS (``grid_crs``);
+    a cloud without one that is terrain in longitude and latitude (``lonlat_lattice``) is
+    gridded at its own steps in WGS 84 (``lonlat_grid``). A cloud gridded to fewer than
+    MIN_NODES nodes along an axis is refused (``check_cloud_grid``).
 
     ``charts``: 1 for one grid, N for a multi-chart grid of at most N charts (``mzc.ops.charts``),
     ``auto`` for one grid when it holds SINGLE_COVER of the surface's area (a face, terrain, a
     star-shaped ball) and charts otherwise (a closed or many-part object); cutting options that
     shape one grid (projection, view, centre, axis, counts, the thesis's grid) ask for one.
     Warns (MzcWarning) when one grid's lines meet less than SEEN_WARNING of the area well.
+
+    ``tap`` (target-aligned pixels, as gdalwarp -tap): a map grid, planar and looking down the
+    input's z, whose cells (each node the centre of a d2 x d1 cell, as a GeoTIFF holds it) have
+    their edges on whole multiples of the spacings (``tap_extent``); its default spacing is
+    round (``round_spacing``), as a cloud with a CRS's is.
     """
     from mzc.limits import check_magnitude
     from mzc.ops.charts import SINGLE_COVER, chart_surface, single_grid_cover
@@ -100,19 +114,31 @@ def slice_surface(surface, d1=None, d2=None, rows=None, cols=None, align="none",
                                 thesis_grid=thesis_grid or None, align=None if align == "none" else align,
                                 projection=None if projection in ("auto", "planar") else projection,
                                 view=None if view in ("auto", "+z") else view,
-                                charts=None if charts in ("auto", 1) else charts)
+                                charts=None if charts in ("auto", 1) else charts, tap=tap or None)
     mesh = surface if classes is None else surface.with_classes(classes)
     check_magnitude(mesh.points, "coordinates")
+    if tap:
+        check_tap(rows=rows is not None, cols=cols is not None, thesis_grid=thesis_grid, align=align != "none",
+                  projection=projection not in ("auto", "planar"), view=view not in ("auto", "+z"),
+                  center=center is not None, axis=axis is not None, charts=charts not in ("auto", 1))
+        projection, view = "planar", "+z"
+    lonlat = lonlat_lattice(mesh)
+    if lonlat is not None:
+        return lonlat_grid(mesh, lonlat, units, d1=d1, d2=d2, rows=rows, cols=cols, tap=tap, thesis_grid=thesis_grid,
+                           align=align, projection=projection, view=view, center=center, axis=axis, charts=charts,
+                           cloud=cloud)
     one_grid = one_grid_option(projection=projection != "auto", view=view != "auto", center=center is not None,
                                axis=axis is not None, thesis_grid=thesis_grid, rows=rows is not None,
-                               cols=cols is not None)
+                               cols=cols is not None, tap=tap)
     count = chart_count(charts, one_grid)
     if count is not None and count > 1:
         return chart_surface(mesh, *frame_for(mesh, align), chart_spacing(d1, d2, mesh), units, count)
     chosen = choose_view(mesh, frame_for(mesh, align), projection, center, axis, view)
     grid = slice_in_frame(mesh, chosen.rotation, chosen.shift, d1=d1, d2=d2, rows=rows, cols=cols, units=units,
                           projection=chosen.projection, radius=chosen.radius, full_turn=chosen.full_turn,
-                          thesis_grid=thesis_grid, cloud=cloud)
+                          thesis_grid=thesis_grid, cloud=cloud, tap=tap,
+                          round_default=tap or (mesh.is_point_cloud and mesh.crs is not None))
+    check_cloud_grid(mesh, grid)
     if np.isnan(grid.z).all():
         raise MzcError("no grid node meets the surface (seen edge-on? try --view or --align pca)")
     if count is None and not one_grid and (single_grid_cover(grid, mesh) or 1.0) < SINGLE_COVER:
@@ -130,6 +156,154 @@ def slice_surface(surface, d1=None, d2=None, rows=None, cols=None, align="none",
             f"60 degrees of its node lines; the rest comes back coarse or not at all (try --projection auto, "
             f"--view or --align pca)"), stacklevel=2)
     return grid
+
+
+def lonlat_lattice(mesh):
+    """(step in longitude, step in latitude) of a point cloud without a CRS that is terrain in
+    degrees: a GIS export of a geographic DEM as x y z. Its x lie within [-180, 360] and its y
+    within [-90, 90], its (x, y) on a lattice (``lattice_steps``, within PRINTED_TOLERANCE of a
+    step: the export rounds the coordinates it prints), and its heights span at least its
+    width and LONLAT_RELIEF of its steps: a metre of relief a degree, where a lattice in one
+    unit spanning as much in z as across is no terrain. Each step is the round angle it was
+    printed from (``round_angle``). Else None."""
+    if not mesh.is_point_cloud or mesh.crs is not None or len(mesh.points) < 4:
+        return None
+    x, y, z = np.asarray(mesh.points, dtype=float).T
+    if x.min() < -180 or x.max() > 360 or y.min() < -90 or y.max() > 90:
+        return None
+    steps = lattice_steps(np.column_stack([x, y]), PRINTED_TOLERANCE)
+    relief = float(np.ptp(z))
+    if steps is None or relief < max(np.ptp(x), np.ptp(y)) or relief < LONLAT_RELIEF * max(steps):
+        return None
+    return tuple(round_angle(np.unique(values), step) for values, step in zip((x, y), steps))
+
+
+def round_angle(values, step):
+    """The angle with the fewest significant digits in degrees, arc-seconds or ninths of an
+    arc-second (0.006 degrees, 1", 1/3", 7.5") that puts the printed ``values`` on a lattice as
+    well as the measured ``step`` does or as their printed digits allow (their deviations from
+    it spread at most twice as far as from ``step``, ``spread``, or at most their last printed
+    digit, ``printed_quantum``: the digits tell the step no closer), else ``step``."""
+    limit = max(2 * spread(values, step), printed_quantum(values, step) / step) + 1e-9
+    for digits in range(1, 10):
+        for scale in (1, 3600, 32400):
+            candidate = float(f"{step * scale:.{digits}g}") / scale
+            if spread(values, candidate) <= limit:
+                return candidate
+    return step
+
+
+def printed_quantum(values, step):
+    """10^-D, under ``step``, for the fewest decimals D (up to 12) that every one of ``values`` was
+    printed with (each within 0.001 of a whole number of them), or 0: each value is then off its
+    node by up to half of it, and two values' deviations lie at most this far apart."""
+    for decimals in range(13):
+        scaled = values * 10.0 ** decimals
+        if 10.0 ** -decimals < step and np.abs(scaled - np.round(scaled)).max() < 1e-3:
+            return 10.0 ** -decimals
+    return 0.0
+
+
+def spread(values, step):
+    """How far apart (in steps) the deviations of ``values`` from a lattice of ``step`` through the
+    first one lie: 0 on the lattice, the printed rounding on an export of it."""
+    position = (values - values[0]) / step
+    deviation = position - np.round(position)
+    return float(deviation.max() - deviation.min())
+
+
+def onto_lattice(points, steps):
+    """``points`` with x and y moved onto the nodes of a lattice of ``steps`` that they were printed
+    from: through the lowest x and y, or the nearest multiple of half a step to them when they lie
+    within the points' own spread of it (a DEM's nodes at whole or half steps of a round angle)."""
+    moved = np.array(points, dtype=float)
+    for axis, step in enumerate(steps):
+        values = moved[:, axis]
+        low = float(values.min())
+        aligned = shortest(float(np.round(low / (step / 2))) * (step / 2))
+        if abs(aligned - low) <= spread(np.unique(values), step) * step + 1e-12 * abs(low):
+            low = aligned
+        moved[:, axis] = low + np.round((values - low) / step) * step
+    return moved
+
+
+def shortest(value):
+    """The decimal with the fewest significant digits within 4 ulp of ``value`` (7 for the
+    7.000000000000001 that 16800 half-steps of 3 arc-seconds make), else ``value``."""
+    import math
+
+    return next((short for digits in range(1, 18) if abs((short := float(f"{value:.{digits}g}")) - value)
+                 <= 4 * math.ulp(value)), value)
+
+
+def lonlat_grid(mesh, steps, units, d1=None, d2=None, rows=None, cols=None, tap=False, **cutting):
+    """The planar grid of a lon/lat cloud (``lonlat_lattice``'s ``steps``), looking down z, in
+    WGS 84 (``georef.WGS84_WKT``; the export names no datum, and the ellipsoids of the others
+    move its metres by under 0.1%): its points moved onto the nodes they were printed from
+    (``onto_lattice``), node for node at its own steps unless spacings or counts
+    are given (``tap`` aligns its cells, ``slice_surface``; a dense one is then binned with its
+    depth jumps measured in metres at its middle latitude). An option that would cut it
+    otherwise (``cutting``, not at its default) is refused: it is terrain."""
+    from mzc.georef import WGS84_WKT, metres_per_unit
+
+    defaults = {"thesis_grid": False, "align": "none", "projection": ("auto", "planar"), "view": ("auto", "+z"),
+                "center": None, "axis": None, "charts": ("auto", 1), "cloud": ("auto",)}
+    refused = next((name for name, value in cutting.items()
+                    if value != defaults[name] and not (isinstance(defaults[name], tuple) and value in defaults[name])),
+                   None)
+    if refused:
+        raise MzcError("the cloud is terrain in longitude and latitude (a lattice in degrees, heights spanning "
+                       "thousands of its steps), gridded looking down z at its own steps or --d1/--d2 in degrees: "
+                       "this option does not apply", field=refused)
+    from mzc.meshes import Mesh
+
+    mesh = Mesh(onto_lattice(mesh.points, steps))
+    latitude = float(mesh.points[:, 1].min() + np.ptp(mesh.points[:, 1]) / 2)   # binning's jumps in metres there
+    grid = slice_in_frame(mesh, np.eye(3), np.zeros(3), d1=d1, d2=d2, rows=rows, cols=cols, units=units,
+                          lattice=steps, tap=tap, cell_metres=metres_per_unit(WGS84_WKT, latitude))
+    check_cloud_grid(mesh, grid)
+    return grid.with_z(grid.z, crs=WGS84_WKT)
+
+
+def check_cloud_grid(mesh, grid):
+    """Refuse a point cloud of MIN_CLOUD_POINTS or more gridded to fewer than MIN_NODES nodes
+    along an axis: its spacing is not the cloud's (say, one taken from heights in metres over
+    x and y in degrees), and such a grid would hold almost nothing of it."""
+    if not mesh.is_point_cloud or len(mesh.points) < MIN_CLOUD_POINTS or min(grid.shape) >= MIN_NODES:
+        return
+    rows, cols = grid.shape
+    raise MzcError(f"{len(mesh.points)} points gridded to {rows} x {cols} nodes at spacings d1 {grid.d1:.6g} and "
+                   f"d2 {grid.d2:.6g}: the spacing is not the cloud's (x and y in degrees and z in metres? "
+                   f"give --d1 and --d2 in the unit of x and y)", field="d1")
+
+
+def check_tap(**given):
+    """Refuse with ``tap`` the first option ``given`` (True when set) that cuts anything but one
+    planar grid looking down the input's z: cells aligned on a map need the map's frame, and a
+    spacing (a count would leave it to the extent)."""
+    refused = one_grid_option(**given)
+    if refused:
+        raise MzcError(f"--tap aligns the cells of one planar grid looking down z, at a spacing (--d1/--d2 or the "
+                       f"default): {refused.replace('_', ' ')} does not go with it", field="tap")
+
+
+def tap_extent(low, high, d2, d1):
+    """(low, high) of the nodes of a grid whose cells have their edges on whole multiples of the
+    spacings (gdalwarp's -tap): the first and last cells are those holding ``low`` and ``high``
+    (a point on an edge is the cell's above it, the last one's below), each node its cell's centre."""
+    step = np.array([d2, d1])
+    first = np.floor(low / step + TAP_TOLERANCE)   # a point on an edge within rounding is on it
+    last = np.maximum(np.ceil(high / step - TAP_TOLERANCE) - 1, first)
+    return (first + 0.5) * step, (last + 0.5) * step
+
+
+def round_spacing(spacing):
+    """The spacing of ROUND_STEPS times a power of ten nearest to ``spacing`` in ratio (the 0.5,
+    1, 2, 2.5, 5 m of DEM products): a map grid's default. Decimal digits and comparisons alone,
+    so every machine picks the same."""
+    exponent = int(f"{spacing:.6e}".split("e")[1])
+    candidates = [float(f"{mantissa}e{power}") for power in (exponent, exponent + 1) for mantissa in ROUND_STEPS]
+    return min(candidates, key=lambda value: max(value / spacing, spacing / value))
 
 
 def one_grid_option(**given):
@@ -173,7 +347,8 @@ def grid_as_sliced(grid, units, **given):
     raster resampled, or the z-grid's surface cut anew from its mesh."""
     refused = next((name for name, value in given.items() if value is not None), None)
     if refused:
-        what, advice = (("a raster", "resample the raster first (gdalwarp -tr, -t_srs)") if grid.raster is not None
+        what, advice = (("a raster", "resample the raster first (gdalwarp -tr, -tap, -t_srs)")
+                        if grid.raster is not None
                         else ("a z-grid", "to cut its surface anew, triangulate it and slice the mesh"))
         raise MzcError(f"{what} is sliced as its own grid, node for node, so this option does not apply: {advice}",
                        field=refused)
@@ -181,7 +356,8 @@ def grid_as_sliced(grid, units, **given):
 
 
 def slice_in_frame(mesh, rotation, shift, d1=None, d2=None, rows=None, cols=None, units=None,
-                   projection="planar", radius=None, full_turn=False, thesis_grid=False, cloud="auto"):
+                   projection="planar", radius=None, full_turn=False, thesis_grid=False, cloud="auto", lattice=None,
+                   tap=False, round_default=False, cell_metres=None):
     """The z-grid of ``mesh`` in the frame where input = rotation @ p + shift, over its (u, v) extent.
 
     Shared by ``slice_surface`` and ``mzc diff``, which samples surfaces in a given frame.
@@ -190,7 +366,12 @@ def slice_in_frame(mesh, rotation, shift, d1=None, d2=None, rows=None, cols=None
     triangulated in (u, v) (Delaunay) or binned (``mzc.ops.binning``), as ``cloud`` says:
     ``auto`` bins a cloud of more than BIN_POINTS points that is dense at the grid's spacing
     (``binning.window_radius``), whose default spacing is then its own median point spacing
-    (a node per point, where Delaunay's grid takes half of it).
+    (a node per point, where Delaunay's grid takes half of it). ``lattice``: the cloud's lattice
+    steps when the caller has found them (``lonlat_lattice``). ``round_default``: a spacing from
+    the data is made round (``round_spacing``); ``tap``: the cells are aligned (``tap_extent``),
+    and a lattice cloud whose points then miss the nodes is triangulated. ``cell_metres``: the
+    metres of a unit of u and of v where they are not lengths in the values' unit (degrees of a
+    lon/lat cloud), for binning's depth-jump height.
     """
     from mzc.projections import to_nodes
 
@@ -199,7 +380,8 @@ def slice_in_frame(mesh, rotation, shift, d1=None, d2=None, rows=None, cols=None
     local = rotated(mesh.points - shift, rotation.T)
     nodes = to_nodes(projection, radius, local)
     low, high = nodes[:, :2].min(axis=0), nodes[:, :2].max(axis=0)
-    lattice = lattice_steps(nodes[:, :2]) if projection == "planar" else None
+    if lattice is None and projection == "planar":
+        lattice = lattice_steps(nodes[:, :2])
     binned = mesh.is_point_cloud and lattice is None and \
         (cloud == "bin" or (cloud == "auto" and len(mesh.points) > BIN_POINTS))
     triangles = mesh.triangles
@@ -217,18 +399,23 @@ def slice_in_frame(mesh, rotation, shift, d1=None, d2=None, rows=None, cols=None
     if pole_to_pole:
         low[1], high[1] = -np.pi / 2 * radius, np.pi / 2 * radius
     if rows is None and cols is None:
-        d1, d2 = spacings(d1, d2, lattice, local, triangles, thesis_grid, nodes[:, :2] if binned else None)
+        d1, d2 = spacings(d1, d2, lattice, local, triangles, thesis_grid, nodes[:, :2] if binned else None,
+                          round_default)
+    if tap:
+        low, high = tap_extent(low, high, d2, d1)
     d1, d2, n_rows, n_cols = grid_size(high - low, d1, d2, rows, cols, full_turn, pole_to_pole, thesis_grid)
     xs, ys = low[0] + d2 * np.arange(n_cols), low[1] + d1 * np.arange(n_rows)
-    on_lattice = mesh.is_point_cloud and lattice == (d2, d1)   # a cloud's own lattice: its values as they are
+    on_lattice = mesh.is_point_cloud and lattice == (d2, d1) and \
+        (not tap or on_nodes(nodes[:, :2].min(axis=0), low, (d2, d1)))   # a cloud's own lattice: its values as they are
     binnable = mesh.is_point_cloud and not on_lattice
     window = cloud_window(nodes, low, d1, d2, (n_rows, n_cols), cloud) if binnable else None
     if on_lattice:
         z = lattice_values(nodes, low, d1, d2, (n_rows, n_cols))
     elif window is not None:
-        from mzc.ops.binning import binned_values
+        from mzc.ops.binning import JUMP_RISE, binned_values
 
-        z = binned_values(nodes, low, d1, d2, (n_rows, n_cols), window)
+        rise = None if cell_metres is None else JUMP_RISE * max(d2 * cell_metres[0], d1 * cell_metres[1])
+        z = binned_values(nodes, low, d1, d2, (n_rows, n_cols), window, rise)
     else:
         if not len(triangles):
             triangles = triangulate_point_cloud(nodes[:, :2])
@@ -250,19 +437,22 @@ def cloud_window(nodes, low, d1, d2, shape, cloud):
     return MAX_RADIUS if radius is None and cloud == "bin" else radius   # 0 is a radius: a dense cloud
 
 
-def spacings(d1, d2, lattice, local, triangles, thesis_grid, binned_uv=None):
+def spacings(d1, d2, lattice, local, triangles, thesis_grid, binned_uv=None, round_default=False):
     """(d1, d2) from the data where not given: on a lattice (``lattice_steps``) its own steps,
     else ``data_spacing`` (half the median edge length of the ``triangles``, a cloud's
     Delaunay ones; for a cloud to bin, given as ``binned_uv``, its median point spacing,
     ``binning.cloud_spacing``), for both; one spacing given, the other equals it. A given
-    spacing within SNAP_TOLERANCE of the lattice's own step is that step. ``thesis_grid``
-    leaves them to ``grid_size`` (72 rows, d2 = d1/10)."""
+    spacing within SNAP_TOLERANCE of the lattice's own step is that step; with ``round_default``
+    a spacing from the data is ``round_spacing``'s. ``thesis_grid`` leaves them to ``grid_size``
+    (72 rows, d2 = d1/10)."""
     if lattice is not None:
         d2, d1 = (snapped(given, step, thesis_grid) for given, step in ((d2, lattice[0]), (d1, lattice[1])))
     if thesis_grid or (d1 is not None and d2 is not None):
         return d1, d2
     if d1 is None and d2 is None:
         d1 = d2 = data_spacing(local, triangles) if binned_uv is None else cloud_data_spacing(local, binned_uv)
+        if round_default:
+            d1 = d2 = round_spacing(d1)
     return (d1, d1) if d2 is None else (d2, d2)
 
 
@@ -301,9 +491,9 @@ def within_longest_side(spacing, points):
     return float(min(spacing, float(np.ptp(points, axis=0).max()) / MIN_NODES_ACROSS))
 
 
-def lattice_steps(uv):
+def lattice_steps(uv, tolerance=LATTICE_TOLERANCE):
     """(step in u, step in v) when every point's u and v lie on a regular lattice (within
-    LATTICE_TOLERANCE of a step; whole lines may be missing) whose nodes the points fill to
+    ``tolerance`` of a step; whole lines may be missing) whose nodes the points fill to
     at least LATTICE_FILL (a DEM with its holes; not a LiDAR cloud, whose coordinates are
     all multiples of its file's 0.01 m quantum), else None."""
     steps, nodes = [], 1.0
@@ -320,10 +510,16 @@ def lattice_steps(uv):
             return None
         step = extent / count
         position = (distinct - distinct[0]) / step
-        if np.abs(position - np.round(position)).max() > LATTICE_TOLERANCE:
+        if np.abs(position - np.round(position)).max() > tolerance:
             return None
         steps.append(float(step))
     return tuple(steps)
+
+
+def on_nodes(point, low, steps):
+    """True when ``point`` (u, v) lies within LATTICE_TOLERANCE of a node of the grid from ``low`` at ``steps``."""
+    position = (np.asarray(point) - low) / np.asarray(steps)
+    return bool(np.abs(position - np.round(position)).max() <= LATTICE_TOLERANCE)
 
 
 def lattice_values(nodes, low, d1, d2, shape):

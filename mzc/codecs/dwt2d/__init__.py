@@ -28,6 +28,7 @@ from mzc.formats.header import (
     read_grid_fields,
     read_header,
 )
+from mzc.georef import is_geographic
 from mzc.grid import MAX_CHARTS, ZGrid
 from mzc.limits import MAX_MAGNITUDE
 
@@ -346,6 +347,7 @@ class Prepared:
         if np.isinf(grid.z).any():
             raise MzcError("the grid holds infinite heights", field="z")
         self.grid, self.wavelet, self.slope_limit = grid, wavelet, slope_limit
+        self.vertical = is_geographic(grid)   # x, y in degrees: errors are heights alone (vertical_terms)
         self.valid = grid.valid
         self.levels = w2.default_levels(grid.shape, self.transform.coarsest) if levels is None else int(levels)
         self.geometry = w2.Geometry.of(grid.d1, grid.d2, grid.origin, grid.shape, grid.projection, grid.radius)
@@ -360,9 +362,13 @@ class Prepared:
     def surface_terms(self):
         """(the valid heights, the weight a*cos(t) of each one's squared error, the area sum of
         a/cos(t)) of surface_rms, from the lean t of the surface from each node's line and its
-        metric area a: only the rmse target needs them."""
+        metric area a: only the rmse target needs them. On a geographic grid, weights of 1 over
+        the node count: its RMS error is the vertical one, as a DEM's accuracy is stated."""
         from mzc.ops.triangulation import jump_edges
 
+        if self.vertical:
+            heights = self.grid.z[self.valid]
+            return heights, np.ones(heights.size), float(heights.size)
         lean, metric = w2.node_areas(self.filled, self.geometry, jump_edges(self.grid))
         lean, metric = lean[self.valid], metric[self.valid]
         return self.grid.z[self.valid], metric / lean, float(np.sum(metric * lean))
@@ -496,8 +502,14 @@ def check_options(options):
 def default_rmse(grid):
     """The target without one given: an RMS surface error of DEFAULT_RMSE_SPACING times the
     grid's smaller node spacing, well under what sampling the surface at that spacing loses
-    (a face's default grid, 0.75 mm: 0.075 mm; a 1 m DEM: 0.1 m)."""
-    return DEFAULT_RMSE_SPACING * min(grid.d1, grid.d2)
+    (a face's default grid, 0.75 mm: 0.075 mm; a 1 m DEM: 0.1 m). A geographic grid's spacing
+    is taken in metres at its centre (1 arc-second at 39.5 N: 23.9 m, so 2.4 m of height)."""
+    from mzc.georef import centre_of, is_geographic, metres_per_unit
+
+    if not is_geographic(grid):
+        return DEFAULT_RMSE_SPACING * min(grid.d1, grid.d2)
+    east, north = metres_per_unit(grid.crs, centre_of(grid)[1])
+    return DEFAULT_RMSE_SPACING * min(grid.d2 * east, grid.d1 * north)
 
 
 def encode_grid(grid, **options):
@@ -534,14 +546,16 @@ def window_writer(source, options, scheduler=None):
 def encode_whole(grid, max_error=None, rmse=None, size=None, wavelet=DEFAULT_WAVELET, level=None, slope_limit=None,
                  unit_checked=False):
     """(bytes, the heights a decoder gets from them) of a ZGrid coded whole; at most one of
-    ``max_error`` (bound at every valid node, grid units), ``rmse`` (target RMS surface error) or
-    ``size`` (target file bytes, not exceeded when reachable), none being ``default_rmse``;
+    ``max_error`` (bound at every valid node, grid units), ``rmse`` (target RMS surface error; on a
+    geographic grid the vertical one, in the height unit) or ``size`` (target file bytes, not
+    exceeded when reachable), none being ``default_rmse``;
     ``unit_checked`` when the caller has judged the grid's unit already (a tile, by its tiled
     grid's CRS).
 
     ``slope_limit`` defaults to SLOPE_LIMIT for ``rmse`` and ``size``, whose errors are
     surface distances, and to 1 (equal steps) for ``max_error``, a bound on heights, where
-    slope-scaled steps measured 3% larger files (f18, E = 0.1).
+    slope-scaled steps measured 3% larger files (f18, E = 0.1), and for a geographic grid,
+    whose lean has no meaning in degrees (``check_slope_limit``).
     """
     if max_error is None and rmse is None and size is None:
         rmse = default_rmse(grid)
@@ -549,7 +563,8 @@ def encode_whole(grid, max_error=None, rmse=None, size=None, wavelet=DEFAULT_WAV
     if max_error is None and not unit_checked:
         check_shared_unit(grid, name)
     if slope_limit is None:
-        slope_limit = 1.0 if max_error is not None else SLOPE_LIMIT
+        slope_limit = 1.0 if max_error is not None or is_geographic(grid) else SLOPE_LIMIT
+    check_slope_limit(grid, slope_limit)
     prepared = Prepared(grid, wavelet, level, slope_limit)
     if max_error is not None:
         bound, rounded = rounding_bounds(grid, max_error) or (max_error, None)
@@ -622,12 +637,9 @@ def check_shared_unit(grid, field):
     gave 306 m. Such grids show heights spanning more than UNIT_RATIO times their width,
     or GEOGRAPHIC_RATIO times on a grid within lon/lat bounds with spacings under
     GEOGRAPHIC_STEP (a DEM's arc-seconds). Central grids are lengths by
-    construction. A grid with a CRS is judged by its CRS instead: refused when geographic."""
+    construction. A grid with a CRS is judged by its CRS instead: a projected one shares its
+    unit, and a geographic one is measured by its heights alone (``Prepared.surface_terms``)."""
     if grid.crs is not None:
-        from mzc.georef import check_lengths
-
-        check_lengths(grid, field, "a surface error needs one unit; use --max-error, which bounds the heights "
-                                   "alone, or reproject the raster to a CRS in metres (gdalwarp -t_srs)")
         return
     z = grid.z[grid.valid]
     if grid.projection != "planar" or z.size < 2:
@@ -641,6 +653,14 @@ def check_shared_unit(grid, field):
                        f"(lon/lat degrees with heights in metres?) and a surface error means nothing: project "
                        f"the grid to a metric frame, or use --max-error, which bounds the heights alone",
                        field=field)
+
+
+def check_slope_limit(grid, slope_limit):
+    """Refuse slope-scaled steps (``slope_limit`` above 1) on a geographic grid: the lean they
+    scale by would be measured across degrees and metres (its decoder reads no metric)."""
+    if slope_limit > 1 and is_geographic(grid):
+        raise MzcError("a geographic grid's lean is not measured across degrees and metres: its steps are "
+                       "equal (slope_limit 1)", field="slope_limit")
 
 
 # --------------------------------------------------------------------------- decoder
