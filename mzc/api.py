@@ -12,13 +12,14 @@ points or a path is a surface.
 from __future__ import annotations
 
 import os
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, TypedDict
 
 from mzc.codecs import DEFAULT_CODEC
 from mzc.errors import MzcError
 
 if TYPE_CHECKING:
     from collections.abc import Sequence
+    from typing import Unpack
 
     import numpy as np
 
@@ -26,6 +27,23 @@ if TYPE_CHECKING:
     from mzc.meshes import Mesh
 
 PathLike = str | os.PathLike
+
+
+class EncodeOptions(TypedDict, total=False):
+    """The options of the built-in codecs, as :func:`encode` and :func:`batch_encode` take them
+    (each codec takes its own: ``mzc encode --help`` says which; a codec refuses the others)."""
+
+    max_error: float     # dwt2d: |decoded - input| <= max_error at every valid node
+    rmse: float          # dwt2d: the RMS surface error aimed at [default: a tenth of the node spacing]
+    size: int            # dwt2d: the file size aimed at, in bytes
+    slope_limit: float   # dwt2d: steps grow as 1/sqrt(cos lean) up to this many times
+    tile: int            # dwt2d: the side of independent tiles (0: the grid whole)
+    wavelet: str         # dwt2d: bior4.4 or bior2.2; dwt: a PyWavelets name
+    level: int           # dwt2d and dwt: wavelet levels
+    quality: int         # dft, dct, dwt: the percentage of coefficients kept
+    degree: int          # poly: the polynomial's degree
+    basis: str           # poly: chebyshev or power
+    precision: int       # the row codecs: decimals written
 BYTES_SOURCE = "<bytes>"
 MESH_SOURCE = "<mesh>"   # a surface given in memory, in error messages
 
@@ -213,7 +231,7 @@ def slicing_numbers(options: dict[str, Any]) -> dict[str, Any]:
     return checked
 
 
-def encode(grid: ZGrid | np.ndarray, codec: str = DEFAULT_CODEC, **options: Any) -> bytes:
+def encode(grid: ZGrid | np.ndarray, codec: str = DEFAULT_CODEC, **options: Unpack[EncodeOptions]) -> bytes:
     """Compress a z-grid (or a 2D array) with a registered codec (``mzc encode``); ``options`` are
     the codec's, e.g. ``max_error=0.01`` for dwt2d, ``quality=20`` for dct."""
     from mzc.codecs import get_codec
@@ -385,7 +403,7 @@ def write(path: PathLike, item: ZGrid | Mesh | bytes, file_format: str | None = 
 def batch_encode(sources: Any, dest: PathLike, codec: str = DEFAULT_CODEC, *,
                  slice_options: dict[str, Any] | None = None, verify: bool = False, scheduler: Any = None,
                  workers: int | None = None, chunk_size: int | None = None, listener: Any = None,
-                 **codec_options: Any) -> Any:
+                 **codec_options: Unpack[EncodeOptions]) -> Any:
     """Slice and encode every mesh, cloud and raster of ``sources`` (paths, folders, globs, ``@list``
     files) into the folder ``dest`` on Dask (``mzc batch encode``): ``slice_options`` are :func:`slice`'s,
     ``codec_options`` :func:`encode`'s. It runs on ``scheduler`` (a scheduler's address or a

@@ -11,7 +11,7 @@ example, hostile input and its stored fixtures. Adding a codec is one module tha
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Iterator
+from collections.abc import Callable, Iterator, Mapping
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
@@ -120,7 +120,7 @@ class Codec:
         """The option called ``name``."""
         return next(o for o in self.options if o.name == name)
 
-    def checked(self, options: dict[str, Any]) -> dict[str, Any]:
+    def checked(self, options: Mapping[str, Any]) -> dict[str, Any]:
         """``options`` checked, converted and completed with the defaults, as the writer takes them."""
         known = {o.name for o in self.options}
         unknown = sorted(set(options) - known)
