@@ -34,15 +34,21 @@ def read_tif(path):
 
 
 def int16_dem_with_nodata(path):
-    """An int16 DEM in UTM with a block of no-data cells (-32768), written by GDAL."""
+    """A 70 x 90 int16 DEM in UTM with a block of no-data cells (-32768), written by GDAL."""
     rng = np.random.default_rng(3)
     r, c = np.mgrid[0:70, 0:90]
-    z = np.round(900 + 60 * np.sin(r / 9) * np.cos(c / 13) + rng.normal(0, 3, r.shape)).astype("int16")
+    z = np.round(900 + 60 * np.sin(r / 9) * np.cos(c / 13) + rng.normal(0, 3, r.shape))
     z[10:16, 20:31] = -32768
-    profile = {"driver": "GTiff", "width": 90, "height": 70, "count": 1, "dtype": "int16", "nodata": -32768,
+    return written_int16_dem(path, z)
+
+
+def written_int16_dem(path, z):
+    """``z`` written by GDAL as an int16 GeoTIFF in UTM 11N, 30 m cells, no-data -32768: ``path``."""
+    rows, cols = z.shape
+    profile = {"driver": "GTiff", "width": cols, "height": rows, "count": 1, "dtype": "int16", "nodata": -32768,
                "transform": Affine(30, 0, 440720, 0, -30, 3751320), "crs": CRS.from_epsg(32611)}
     with rasterio.open(path, "w", **profile) as dataset:
-        dataset.write(z, 1)
+        dataset.write(z.astype("int16"), 1)
     return path
 
 
@@ -167,13 +173,9 @@ def large_int16_dem(path):
     rng = np.random.default_rng(5)
     r, c = np.mgrid[0:700, 0:900]
     z = np.round(1500 + 300 * np.sin(r / 60) * np.cos(c / 85) + 20 * np.sin(r / 7 + c / 11)
-                 + rng.normal(0, 2, r.shape)).astype("int16")
+                 + rng.normal(0, 2, r.shape))
     z[300:340, 100:180] = -32768
-    profile = {"driver": "GTiff", "width": 900, "height": 700, "count": 1, "dtype": "int16", "nodata": -32768,
-               "transform": Affine(30, 0, 440720, 0, -30, 3751320), "crs": CRS.from_epsg(32611)}
-    with rasterio.open(path, "w", **profile) as dataset:
-        dataset.write(z, 1)
-    return path
+    return written_int16_dem(path, z)
 
 
 @pytest.fixture(scope="module")
