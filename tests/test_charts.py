@@ -139,6 +139,21 @@ def test_dwt2d_codes_every_chart_within_one_bound():
     assert np.nanmax(np.abs(back.z - grid.z)) <= 0.05
 
 
+def test_a_negative_chart_view_number_is_refused_not_read_from_the_end(monkeypatch):
+    """A view number of -5 would pick CHART_VIEWS[-5] (-x) as Python indexes; the spec says 0..5."""
+
+    class Shifted(tuple):
+        def index(self, view, *args):   # each view written as its number minus six
+            return super().index(view) - 6
+
+    views = dwt2d.CHART_VIEWS
+    monkeypatch.setattr(dwt2d, "CHART_VIEWS", Shifted(views))
+    data = dwt2d.write(two_charts(), max_error=0.05)
+    monkeypatch.setattr(dwt2d, "CHART_VIEWS", views)
+    with pytest.raises(MzcError, match="view number is not 0..5"):
+        read_any(data, "t.mzw2")
+
+
 def test_the_row_codecs_refuse_charts_in_one_line():
     with pytest.raises(MzcError, match="codes one chart; the grid has 2") as error:
         dct.write(two_charts(), quality=50)

@@ -284,7 +284,7 @@ def decode_charts(decoder, count):
     from mzc.grid import Chart
 
     records = np.stack([decoder.read(chart_model(field), count) for field in range(7)], axis=1)
-    if (records[:, 0] >= len(CHART_VIEWS)).any():
+    if ((records[:, 0] < 0) | (records[:, 0] >= len(CHART_VIEWS))).any():   # a negative one indexed from the end
         raise decoder.error("a chart's view number is not 0..5")
     records[:, 1:3] = np.cumsum(records[:, 1:3], axis=0)
     try:
