@@ -1,0 +1,26 @@
+// mzc's decoders in one dependency-free ES module, written from spec/ alone.
+//
+//   import { decode, writeZgrid } from "./mzc.mjs";
+//   const grid = decode(bytes);     // {kind, version, rows, cols, z: Float64Array, d1, d2, ...}
+//   const zg = writeZgrid(grid);    // the raw float64 z-grid `mzc decode` writes
+//
+// decode() reads the formats of DECODERS below. Every bad file throws an MzcError with one
+// line of text; nothing is returned half decoded.
+
+import { MzcError, fail, parseMagic, splitHeader, writeZgrid, formatNumber } from "./header.mjs";
+import { decodeDwt2d } from "./dwt2d.mjs";
+
+export { MzcError, writeZgrid, formatNumber };
+
+/** Each format's decoder by the kind of its magic line. */
+const DECODERS = { dwt2d: decodeDwt2d };
+
+/** Decodes the bytes of an mzc file into its grid; throws MzcError on any bad file. */
+export function decode(bytes) {
+  if (!(bytes instanceof Uint8Array)) bytes = new Uint8Array(bytes);
+  const { lines, body } = splitHeader(bytes);
+  const magic = parseMagic(lines[0]);
+  const decoder = DECODERS[magic.kind];
+  if (!decoder) fail(null, `mzc-${magic.kind} is not a format this decoder reads`);
+  return { kind: magic.kind, version: `${magic.major}.${magic.minor}`, ...decoder(bytes, lines, body, magic) };
+}
