@@ -139,14 +139,13 @@ class Payload {
     const m = this.lo & 0xffffff;
     const s = table.slot[m >>> 10];
     const f = table.freq[s];
-    const product = f * (this.hi * 256 + Math.floor(this.lo / 16777216));   // f * (x >> 24), < 2^54
-    const high = Math.floor(product / 4194304);
-    let lo = (product - high * 4194304) * 1024 + m - table.cum[s] * 1024;
-    let hi = high;
-    if (lo >= 4294967296) {
-      lo -= 4294967296;
-      hi += 1;
-    }
+    // x' = f 2^10 (x >> 24) + m - B = (f hi) 2^18 + f (lo >> 24) 2^10 + m - B, each part exact
+    const a = f * this.hi;
+    const top = Math.floor(a / 16384);
+    const low = (a - top * 16384) * 262144 + f * (this.lo >>> 24) * 1024 + m - table.cum[s] * 1024;
+    const carry = Math.floor(low / 4294967296);
+    let hi = top + carry;
+    let lo = low - carry * 4294967296;
     if (hi === 0 && this.words.length) {
       hi = lo;
       lo = this.words.pop();
