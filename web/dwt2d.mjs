@@ -211,7 +211,7 @@ function decodeGrid(payload, grid, p) {
   const mask = decodeMask(payload, rows, cols);
   const periodic = isPeriodic(grid);
   const shapes = bandShapes(rows, cols, p);
-  const relevant = p.v3 ? relevance3(mask, rows, cols, p, periodic) : relevantPeriodized2d(mask, rows, cols, p.wavelet, p.levels, shapes);
+  const relevant = p.v3 ? relevance3(mask, rows, cols, p, periodic) : relevantPeriodized2d(mask, rows, cols, p.wavelet, p.levels);
   const q = [decodeBand0(payload, shapes[0])];
   for (let b = 1; b < shapes.length; b++) q.push(decodeDetail(payload, q, b, shapes, relevant, p));
   const bands = dequantise(q, shapes, grid, p, periodic);
