@@ -9,11 +9,12 @@
 
 import { MzcError, fail, parseMagic, splitHeader, writeZgrid, formatNumber } from "./header.mjs";
 import { decodeDwt2d } from "./dwt2d.mjs";
+import { ROW_CODECS } from "./rows.mjs";
 
 export { MzcError, writeZgrid, formatNumber };
 
 /** Each format's decoder by the kind of its magic line. */
-const DECODERS = { dwt2d: decodeDwt2d };
+const DECODERS = { dwt2d: decodeDwt2d, ...ROW_CODECS };
 
 /** Decodes the bytes of an mzc file into its grid; throws MzcError on any bad file. */
 export function decode(bytes) {
