@@ -21,6 +21,10 @@ function main(args) {
     process.stderr.write(`mzc: ${name}: ${error.code === "ENOENT" ? "no such file" : error.message}\n`);
     return 1;
   }
+  process.stdout.on("error", (error) => {
+    if (error.code !== "EPIPE") process.stderr.write(`mzc: stdout: ${error.message}\n`);
+    process.exit(1);
+  });
   process.stdout.write(out);
   return 0;
 }

@@ -412,19 +412,34 @@ const LIFTING = {
   "bior2.2": { steps: [-0.5, 0.25], k: 1, reach: [1, 2] },
 };
 
-/** Marks along one signal of n samples (read with stride): the low coefficients within
- * reach[0] of a valid sample, the high ones within reach[1], wrapping when `wrap`. */
-function relevantAlong(get, n, reach, wrap) {
+/** Marks along one signal x: the low coefficients within reach[0] of a valid sample, the
+ * high ones within reach[1] (samples outside the signal ignored, or wrapping when `wrap`). */
+function relevantAlong(x, reach, wrap) {
+  const n = x.length;
   const near = (centre, d) => {
     for (let i = centre - d; i <= centre + d; i++) {
-      const j = wrap ? ((i % n) + n) % n : i;
-      if (j >= 0 && j < n && get(j)) return 1;
+      const j = wrap ? (i + n) % n : i;
+      if (j >= 0 && j < n && x[j]) return 1;
     }
     return 0;
   };
-  const low = Array.from({ length: Math.ceil(n / 2) }, (_, k) => near(2 * k, reach[0]));
-  const high = Array.from({ length: Math.floor(n / 2) }, (_, k) => near(2 * k + 1, reach[1]));
+  const low = new Uint8Array((n + 1) >> 1);
+  const high = new Uint8Array(n >> 1);
+  for (let k = 0; k < low.length; k++) low[k] = near(2 * k, reach[0]);
+  for (let k = 0; k < high.length; k++) high[k] = near(2 * k + 1, reach[1]);
   return [low, high];
+}
+
+/** Line l of an array of `lines` x n values (row-major when `byRows`, else its columns). */
+function line(a, l, n, width, byRows) {
+  const out = new Float64Array(n);
+  for (let i = 0; i < n; i++) out[i] = a[byRows ? l * width + i : i * width + l];
+  return out;
+}
+
+/** Writes `values` as line l of a row-major array of the given width (a row, or a column). */
+function putLine(a, l, values, width, byRows) {
+  for (let i = 0; i < values.length; i++) a[byRows ? l * width + i : i * width + l] = values[i];
 }
 
 /** The relevant coefficients of every band (3.0): each level's marks along the rows, then
@@ -437,8 +452,8 @@ function relevance3(mask, rows, cols, p, periodic) {
   let c = cols;
   for (let l = 1; l <= p.levels; l++) {
     const wrap = periodic && c % 2 === 0 && c > 2;
-    const halves = splitRows(current, r, c, (get, n) => relevantAlong(get, n, reach, wrap));
-    const [ll, h, v, d] = splitColumns(halves, r, c, (get, n) => relevantAlong(get, n, reach, false));
+    const halves = splitRows(current, r, c, (x) => relevantAlong(x, reach, wrap));
+    const [ll, h, v, d] = splitColumns(halves, r, c, (x) => relevantAlong(x, reach, false));
     detail.unshift([h, v, d]);
     current = ll;
     r = Math.ceil(r / 2);
@@ -447,17 +462,16 @@ function relevance3(mask, rows, cols, p, periodic) {
   return [current, ...detail.flat()];
 }
 
-/** Applies a one-signal split `fn(get, n) -> [low, high]` to every row of an r x c array:
- * the row-low half (r x ceil(c/2)) and the row-high half (r x floor(c/2)). */
+/** Applies a one-signal split `fn(x) -> [low, high]` to every row of an r x c array: the
+ * row-low half (r x ceil(c/2)) and the row-high half (r x floor(c/2)). */
 function splitRows(a, r, c, fn) {
   const lc = Math.ceil(c / 2);
-  const hc = c - lc;
-  const low = new Float64Array(r * lc);
-  const high = new Float64Array(r * hc);
+  const low = new Uint8Array(r * lc);
+  const high = new Uint8Array(r * (c - lc));
   for (let i = 0; i < r; i++) {
-    const [lo, hi] = fn((j) => a[i * c + j], c);
-    low.set(lo, i * lc);
-    high.set(hi, i * hc);
+    const [lo, hi] = fn(line(a, i, c, c, true));
+    putLine(low, i, lo, lc, true);
+    putLine(high, i, hi, c - lc, true);
   }
   return [low, high];
 }
@@ -465,19 +479,18 @@ function splitRows(a, r, c, fn) {
 /** Applies `fn` down every column of both halves: band 0, H, V, D of the level. */
 function splitColumns([low, high], r, c, fn) {
   const lr = Math.ceil(r / 2);
-  const hr = r - lr;
   const out = [];
   for (const [a, w] of [[low, Math.ceil(c / 2)], [high, Math.floor(c / 2)]]) {
-    const lo = new Float64Array(lr * w);
-    const hi = new Float64Array(hr * w);
+    const lo = new Uint8Array(lr * w);
+    const hi = new Uint8Array((r - lr) * w);
     for (let j = 0; j < w; j++) {
-      const [l, h] = fn((i) => a[i * w + j], r);
-      l.forEach((x, i) => (lo[i * w + j] = x));
-      h.forEach((x, i) => (hi[i * w + j] = x));
+      const [l, h] = fn(line(a, j, r, w, false));
+      putLine(lo, j, l, w, false);
+      putLine(hi, j, h, w, false);
     }
     out.push(lo, hi);
   }
-  return [out[0], out[1], out[2], out[3]];
+  return out;
 }
 
 /** The dequantised bands: q times its band's step, detail steps scaled by the slope factors
@@ -600,35 +613,31 @@ function inverse3(bands, shapes, rows, cols, p, periodic) {
 /** Columns of a low (ceil(r/2) x w) and a high (floor(r/2) x w) half merged into r x w. */
 function mergeColumns(lo, hi, r, w, lift) {
   const lr = Math.ceil(r / 2);
-  const hr = r - lr;
   const out = new Float64Array(r * w);
-  for (let j = 0; j < w; j++) {
-    const s = Float64Array.from({ length: lr }, (_, i) => lo[i * w + j]);
-    const d = Float64Array.from({ length: hr }, (_, i) => hi[i * w + j]);
-    inverseLevel(s, d, r, lift, false).forEach((x, i) => (out[i * w + j] = x));
-  }
+  for (let j = 0; j < w; j++) putLine(out, j, inverseLevel(line(lo, j, lr, w, false), line(hi, j, r - lr, w, false), r, lift, false), w, false);
   return out;
 }
 
 /** One inverse level of an n-sample signal from its low and high coefficients: undo the
- * scales, then the lifting steps from the last to the first; interleave. */
+ * scales, then the lifting steps from the last to the first (a d step reads only s and an
+ * s step only d, so each updates in place as if all k at once); interleave. */
 function inverseLevel(low, high, n, lift, wrap) {
   if (n === 1) return Float64Array.of(low[0] / Math.SQRT2);
-  const s = low.map((x) => x / (Math.SQRT2 / lift.k));
-  const d = high.map((x) => x / (-lift.k / Math.SQRT2));
-  const ns = s.length;
-  const nd = d.length;
-  const sNext = (k) => (k + 1 < ns ? s[k + 1] : wrap ? s[0] : s[ns - 1]);
-  const dPrev = (k) => (k > 0 ? d[k - 1] : wrap ? d[nd - 1] : d[0]);
-  const dAt = (k) => (k < nd ? d[k] : d[nd - 1]);
+  const lowScale = Math.SQRT2 / lift.k;
+  const highScale = -lift.k / Math.SQRT2;
+  const ns = low.length;
+  const nd = high.length;
+  const s = new Float64Array(ns);
+  const d = new Float64Array(nd);
+  for (let k = 0; k < ns; k++) s[k] = low[k] / lowScale;
+  for (let k = 0; k < nd; k++) d[k] = high[k] / highScale;
+  const dBefore = wrap ? nd - 1 : 0;       // the index of d_(-1)
   for (let step = lift.steps.length - 1; step >= 0; step--) {
     const a = lift.steps[step];
     if (step % 2 === 0) {
-      const sums = Array.from({ length: nd }, (_, k) => s[k] + sNext(k));
-      for (let k = 0; k < nd; k++) d[k] -= a * sums[k];
+      for (let k = 0; k < nd; k++) d[k] -= a * (s[k] + (k + 1 < ns ? s[k + 1] : wrap ? s[0] : s[ns - 1]));
     } else {
-      const sums = Array.from({ length: ns }, (_, k) => dPrev(k) + dAt(k));
-      for (let k = 0; k < ns; k++) s[k] -= a * sums[k];
+      for (let k = 0; k < ns; k++) s[k] -= a * ((k > 0 ? d[k - 1] : d[dBefore]) + (k < nd ? d[k] : d[nd - 1]));
     }
   }
   const x = new Float64Array(n);
