@@ -62,6 +62,8 @@ function bandSteps(written, levels) {
 
 const WEIGHT_MANTISSA = [16, 19, 23, 27];
 const TOTAL = 16384;
+const range = (from, to) => Array.from({ length: to - from + 1 }, (_, i) => from + i);
+const SAME_SIZE = [range(4, 14), range(15, 22), range(23, 26)];   // detail, sign and correction tables
 
 /** A reader of the payload: its tables, its rANS state and its raw-bit cursor. */
 class Payload {
@@ -108,6 +110,10 @@ class Payload {
       }
       this.at += nbytes;
       tables.push(frequencyTable(codes));
+    }
+    for (const group of SAME_SIZE) {
+      const sizes = new Set(group.filter((m) => m < tables.length).map((m) => tables[m].freq.length));
+      if (sizes.size > 1) fail("tables", "tables mixed in one row have different class counts");
     }
     return tables;
   }
@@ -178,9 +184,12 @@ class Payload {
     return k === 0 ? 0 : 2 ** (k - 1) + this.bits(k - 1);
   }
 
-  /** Refuses bytes after the last one the raw bits need. */
+  /** Refuses a payload with data left once everything it declares is decoded: bytes after
+   * the last one the raw bits need, or rANS words not consumed (the state is then not 0;
+   * spec/dwt2d.md does not say so, mzc refuses them). */
   finish() {
     if (Math.ceil(this.bitAt / 8) < this.bytes.length) fail("data", "bytes after the end of the payload");
+    if (this.hi || this.lo || this.words.length) fail("data", "rANS words left over after the last symbol");
   }
 }
 

@@ -14,7 +14,20 @@ export const fail = (field, message) => {
 
 const MAX_NODES = 100_000_000;
 const TEXT = new TextDecoder("utf-8", { fatal: true });
+const SPACES = /[\t-\r\x1c-\x20\x85\xa0\u1680\u2000-\u200a\u2028\u2029\u202f\u205f\u3000]+/u;   // Python's str.split()
+const NOT_TOKEN = /[\t-\r\x1c-\x20\x85\xa0\u1680\u2000-\u200a\u2028\u2029\u202f\u205f\u3000\x00-\x1f\x7f]/u;
+const NOT_PRINTABLE = /[\p{C}\p{Z}]/u;   // where Python's str.isprintable() is false (but for " ")
 const NUMBER = /^[+-]?(\d+(_\d+)*\.?(\d+(_\d+)*)?|\.\d+(_\d+)*)([eE][+-]?\d+)?$/;
+
+/** A header word as Python's float() reads a finite decimal (`12`, `-0.25`, `1e-3`, `1_000`),
+ * else NaN; with `underscores` false, as mzc reads a row's numbers (no `_`). */
+export function pythonFloat(word, underscores = true) {
+  if (!NUMBER.test(word) || (!underscores && word.includes("_"))) return NaN;
+  return Number(word.replace(/_/g, ""));
+}
+
+/** A line's words, split as Python's str.split() splits them. */
+export const words = (line) => line.split(SPACES).filter((w) => w !== "");
 
 /** The bytes up to and including the `data` line, split into text lines, and the offset of
  * the body that follows it. */
@@ -50,10 +63,10 @@ export function headerFields(lines, crlf) {
   for (const raw of lines.slice(1, -1)) {
     if (raw.endsWith("\r") && !crlf) fail("data", "header line ends in \\r\\n (a text-mode copy corrupts the payload)");
     const line = raw.replace(/\r$/, "");
-    if (line.trim() === "" || line.startsWith("#")) continue;
-    const words = line.trim().split(/[ \t]+/);
-    if (fields.has(words[0])) fail(words[0], "given twice");
-    fields.set(words[0], words.slice(1));
+    const [keyword, ...values] = words(line);
+    if (keyword === undefined || line.startsWith("#")) continue;
+    if (fields.has(keyword)) fail(keyword, "given twice");
+    fields.set(keyword, values);
   }
   if (lines[lines.length - 1].endsWith("\r") && !crlf) fail("data", "header line ends in \\r\\n");
   return fields;
@@ -61,7 +74,7 @@ export function headerFields(lines, crlf) {
 
 /** A header reader over the fields map: typed accessors that refuse bad values by name. */
 export function fieldReader(fields) {
-  const words = (key, count, required) => {
+  const valuesOf = (key, count, required) => {
     const v = fields.get(key);
     if (v === undefined) {
       if (required) fail(key, "missing");
@@ -71,27 +84,26 @@ export function fieldReader(fields) {
     return v;
   };
   const float = (key, word) => {
-    if (!NUMBER.test(word)) fail(key, `not a number: ${JSON.stringify(word.slice(0, 40))}`);
-    const x = Number(word.replace(/_/g, ""));
-    if (!Number.isFinite(x)) fail(key, `not finite: ${word}`);
+    const x = pythonFloat(word);
+    if (!Number.isFinite(x)) fail(key, `not a finite number: ${JSON.stringify(word.slice(0, 40))}`);
     return x;
   };
   return {
     has: (key) => fields.has(key),
-    words,
+    words: valuesOf,
     floats(key, count, required = true) {
-      const v = words(key, count, required);
+      const v = valuesOf(key, count, required);
       return v && v.map((w) => float(key, w));
     },
     float(key, required = true, low = -Infinity, high = Infinity) {
-      const v = words(key, 1, required);
+      const v = valuesOf(key, 1, required);
       if (!v) return undefined;
       const x = float(key, v[0]);
       if (!(x >= low && x <= high)) fail(key, `${v[0]} is outside ${low} .. ${high}`);
       return x;
     },
     integer(key, low, high, required = true) {
-      const v = words(key, 1, required);
+      const v = valuesOf(key, 1, required);
       if (!v) return undefined;
       if (!/^[+-]?\d+$/.test(v[0])) fail(key, `not an integer: ${v[0]}`);
       const n = Number(v[0]);
@@ -99,7 +111,7 @@ export function fieldReader(fields) {
       return n;
     },
     word(key, choices, required = true) {
-      const v = words(key, 1, required);
+      const v = valuesOf(key, 1, required);
       if (!v) return undefined;
       if (choices && !choices.includes(v[0])) fail(key, `${v[0]} is not one of ${choices.join(", ")}`);
       return v[0];
@@ -111,7 +123,7 @@ export function fieldReader(fields) {
 function token(h, key, fallback) {
   const w = h.word(key, null, false);
   if (w === undefined) return fallback;
-  if ([...w].length > 64 || /[\u0000-\u001f\u007f]/.test(w)) fail(key, "not a token of 1 to 64 printable characters");
+  if ([...w].length > 64 || NOT_TOKEN.test(w)) fail(key, "not a token of 1 to 64 printable characters");
   return w;
 }
 
@@ -169,7 +181,8 @@ function georeference(h, lines, projection) {
   const out = {};
   if (h.has("crs")) {
     const text = h.words("crs").join(" ");
-    if (text.length < 1 || text.length > 16384) fail("crs", "WKT of 1 to 16,384 characters expected");
+    if (text.length < 1 || [...text].length > 16384) fail("crs", "WKT of 1 to 16,384 characters expected");
+    if (NOT_PRINTABLE.test(text.replaceAll(" ", ""))) fail("crs", "the CRS holds a control character");
     out.crs = text;
   }
   if (h.has("raster")) {

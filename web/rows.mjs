@@ -3,7 +3,7 @@
 // polynomial codec's evaluation (spec/poly.md), bit for bit as spec/arithmetic.md promises.
 // The transforms of dft, dct and dwt are in transforms.mjs.
 
-import { fail, headerFields, fieldReader, gridFields, checkChecksum, checkMajor } from "./header.mjs";
+import { fail, headerFields, fieldReader, gridFields, checkChecksum, checkMajor, pythonFloat, words } from "./header.mjs";
 import { dftRow, dctRow, dwtRow, dwtLengths } from "./transforms.mjs";
 
 /** Reads a row codec file of `codec` (ROW_CODECS below) into its grid. */
@@ -25,25 +25,34 @@ function decodeRows(codec, bytes, lines, body, magic) {
   return { ...grid, z };
 }
 
-/** The body's lines (`\r\n` accepted), without trailing blank lines. */
+/** The body's lines as mzc splits them (Python's str.splitlines(): `\n`, `\r\n`, and also a
+ * lone `\r`, `\v`, `\f`, ...), without trailing NUL padding and blank lines. */
 function rowText(body) {
-  const lines = new TextDecoder().decode(body).split("\n").map((l) => l.replace(/\r$/, ""));
-  while (lines.length && lines[lines.length - 1].trim() === "") lines.pop();
+  let end = body.length;
+  while (end && body[end - 1] === 0) end--;
+  let text;
+  try {
+    text = new TextDecoder("utf-8", { fatal: true }).decode(body.subarray(0, end));
+  } catch {
+    fail("data", "data is not UTF-8 text");
+  }
+  const lines = text.split(/\r\n|[\n\r\v\f\x1c-\x1e\x85\u2028\u2029]/u);
+  if (lines[lines.length - 1] === "") lines.pop();
+  while (lines.length && !words(lines[lines.length - 1]).length) lines.pop();
   return lines;
 }
 
 /** Decodes row r's line into z; returns its span [v1, v2] (1-based), or null. */
 function readRow(line, r, grid, options, codec, z) {
-  const words = line.trim().split(/[ \t]+/);
+  const tokens = words(line);
   const where = `row ${r + 1}`;
-  if (words[0] === "0" && words[1] === "0" && words.length === 2) return null;
-  const [v1, v2] = words.slice(0, 2).map(Number);
-  if (words.length < 2 || !Number.isInteger(v1) || !Number.isInteger(v2) || !/^\d+$/.test(words[0]) || !/^\d+$/.test(words[1])
-    || v1 < 1 || v1 > v2 || v2 > grid.cols) {
+  if (tokens[0] === "0" && tokens[1] === "0" && tokens.length === 2) return null;
+  const [v1, v2] = tokens.slice(0, 2).map(Number);
+  if (tokens.length < 2 || !/^\d+$/.test(tokens[0]) || !/^\d+$/.test(tokens[1]) || v1 < 1 || v1 > v2 || v2 > grid.cols) {
     fail("span", `${where}: v1 v2 must be integers with 1 <= v1 <= v2 <= ${grid.cols}`);
   }
-  const numbers = words.slice(2).map((w, i) => {
-    const x = /^[+-]?(\d+\.?\d*|\.\d+)([eE][+-]?\d+)?$/.test(w) ? Number(w) : NaN;
+  const numbers = tokens.slice(2).map((w, i) => {
+    const x = pythonFloat(w, false);
     if (!Number.isFinite(x)) fail("coefficients", `${where}: number ${i + 1} is ${JSON.stringify(w)}: coefficients must be finite`);
     return x;
   });
@@ -58,13 +67,13 @@ function readRow(line, r, grid, options, codec, z) {
 /** The optional `holes K` section: K lines `r s1 e1 [s2 e2 ...]` setting runs invalid. */
 function applyHoles(lines, spans, grid, z) {
   if (!lines.length) return;
-  const head = lines[0].trim().split(/[ \t]+/);
+  const head = words(lines[0]);
   if (head[0] !== "holes" || head.length !== 2 || !/^\d+$/.test(head[1])) fail("holes", "expected 'holes COUNT' after the row lines");
   if (Number(head[1]) !== lines.length - 1) fail("holes", `says ${head[1]} hole line(s) but ${lines.length - 1} follow`);
   for (const line of lines.slice(1)) {
-    const words = line.trim().split(/[ \t]+/);
-    if (!words.every((w) => /^\d+$/.test(w))) fail("holes", "hole lines hold integers 'row start end ...'");
-    const [r, ...runs] = words.map(Number);
+    const tokens = words(line);
+    if (!tokens.every((w) => /^\d+$/.test(w))) fail("holes", "hole lines hold integers 'row start end ...'");
+    const [r, ...runs] = tokens.map(Number);
     if (r < 1 || r > grid.rows || runs.length < 2 || runs.length % 2) fail("holes", "expected 'row start end [start end ...]' with a row in 1..rows");
     const span = spans[r - 1];
     for (let i = 0, last = span ? span[0] : Infinity; i < runs.length; i += 2) {
