@@ -329,22 +329,23 @@ function decodeDetail(payload, q, b, shapes, relevant, p) {
     return q[parent][Math.min(r >> 1, ps.rows - 1) * ps.cols + Math.min(c >> 1, ps.cols - 1)];
   };
   const [wa, wp, wt] = SIGN_WEIGHTS[shape.orient];
+  const context = new Int8Array(cols);   // each column's context in the pass, -1 if not coded
   for (let r = 0; r < rows; r++) {
     for (const odd of [0, 1]) {
-      const byContext = Array.from({ length: 11 }, () => []);
+      context.fill(-1);
       for (let c = odd; c < cols; c += 2) {
         if (!relevant[b][r * cols + c]) continue;
         let a = parent > 0 ? Math.abs(parentAt(r, c)) * ratio : 0;
         for (const e of earlier) a += at(q[e], shapes[e], r, c);
         a += at(out, shape, r - 1, c) + (at(out, shape, r - 1, c - 1) + at(out, shape, r - 1, c + 1) + at(out, shape, r - 2, c)) / 2;
         if (odd) a += at(out, shape, r, c - 1) + at(out, shape, r, c + 1);
-        let context = 0;
-        while (context < 10 && THRESHOLDS[context] <= a) context++;
-        byContext[context].push(c);
+        let n = 0;
+        while (n < 10 && THRESHOLDS[n] <= a) n++;
+        context[c] = n;
       }
-      byContext.forEach((list, context) => {
-        for (const c of list) out[r * cols + c] = payload.unsigned(4 + context);
-      });
+      for (let n = 0; n <= 10; n++) {
+        for (let c = odd; c < cols; c += 2) if (context[c] === n) out[r * cols + c] = payload.unsigned(4 + n);
+      }
       for (let c = odd; c < cols; c += 2) {
         const i = r * cols + c;
         if (!out[i]) continue;
@@ -421,34 +422,33 @@ const LIFTING = {
   "bior2.2": { steps: [-0.5, 0.25], k: 1, reach: [1, 2] },
 };
 
-/** Marks along one signal x: the low coefficients within reach[0] of a valid sample, the
- * high ones within reach[1] (samples outside the signal ignored, or wrapping when `wrap`). */
-function relevantAlong(x, reach, wrap) {
-  const n = x.length;
-  const near = (centre, d) => {
-    for (let i = centre - d; i <= centre + d; i++) {
-      const j = wrap ? (i + n) % n : i;
-      if (j >= 0 && j < n && x[j]) return 1;
+/** Marks along every row of an r x c array of 0/1: the low coefficients within reach[0]
+ * of a valid sample, the high ones within reach[1] (samples outside the row ignored, or
+ * wrapping round when `wrap`): the row-low (r x ceil(c/2)) and row-high (r x floor(c/2)) marks. */
+function markRows(a, r, c, reach, wrap) {
+  const lc = (c + 1) >> 1;
+  const hc = c >> 1;
+  const low = new Uint8Array(r * lc);
+  const high = new Uint8Array(r * hc);
+  const near = (base, centre, d) => {
+    for (let t = centre - d; t <= centre + d; t++) {
+      const j = wrap ? (t + c) % c : t;
+      if (j >= 0 && j < c && a[base + j]) return 1;
     }
     return 0;
   };
-  const low = new Uint8Array((n + 1) >> 1);
-  const high = new Uint8Array(n >> 1);
-  for (let k = 0; k < low.length; k++) low[k] = near(2 * k, reach[0]);
-  for (let k = 0; k < high.length; k++) high[k] = near(2 * k + 1, reach[1]);
+  for (let i = 0; i < r; i++) {
+    for (let k = 0; k < lc; k++) low[i * lc + k] = near(i * c, 2 * k, reach[0]);
+    for (let k = 0; k < hc; k++) high[i * hc + k] = near(i * c, 2 * k + 1, reach[1]);
+  }
   return [low, high];
 }
 
-/** Line l of an array of `lines` x n values (row-major when `byRows`, else its columns). */
-function line(a, l, n, width, byRows) {
-  const out = new Float64Array(n);
-  for (let i = 0; i < n; i++) out[i] = a[byRows ? l * width + i : i * width + l];
+/** The c x r transpose of an r x c array. */
+function transpose(a, r, c) {
+  const out = new a.constructor(r * c);
+  for (let i = 0; i < r; i++) for (let j = 0; j < c; j++) out[j * r + i] = a[i * c + j];
   return out;
-}
-
-/** Writes `values` as line l of a row-major array of the given width (a row, or a column). */
-function putLine(a, l, values, width, byRows) {
-  for (let i = 0; i < values.length; i++) a[byRows ? l * width + i : i * width + l] = values[i];
 }
 
 /** The relevant coefficients of every band (3.0): each level's marks along the rows, then
@@ -460,46 +460,16 @@ function relevance3(mask, rows, cols, p, periodic) {
   let r = rows;
   let c = cols;
   for (let l = 1; l <= p.levels; l++) {
-    const wrap = periodic && c % 2 === 0 && c > 2;
-    const halves = splitRows(current, r, c, (x) => relevantAlong(x, reach, wrap));
-    const [ll, h, v, d] = splitColumns(halves, r, c, (x) => relevantAlong(x, reach, false));
+    const [rowLow, rowHigh] = markRows(current, r, c, reach, periodic && c % 2 === 0 && c > 2);
+    const down = (x, w) => markRows(transpose(x, r, w), w, r, reach, false).map((m, i) => transpose(m, w, i ? r >> 1 : (r + 1) >> 1));
+    const [ll, h] = down(rowLow, (c + 1) >> 1);
+    const [v, d] = down(rowHigh, c >> 1);
     detail.unshift([h, v, d]);
     current = ll;
-    r = Math.ceil(r / 2);
-    c = Math.ceil(c / 2);
+    r = (r + 1) >> 1;
+    c = (c + 1) >> 1;
   }
   return [current, ...detail.flat()];
-}
-
-/** Applies a one-signal split `fn(x) -> [low, high]` to every row of an r x c array: the
- * row-low half (r x ceil(c/2)) and the row-high half (r x floor(c/2)). */
-function splitRows(a, r, c, fn) {
-  const lc = Math.ceil(c / 2);
-  const low = new Uint8Array(r * lc);
-  const high = new Uint8Array(r * (c - lc));
-  for (let i = 0; i < r; i++) {
-    const [lo, hi] = fn(line(a, i, c, c, true));
-    putLine(low, i, lo, lc, true);
-    putLine(high, i, hi, c - lc, true);
-  }
-  return [low, high];
-}
-
-/** Applies `fn` down every column of both halves: band 0, H, V, D of the level. */
-function splitColumns([low, high], r, c, fn) {
-  const lr = Math.ceil(r / 2);
-  const out = [];
-  for (const [a, w] of [[low, Math.ceil(c / 2)], [high, Math.floor(c / 2)]]) {
-    const lo = new Uint8Array(lr * w);
-    const hi = new Uint8Array((r - lr) * w);
-    for (let j = 0; j < w; j++) {
-      const [l, h] = fn(line(a, j, r, w, false));
-      putLine(lo, j, l, w, false);
-      putLine(hi, j, h, w, false);
-    }
-    out.push(lo, hi);
-  }
-  return out;
 }
 
 /** The dequantised bands: q times its band's step, detail steps scaled by the slope factors
@@ -621,10 +591,12 @@ function inverse3(bands, shapes, rows, cols, p, periodic) {
 
 /** Columns of a low (ceil(r/2) x w) and a high (floor(r/2) x w) half merged into r x w. */
 function mergeColumns(lo, hi, r, w, lift) {
-  const lr = Math.ceil(r / 2);
-  const out = new Float64Array(r * w);
-  for (let j = 0; j < w; j++) putLine(out, j, inverseLevel(line(lo, j, lr, w, false), line(hi, j, r - lr, w, false), r, lift, false), w, false);
-  return out;
+  const lr = (r + 1) >> 1;
+  const low = transpose(lo, lr, w);
+  const high = transpose(hi, r - lr, w);
+  const out = new Float64Array(w * r);
+  for (let j = 0; j < w; j++) out.set(inverseLevel(low.subarray(j * lr, (j + 1) * lr), high.subarray(j * (r - lr), (j + 1) * (r - lr)), r, lift, false), j * r);
+  return transpose(out, w, r);
 }
 
 /** One inverse level of an n-sample signal from its low and high coefficients: undo the
