@@ -16,7 +16,7 @@ export function decodeDwt2d(bytes, lines, body, magic) {
   const fields = headerFields(lines, false);
   const h = fieldReader(fields);
   checkChecksum(bytes, lines, fields, magic.major === 4 || (magic.major === 3 && magic.minor >= 1));
-  const grid = gridFields(h, lines, { projected: magic.major >= 3, georef: magic.major >= 4 || (magic.major === 3 && magic.minor >= 2) });
+  const grid = gridFields(h, { projected: magic.major >= 3, georef: magic.major >= 4 || (magic.major === 3 && magic.minor >= 2) });
   const p = codecFields(h, magic, grid);
   const payload = new Payload(bytes.subarray(body));
   const z = decodeGrid(payload, grid, p);

@@ -14,8 +14,9 @@ export const fail = (field, message) => {
 
 const MAX_NODES = 100_000_000;
 const TEXT = new TextDecoder("utf-8", { fatal: true });
-const SPACES = /[\t-\r\x1c-\x20\x85\xa0\u1680\u2000-\u200a\u2028\u2029\u202f\u205f\u3000]+/u;   // Python's str.split()
-const NOT_TOKEN = /[\t-\r\x1c-\x20\x85\xa0\u1680\u2000-\u200a\u2028\u2029\u202f\u205f\u3000\x00-\x1f\x7f]/u;
+const SPACE = "\\t-\\r\\x1c-\\x20\\x85\\xa0\\u1680\\u2000-\\u200a\\u2028\\u2029\\u202f\\u205f\\u3000";   // Python's str.isspace()
+const SPACES = new RegExp(`[${SPACE}]+`, "u");
+const NOT_TOKEN = new RegExp(`[${SPACE}\\x00-\\x1f\\x7f]`, "u");
 const NOT_PRINTABLE = /[\p{C}\p{Z}]/u;   // where Python's str.isprintable() is false (but for " ")
 const NUMBER = /^[+-]?(\d+(_\d+)*\.?(\d+(_\d+)*)?|\.\d+(_\d+)*)([eE][+-]?\d+)?$/;
 
@@ -129,10 +130,10 @@ function token(h, key, fallback) {
 
 const TWO_PI = 2 * Math.PI;
 
-/** The grid fields of spec/zgrid.md common to every format (rows .. charts' presence),
- * checked as the spec says. `major` and `projectedMajor` decide whether `projection` may
- * appear; `georef` whether `crs` and `raster` are read. */
-export function gridFields(h, lines, { projected, georef }) {
+/** The grid fields of spec/zgrid.md common to every format, checked as the spec says:
+ * `projected` says whether the version may hold a central projection, `georef` whether
+ * its `crs` and `raster` lines are read (older minors ignore them). */
+export function gridFields(h, { projected, georef }) {
   const rows = h.integer("rows", 1, 1_000_000);
   const cols = h.integer("cols", 1, 1_000_000);
   if (rows * cols > MAX_NODES) fail("rows", `${rows} x ${cols} is more than ${MAX_NODES} nodes`);
@@ -162,7 +163,7 @@ export function gridFields(h, lines, { projected, georef }) {
     units: token(h, "units", undefined),
     nodata: token(h, "nodata", "nan"),
   };
-  if (georef) Object.assign(grid, georeference(h, lines, projection));
+  if (georef) Object.assign(grid, georeference(h, projection));
   return grid;
 }
 
@@ -177,7 +178,7 @@ function checkRotation(t) {
 }
 
 /** The `crs` (rest of the line, runs of spaces as one) and `raster` lines of a planar grid. */
-function georeference(h, lines, projection) {
+function georeference(h, projection) {
   const out = {};
   if (h.has("crs")) {
     const text = h.words("crs").join(" ");

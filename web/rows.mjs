@@ -12,7 +12,7 @@ function decodeRows(codec, bytes, lines, body, magic) {
   const fields = headerFields(lines, true);
   const h = fieldReader(fields);
   checkChecksum(bytes, lines, fields, magic.minor >= 1);
-  const grid = gridFields(h, lines, { projected: magic.major === 2, georef: magic.major === 1 && magic.minor >= 2 });
+  const grid = gridFields(h, { projected: magic.major === 2, georef: magic.major === 1 && magic.minor >= 2 });
   const options = codec.options(h);
   const text = rowText(bytes.subarray(body));
   const z = new Float64Array(grid.rows * grid.cols).fill(NaN);
