@@ -13,10 +13,11 @@ import subprocess
 import numpy as np
 import pytest
 
-from codec_contract import FIXTURES, damaged, fixture_bytes, fixture_names, rechecksummed, spec_examples
-from conftest import face_path, run_mzc
 from mzc.errors import MzcError
 from mzc.formats import read_any, zgrid
+
+from codec_contract import FIXTURES, damaged, fixture_bytes, fixture_names, rechecksummed, spec_examples
+from conftest import face_path, run_mzc
 
 WEB = FIXTURES.parents[1] / "web"
 NODE = shutil.which("node")
@@ -71,7 +72,8 @@ DWT2D_TARGETS = (("--rmse", "0.05"), ("--rmse", "0.2"), ("--max-error", "0.2"), 
                  ("--size", "1500"))
 ROW_CODECS = (("--poly", "8"), ("--poly", "12", "--basis", "power"), ("--dct", "-q", "30"), ("--dft", "-q", "30"),
               ("--dwt", "-q", "30"))
-CASES = [(face, ("--dwt2d", *target)) for face in ("f18.ply", "m66.ply") for target in DWT2D_TARGETS]
+CASES: list[tuple[str, tuple[str, ...]]] = [(face, ("--dwt2d", *target)) for face in ("f18.ply", "m66.ply")
+                                             for target in DWT2D_TARGETS]
 CASES += [("f18.ply", codec) for codec in ROW_CODECS]
 
 
@@ -138,7 +140,7 @@ def test_every_worked_example_decodes_as_mzc_decodes_it(tmp_path):
     paths = [tmp_path / name for _, _, name in examples]
     for path, (data, _, _) in zip(paths, examples):
         path.write_bytes(data)
-    for path, (data, _, name), result in zip(paths, examples, node_decode_all(paths)):
+    for (data, _, name), result in zip(examples, node_decode_all(paths)):
         assert "zgrid" in result, (name, result)
         assert_same_zgrid(bytes.fromhex(result["zgrid"]), python_decode(data, name), kind_of(data))
 
