@@ -21,7 +21,7 @@ from conftest import face_path, run_mzc
 
 WEB = FIXTURES.parents[1] / "web"
 NODE = shutil.which("node")
-SUPPORTED = ("dwt2d", "poly", "dft", "dct", "dwt")   # the kinds web/mzc.mjs decodes
+SUPPORTED = ("zgrid", "dwt2d", "poly", "dft", "dct", "dwt")   # the kinds web/mzc.mjs decodes
 TO_1E12 = ("dft", "dct")   # decoded to one part in 10^12, not bit for bit
 
 pytestmark = pytest.mark.skipif(NODE is None, reason="node is not installed")
@@ -133,6 +133,14 @@ def python_decode(data, name):
         return zgrid.write(read_any(data, name), raw="float64")
     except MzcError:
         return None
+
+
+def test_every_expected_zgrid_decodes_as_mzc_decodes_it():
+    """The fixtures' expectations: plain z-grids of every kind of grid (a raw one for charts)."""
+    paths = [FIXTURES / f"{name}.expected.zg" for name in fixture_names()]
+    for path, result in zip(paths, node_decode_all(paths)):
+        assert "zgrid" in result, (path.name, result)
+        assert bytes.fromhex(result["zgrid"]) == python_decode(path.read_bytes(), path.name), path.name
 
 
 def test_every_worked_example_decodes_as_mzc_decodes_it(tmp_path):

@@ -2,13 +2,12 @@
 // payload (tables, rANS, raw bits), mask, relevance, bands, slope factors, inverse
 // transform, correction layer and chart records.
 
-import { fail, headerFields, fieldReader, gridFields, checkChecksum, checkMajor } from "./header.mjs";
+import { fail, headerFields, fieldReader, gridFields, checkChecksum, checkMajor, checkCharts, VIEWS } from "./header.mjs";
 import { cos } from "./elementary.mjs";
 import { inversePeriodized2d, relevantPeriodized2d } from "./pywt.mjs";
 
 const WAVELETS_3 = ["bior4.4", "bior2.2"];
 const WAVELETS_2 = ["bior4.4", "bior2.2", "bior3.3", "db2", "db4", "sym4", "coif1", "haar"];
-const VIEWS = ["+z", "-z", "+x", "-x", "+y", "-y"];
 
 /** Decodes a dwt2d file (bytes; its header lines; the payload's offset; its magic). */
 export function decodeDwt2d(bytes, lines, body, magic) {
@@ -38,9 +37,6 @@ function codecFields(h, magic, grid) {
   const correction = h.float("correction", false, 0) ?? 0;
   if (!v3) h.word("coder", ["rans-signs-2"]);
   const chartCount = magic.major >= 4 ? h.integer("chart_count", 1, 65536, false) : undefined;
-  if (chartCount && (grid.projection !== "planar" || grid.crs !== undefined || grid.raster !== undefined)) {
-    fail("chart_count", "a multi-chart grid is planar, without crs or raster");
-  }
   return { v3, wavelet, levels, steps: bandSteps(written, levels), slopeLimit, correction, chartCount };
 }
 
@@ -395,22 +391,7 @@ function chartRecords(payload, count, grid, z) {
     if (!(view >= 0 && view < 6)) fail("charts", `view number ${view} (0..5)`);
     return { view: VIEWS[view], row0: fields[1][i], col0: fields[2][i], rows: fields[3][i], cols: fields[4][i], i0: fields[5][i], j0: fields[6][i] };
   });
-  const owner = new Int32Array(grid.rows * grid.cols).fill(-1);
-  charts.forEach((c, n) => {
-    if (c.row0 < 0 || c.col0 < 0 || c.rows < 1 || c.cols < 1 || c.row0 + c.rows > grid.rows || c.col0 + c.cols > grid.cols) {
-      fail("charts", `chart ${n + 1} does not lie inside the ${grid.rows} x ${grid.cols} array`);
-    }
-    for (let r = c.row0; r < c.row0 + c.rows; r++) {
-      for (let col = c.col0; col < c.col0 + c.cols; col++) {
-        if (owner[r * grid.cols + col] >= 0) fail("charts", `charts ${owner[r * grid.cols + col] + 1} and ${n + 1} overlap`);
-        owner[r * grid.cols + col] = n;
-      }
-    }
-  });
-  if (grid.origin[0] !== 0 || grid.origin[1] !== 0) fail("origin", "a multi-chart grid's origin is 0 0");
-  z.forEach((v, i) => {
-    if (!Number.isNaN(v) && owner[i] < 0) fail("charts", "a valid node lies outside every chart");
-  });
+  checkCharts(charts, grid, z);
   return charts;
 }
 

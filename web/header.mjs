@@ -199,6 +199,36 @@ function georeference(h, projection) {
 }
 
 // ---------------------------------------------------------------------------------------
+// Charts (spec/zgrid.md, Charts)
+
+/** The chart views in the order of their numbers in a dwt2d file. */
+export const VIEWS = ["+z", "-z", "+x", "-x", "+y", "-y"];
+
+/** Refuses charts that leave the array, overlap, or leave a valid node (z not NaN) outside
+ * them, and a multi-chart grid that is not planar at origin 0 0 without crs and raster. */
+export function checkCharts(charts, grid, z) {
+  if (grid.projection !== "planar" || grid.crs !== undefined || grid.raster !== undefined) {
+    fail("charts", "a multi-chart grid is planar, without crs or raster");
+  }
+  if (grid.origin[0] !== 0 || grid.origin[1] !== 0) fail("origin", "a multi-chart grid's origin is 0 0");
+  const owner = new Int32Array(grid.rows * grid.cols).fill(-1);
+  charts.forEach((c, n) => {
+    if (c.row0 < 0 || c.col0 < 0 || c.rows < 1 || c.cols < 1 || c.row0 + c.rows > grid.rows || c.col0 + c.cols > grid.cols) {
+      fail("charts", `chart ${n + 1} does not lie inside the ${grid.rows} x ${grid.cols} array`);
+    }
+    for (let r = c.row0; r < c.row0 + c.rows; r++) {
+      for (let col = c.col0; col < c.col0 + c.cols; col++) {
+        if (owner[r * grid.cols + col] >= 0) fail("charts", `charts ${owner[r * grid.cols + col] + 1} and ${n + 1} overlap`);
+        owner[r * grid.cols + col] = n;
+      }
+    }
+  });
+  z.forEach((v, i) => {
+    if (!Number.isNaN(v) && owner[i] < 0) fail("charts", "a valid node lies outside every chart");
+  });
+}
+
+// ---------------------------------------------------------------------------------------
 // CRC-32 (spec/zgrid.md, Checksum): zlib's.
 
 const CRC_TABLE = (() => {

@@ -10,11 +10,12 @@
 import { MzcError, fail, parseMagic, splitHeader, writeZgrid, formatNumber } from "./header.mjs";
 import { decodeDwt2d } from "./dwt2d.mjs";
 import { ROW_CODECS } from "./rows.mjs";
+import { decodeZgrid } from "./zgrid.mjs";
 
 export { MzcError, writeZgrid, formatNumber };
 
 /** Each format's decoder by the kind of its magic line. */
-const DECODERS = { dwt2d: decodeDwt2d, ...ROW_CODECS };
+const DECODERS = { dwt2d: decodeDwt2d, zgrid: decodeZgrid, ...ROW_CODECS };
 
 /** Decodes the bytes of an mzc file into its grid; throws MzcError on any bad file. */
 export function decode(bytes) {
@@ -23,5 +24,21 @@ export function decode(bytes) {
   const magic = parseMagic(lines[0]);
   const decoder = DECODERS[magic.kind];
   if (!decoder) fail(null, `mzc-${magic.kind} is not a format this decoder reads`);
-  return { kind: magic.kind, version: `${magic.major}.${magic.minor}`, ...decoder(bytes, lines, body, magic) };
+  const grid = decoder(bytes, lines, body, magic);
+  checkMagnitudes(grid);
+  return { kind: magic.kind, version: `${magic.major}.${magic.minor}`, ...grid };
+}
+
+const MAX_MAGNITUDE = 1e100;
+
+/** Refuses a grid whose origin, transform shift or heights exceed 10^100 in magnitude, as
+ * mzc's readers do (mzc.limits; spec/zgrid.md says only "finite"). */
+function checkMagnitudes(grid) {
+  const t = grid.transform ?? [];
+  const largest = (values, field) => {
+    for (const v of values) if (Math.abs(v) > MAX_MAGNITUDE) fail(field, `${Math.abs(v).toPrecision(3)} is beyond ${MAX_MAGNITUDE} in magnitude`);
+  };
+  largest(grid.origin, "origin");
+  largest([t[3], t[7], t[11]].filter((v) => v !== undefined), "transform");
+  largest(grid.z, "data");
 }
