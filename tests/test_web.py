@@ -75,22 +75,30 @@ ROW_CODECS = (("--poly", "8"), ("--poly", "12", "--basis", "power"), ("--dct", "
 CASES: list[tuple[str, tuple[str, ...]]] = [(face, ("--dwt2d", *target)) for face in ("f18.ply", "m66.ply")
                                              for target in DWT2D_TARGETS]
 CASES += [("f18.ply", codec) for codec in ROW_CODECS]
+CASES += [("blob", ("--dwt2d", "--rmse", "0.05"))]   # a multi-chart grid (mzc-dwt2d 4.0) of a built-in sample
 
 
 @pytest.fixture(scope="module")
 def sliced(tmp_path_factory):
-    """A shared face's grid as mzc slices it, sliced once per face: sliced(name) -> path."""
+    """A surface's grid as mzc slices it, sliced once: sliced(name) -> path; a shared face by its
+    file name, or the sample ``blob`` cut into six charts."""
     paths = {}
 
     def grid(name):
         if name not in paths:
-            paths[name] = tmp_path_factory.mktemp("web") / name.replace(".ply", ".zg")
-            run_mzc("slice", face_path(name), "-o", paths[name], check=True)
+            folder = tmp_path_factory.mktemp("web")
+            paths[name] = folder / f"{name}.zg"
+            if name == "blob":
+                run_mzc("sample", "blob", "-o", folder / "blob.obj", check=True)
+                run_mzc("slice", folder / "blob.obj", "--charts", "6", "-o", paths[name], check=True)
+            else:
+                run_mzc("slice", face_path(name), "-o", paths[name], check=True)
         return paths[name]
     return grid
 
 
-@pytest.mark.parametrize("face, options", CASES, ids=[f"{face[:-4]} {' '.join(options)}" for face, options in CASES])
+@pytest.mark.parametrize("face, options", CASES, ids=[f"{face.removesuffix('.ply')} {' '.join(options)}"
+                                                     for face, options in CASES])
 def test_faces_at_several_targets_decode_as_mzc_decodes_them(sliced, face, options, tmp_path):
     path = tmp_path / "face.mzc"
     run_mzc("encode", *options, sliced(face), "-o", path, check=True)
