@@ -50,6 +50,23 @@ export function splitHeader(bytes) {
   }
 }
 
+/** A text body's lines as mzc splits them (Python's str.splitlines(): `\n`, `\r\n`, and also
+ * a lone `\r`, `\v`, `\f`, ...), without the NUL bytes that may pad its end and trailing
+ * blank lines. */
+export function bodyLines(body) {
+  let end = body.length;
+  while (end && body[end - 1] === 0) end--;
+  let text;
+  try {
+    text = TEXT.decode(body.subarray(0, end));
+  } catch {
+    fail("data", "data is not UTF-8 text");
+  }
+  const lines = text.split(/\r\n|[\n\r\v\f\x1c-\x1e\x85\u2028\u2029]/u);
+  while (lines.length && !words(lines[lines.length - 1]).length) lines.pop();
+  return lines;
+}
+
 /** The kind and version of a magic line `mzc-KIND MAJOR.MINOR`. */
 export function parseMagic(line) {
   const m = /^mzc-([a-z0-9]+) (\d+)\.(\d+)$/.exec(line);

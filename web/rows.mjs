@@ -3,7 +3,7 @@
 // polynomial codec's evaluation (spec/poly.md), bit for bit as spec/arithmetic.md promises.
 // The transforms of dft, dct and dwt are in transforms.mjs.
 
-import { fail, headerFields, fieldReader, gridFields, checkChecksum, checkMajor, pythonFloat, words } from "./header.mjs";
+import { fail, headerFields, fieldReader, gridFields, checkChecksum, checkMajor, pythonFloat, words, bodyLines } from "./header.mjs";
 import { dftRow, dctRow, dwtRow, dwtLengths } from "./transforms.mjs";
 
 /** Reads a row codec file of `codec` (ROW_CODECS below) into its grid. */
@@ -14,7 +14,7 @@ function decodeRows(codec, bytes, lines, body, magic) {
   checkChecksum(bytes, lines, fields, magic.minor >= 1);
   const grid = gridFields(h, { projected: magic.major === 2, georef: magic.major === 1 && magic.minor >= 2 });
   const options = codec.options(h);
-  const text = rowText(bytes.subarray(body));
+  const text = bodyLines(bytes.subarray(body));
   const z = new Float64Array(grid.rows * grid.cols).fill(NaN);
   const spans = [];
   for (let r = 0; r < grid.rows; r++) {
@@ -23,23 +23,6 @@ function decodeRows(codec, bytes, lines, body, magic) {
   }
   applyHoles(text.slice(grid.rows), spans, grid, z);
   return { ...grid, z };
-}
-
-/** The body's lines as mzc splits them (Python's str.splitlines(): `\n`, `\r\n`, and also a
- * lone `\r`, `\v`, `\f`, ...), without trailing NUL padding and blank lines. */
-function rowText(body) {
-  let end = body.length;
-  while (end && body[end - 1] === 0) end--;
-  let text;
-  try {
-    text = new TextDecoder("utf-8", { fatal: true }).decode(body.subarray(0, end));
-  } catch {
-    fail("data", "data is not UTF-8 text");
-  }
-  const lines = text.split(/\r\n|[\n\r\v\f\x1c-\x1e\x85\u2028\u2029]/u);
-  if (lines[lines.length - 1] === "") lines.pop();
-  while (lines.length && !words(lines[lines.length - 1]).length) lines.pop();
-  return lines;
 }
 
 /** Decodes row r's line into z; returns its span [v1, v2] (1-based), or null. */

@@ -1,7 +1,7 @@
 // The z-grid itself (spec/zgrid.md): `mzc decode` reads it as any grid and writes it again,
 // so decode() reads its plain (1.x, 2.x) and raw (3.x, 4.0) bodies too.
 
-import { fail, headerFields, fieldReader, gridFields, checkChecksum, checkMajor, checkCharts, VIEWS, words } from "./header.mjs";
+import { fail, headerFields, fieldReader, gridFields, checkChecksum, checkMajor, checkCharts, VIEWS, words, bodyLines } from "./header.mjs";
 
 const NUMBER = /^[+-]?(\d+\.?\d*|\.\d+)([eE][+-]?\d+)?$/;
 const SAMPLES = { float64: 8, float32: 4 };
@@ -50,19 +50,9 @@ function rawBody(h, body, grid) {
 }
 
 /** The values of a plain body: `rows` lines of `cols` numbers, the `nodata` token or a
- * `nan` (any case) marking an invalid node; lines split as mzc splits them (splitlines). */
+ * `nan` (any case) marking an invalid node. */
 function plainBody(body, grid) {
-  let end = body.length;
-  while (end && body[end - 1] === 0) end--;
-  let text;
-  try {
-    text = new TextDecoder("utf-8", { fatal: true }).decode(body.subarray(0, end));
-  } catch {
-    fail("data", "data is not UTF-8 text");
-  }
-  const lines = text.split(/\r\n|[\n\r\v\f\x1c-\x1e\x85\u2028\u2029]/u);
-  if (lines[lines.length - 1] === "") lines.pop();
-  while (lines.length && !words(lines[lines.length - 1]).length) lines.pop();
+  const lines = bodyLines(body);
   if (lines.length !== grid.rows) fail("data", `header says rows ${grid.rows} but the data has ${lines.length} row line(s)`);
   const z = new Float64Array(grid.rows * grid.cols);
   lines.forEach((line, r) => {
