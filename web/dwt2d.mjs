@@ -2,7 +2,7 @@
 // payload (tables, rANS, raw bits), mask, relevance, bands, slope factors, inverse
 // transform, correction layer and chart records.
 
-import { fail, headerFields, fieldReader, gridFields, checkChecksum, checkMajor, checkCharts, VIEWS } from "./header.mjs";
+import { fail, headerFields, fieldReader, gridFields, checkChecksum, checkCharts, VIEWS } from "./header.mjs";
 import { cos } from "./elementary.mjs";
 import { inversePeriodized2d, relevantPeriodized2d } from "./pywt.mjs";
 
@@ -11,7 +11,6 @@ const WAVELETS_2 = ["bior4.4", "bior2.2", "bior3.3", "db2", "db4", "sym4", "coif
 
 /** Decodes a dwt2d file (bytes; its header lines; the payload's offset; its magic). */
 export function decodeDwt2d(bytes, lines, body, magic) {
-  checkMajor(magic, 2, 4);
   const fields = headerFields(lines, false);
   const h = fieldReader(fields);
   checkChecksum(bytes, lines, fields, magic.major === 4 || (magic.major === 3 && magic.minor >= 1));

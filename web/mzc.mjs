@@ -7,7 +7,7 @@
 // decode() reads the formats of DECODERS below. Every bad file throws an MzcError with one
 // line of text; nothing is returned half decoded.
 
-import { MzcError, fail, parseMagic, splitHeader, writeZgrid, formatNumber } from "./header.mjs";
+import { MzcError, fail, parseMagic, splitHeader, writeZgrid, formatNumber, checkMajor } from "./header.mjs";
 import { decodeDwt2d } from "./dwt2d.mjs";
 import { ROW_CODECS } from "./rows.mjs";
 import { decodeZgrid } from "./zgrid.mjs";
@@ -17,6 +17,9 @@ export { MzcError, writeZgrid, formatNumber };
 /** Each format's decoder by the kind of its magic line. */
 const DECODERS = { dwt2d: decodeDwt2d, zgrid: decodeZgrid, ...ROW_CODECS };
 
+/** The major versions read of each kind, [oldest, newest] (tests/test_web.py asks for them). */
+export const READS = { dwt2d: [2, 4], zgrid: [1, 4], poly: [1, 2], dft: [1, 2], dct: [1, 2], dwt: [1, 2] };
+
 /** Decodes the bytes of an mzc file into its grid; throws MzcError on any bad file. */
 export function decode(bytes) {
   if (!(bytes instanceof Uint8Array)) bytes = new Uint8Array(bytes);
@@ -24,6 +27,7 @@ export function decode(bytes) {
   const magic = parseMagic(lines[0]);
   const decoder = DECODERS[magic.kind];
   if (!decoder) fail(null, `mzc-${magic.kind} is not a format this decoder reads`);
+  checkMajor(magic, ...READS[magic.kind]);
   const grid = decoder(bytes, lines, body, magic);
   checkMagnitudes(grid);
   return { kind: magic.kind, version: `${magic.major}.${magic.minor}`, ...grid };

@@ -3,12 +3,11 @@
 // polynomial codec's evaluation (spec/poly.md), bit for bit as spec/arithmetic.md promises.
 // The transforms of dft, dct and dwt are in transforms.mjs.
 
-import { fail, headerFields, fieldReader, gridFields, checkChecksum, checkMajor, pythonFloat, words, bodyLines } from "./header.mjs";
+import { fail, headerFields, fieldReader, gridFields, checkChecksum, pythonFloat, words, bodyLines } from "./header.mjs";
 import { dftRow, dctRow, dwtRow, dwtLengths } from "./transforms.mjs";
 
 /** Reads a row codec file of `codec` (ROW_CODECS below) into its grid. */
 function decodeRows(codec, bytes, lines, body, magic) {
-  checkMajor(magic, 1, 2);
   const fields = headerFields(lines, true);
   const h = fieldReader(fields);
   checkChecksum(bytes, lines, fields, magic.minor >= 1);

@@ -1,14 +1,13 @@
 // The z-grid itself (spec/zgrid.md): `mzc decode` reads it as any grid and writes it again,
 // so decode() reads its plain (1.x, 2.x) and raw (3.x, 4.0) bodies too.
 
-import { fail, headerFields, fieldReader, gridFields, checkChecksum, checkMajor, checkCharts, VIEWS, words, bodyLines } from "./header.mjs";
+import { fail, headerFields, fieldReader, gridFields, checkChecksum, checkCharts, VIEWS, words, bodyLines } from "./header.mjs";
 
 const NUMBER = /^[+-]?(\d+\.?\d*|\.\d+)([eE][+-]?\d+)?$/;
 const SAMPLES = { float64: 8, float32: 4 };
 
 /** Decodes a z-grid file (bytes; its header lines; the body's offset; its magic). */
 export function decodeZgrid(bytes, lines, body, magic) {
-  checkMajor(magic, 1, 4);
   const raw = magic.major >= 3;
   const fields = headerFields(lines, !raw);
   const h = fieldReader(fields);
