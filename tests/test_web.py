@@ -13,9 +13,11 @@ import subprocess
 import numpy as np
 import pytest
 
+from mzc.codecs import dwt2d
 from mzc.errors import MzcError
 from mzc.formats import read_any, zgrid
 from mzc.formats.header import split_magic
+from mzc.grid import ZGrid
 
 from codec_contract import FIXTURES, damaged, fixture_bytes, fixture_names, rechecksummed, spec_examples
 from conftest import face_path, run_mzc
@@ -209,6 +211,23 @@ def known_divergence(result):
     """A file mzc decodes where the spec refuses it: a chart's view number below 0, which mzc
     reads as a Python index from the end (mzc.codecs.dwt2d.decode_charts checks only >= 6)."""
     return "view number -" in result.get("refused", "")
+
+
+def test_narrow_and_small_grids_decode_as_mzc_decodes_them(tmp_path):
+    """Grids of one or two columns or rows at one and two levels (a tiled file's last tiles):
+    bands of one node, or of none, along an axis."""
+    rng = np.random.default_rng(34)
+    paths, expected = [], []
+    for rows, cols in [(4, 1), (1, 4), (3, 1), (5, 1), (8, 1), (4, 2), (2, 4), (5, 2), (1, 1), (2, 2)]:
+        for level in (1, 2):
+            grid = ZGrid(np.round(10 + rng.normal(0, 1, (rows, cols)), 3), d1=1.5, d2=2)
+            data = dwt2d.write(grid, max_error=0.05, level=level, slope_limit=2)
+            paths.append(tmp_path / f"{rows}x{cols}-{level}.mzw2")
+            paths[-1].write_bytes(data)
+            expected.append(python_decode(data, paths[-1].name))
+    for path, want, result in zip(paths, expected, node_decode_all(paths)):
+        assert "zgrid" in result, (path.name, result)
+        assert bytes.fromhex(result["zgrid"]) == want, path.name
 
 
 @pytest.mark.parametrize("name", web_fixtures())

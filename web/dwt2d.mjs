@@ -1,8 +1,8 @@
-// The 2D wavelet codec `mzc-dwt2d` 2.0, 3.0, 3.1, 3.2 and 4.0 (spec/dwt2d.md): header,
-// payload (tables, rANS, raw bits), mask, relevance, bands, slope factors, inverse
-// transform, correction layer and chart records.
+// The 2D wavelet codec `mzc-dwt2d` 2.0, 3.0, 3.1, 3.2, 4.0, 5.0 (tiles) and 6.0 (rounding)
+// (spec/dwt2d.md): header, payload (tables, rANS, raw bits), mask, relevance, bands, slope
+// factors, inverse transform, correction layer, chart records, rounding and tiles.
 
-import { fail, headerFields, fieldReader, gridFields, checkChecksum, checkCharts, VIEWS } from "./header.mjs";
+import { fail, headerFields, fieldReader, gridFields, checkChecksum, checkCharts, VIEWS, crc32, splitHeader, parseMagic } from "./header.mjs";
 import { cos } from "./elementary.mjs";
 import { inversePeriodized2d, relevantPeriodized2d } from "./pywt.mjs";
 
@@ -11,16 +11,91 @@ const WAVELETS_2 = ["bior4.4", "bior2.2", "bior3.3", "db2", "db4", "sym4", "coif
 
 /** Decodes a dwt2d file (bytes; its header lines; the payload's offset; its magic). */
 export function decodeDwt2d(bytes, lines, body, magic) {
+  if (magic.major === 5) return decodeTiled(bytes, lines, body);
   const fields = headerFields(lines, false);
   const h = fieldReader(fields);
-  checkChecksum(bytes, lines, fields, magic.major === 4 || (magic.major === 3 && magic.minor >= 1));
-  const grid = gridFields(h, { projected: magic.major >= 3, georef: magic.major >= 4 || (magic.major === 3 && magic.minor >= 2) });
+  checkChecksum(bytes, lines, fields, magic.major >= 4 || (magic.major === 3 && magic.minor >= 1));
+  const georef = magic.major === 6 || (magic.major === 3 && magic.minor >= 2);
+  const grid = gridFields(h, { projected: magic.major >= 3, georef });
   const p = codecFields(h, magic, grid);
   const payload = new Payload(bytes.subarray(body));
   const z = decodeGrid(payload, grid, p);
   const charts = p.chartCount ? chartRecords(payload, p.chartCount, grid, z) : undefined;
   payload.finish();
+  if (p.rounding) roundToSamples(z, grid);
   return { ...grid, z, charts };
+}
+
+const SAMPLE_RANGES = { uint8: [0, 255], int8: [-128, 127], uint16: [0, 65535], int16: [-32768, 32767],
+  uint32: [0, 4294967295], int32: [-2147483648, 2147483647] };
+
+/** 6.0's `rounding integer` (Rounding): each valid value to the nearest integer, ties to even,
+ * then held to the range of the `raster` line's integer sample type. */
+function roundToSamples(z, grid) {
+  const range = grid.raster && SAMPLE_RANGES[grid.raster[2]];
+  if (!range) fail("rounding", "rounding integer needs a raster line of an integer sample type");
+  for (let i = 0; i < z.length; i++) {
+    if (Number.isNaN(z[i])) continue;
+    const r = Math.abs(z[i] % 1) === 0.5 ? 2 * Math.round(z[i] / 2) : Math.round(z[i]);
+    z[i] = Math.min(Math.max(r, range[0]), range[1]);
+  }
+}
+
+// ---------------------------------------------------------------------------------------
+// Tiled files (5.0): a header, an index of the tiles' lengths, and tiles that are 3.x files
+
+/** Decodes a 5.0 file: checks its header's checksum and lines, the index and its CRC-32, then
+ * decodes every tile as a 3.x file and puts its values in their place. */
+function decodeTiled(bytes, lines, body) {
+  const fields = headerFields(lines, false);
+  const h = fieldReader(fields);
+  checkChecksum(bytes, lines, fields, true, body);
+  const grid = gridFields(h, { projected: true, georef: true });
+  const T = h.integer("tile", 4, 4096);
+  const [NR, NC] = h.words("tiles", 2).map((w) => (/^\d+$/.test(w) ? Number(w) : fail("tiles", `not an integer: ${w}`)));
+  if (NR !== Math.ceil(grid.rows / T) || NC !== Math.ceil(grid.cols / T) || NR * NC > 4194304) {
+    fail("tiles", `${NR} ${NC} is not ceil(rows / ${T}) and ceil(cols / ${T}), at most 4,194,304 tiles`);
+  }
+  const lengths = tileIndex(bytes, body, NR * NC);
+  const z = new Float64Array(grid.rows * grid.cols);
+  let at = body + 8 * NR * NC + 4;
+  for (let i = 0; i < NR; i++) {
+    for (let j = 0; j < NC; j++) {
+      const tile = decodeTile(bytes.subarray(at, at + lengths[i * NC + j]), grid, T, i, j);
+      for (let r = 0; r < tile.rows; r++) z.set(tile.z.subarray(r * tile.cols, (r + 1) * tile.cols), (i * T + r) * grid.cols + j * T);
+      at += lengths[i * NC + j];
+    }
+  }
+  return { ...grid, z };
+}
+
+/** The index's n lengths (u64 little-endian), its CRC-32 checked, each at least 1 and all
+ * adding up to exactly the bytes after the index. */
+function tileIndex(bytes, body, n) {
+  const end = body + 8 * n + 4;
+  if (end > bytes.length) fail("data", "the file ends inside the tile index");
+  const view = new DataView(bytes.buffer, bytes.byteOffset + body, 8 * n + 4);
+  if (crc32(bytes.subarray(body, end - 4)) !== view.getUint32(8 * n, true)) fail("data", "the tile index's checksum does not match");
+  const lengths = Array.from({ length: n }, (_, k) => view.getUint32(8 * k + 4, true) * 4294967296 + view.getUint32(8 * k, true));
+  if (lengths.some((l) => l < 1)) fail("data", "a tile of no bytes");
+  if (lengths.reduce((a, b) => a + b, 0) !== bytes.length - end) fail("data", "the tiles' lengths do not add up to the bytes after the index");
+  return lengths;
+}
+
+/** Tile (i, j): a whole mzc-dwt2d 3.x file of its block, its lines those the header implies. */
+function decodeTile(bytes, grid, T, i, j) {
+  const { lines, body } = splitHeader(bytes);
+  const magic = parseMagic(lines[0]);
+  if (magic.kind !== "dwt2d" || magic.major !== 3) fail("data", `tile ${i + 1}, ${j + 1} is not an mzc-dwt2d 3.x file`);
+  const tile = decodeDwt2d(bytes, lines, body, magic);
+  const fields = headerFields(lines, false);
+  const origin = [grid.origin[0] + j * T * grid.d2, grid.origin[1] + i * T * grid.d1];
+  const ok = tile.rows === Math.min((i + 1) * T, grid.rows) - i * T && tile.cols === Math.min((j + 1) * T, grid.cols) - j * T
+    && tile.d1 === grid.d1 && tile.d2 === grid.d2 && tile.projection === grid.projection && tile.radius === grid.radius
+    && tile.origin[0] === origin[0] && tile.origin[1] === origin[1]
+    && !["transform", "units", "nodata", "crs", "raster"].some((key) => fields.has(key));
+  if (!ok) fail("data", `tile ${i + 1}, ${j + 1}: its lines do not say the block the header gives it`);
+  return tile;
 }
 
 /** The codec's header lines (spec/dwt2d.md, Header lines) and the steps of every band. */
@@ -36,7 +111,8 @@ function codecFields(h, magic, grid) {
   const correction = h.float("correction", false, 0) ?? 0;
   if (!v3) h.word("coder", ["rans-signs-2"]);
   const chartCount = magic.major >= 4 ? h.integer("chart_count", 1, 65536, false) : undefined;
-  return { v3, wavelet, levels, steps: bandSteps(written, levels), slopeLimit, correction, chartCount };
+  const rounding = magic.major >= 6 && h.word("rounding", ["integer"], false) === "integer";
+  return { v3, wavelet, levels, steps: bandSteps(written, levels), slopeLimit, correction, chartCount, rounding };
 }
 
 /** The step of each of the 1 + 3L bands from the `steps` line's 1, 2 or 1 + 3L values. */
@@ -470,8 +546,8 @@ function slopeFactors(q0, shape, grid, p, periodic) {
   const { rows: R, cols: C } = shape;
   const scale = 2 ** p.levels;
   const A = q0.map((v) => (v * p.steps[0]) / scale);
-  const gy = gradient(A, R, C, R, C, scale * grid.d1, false);
-  const gx = gradient(A, C, 1, R, C, scale * grid.d2, periodic && C > 2);
+  const gy = gradient(A, 0, R, C, scale * grid.d1, false);
+  const gx = gradient(A, 1, R, C, scale * grid.d2, periodic && C > 2);
   const F = p.slopeLimit;
   const g = new Float64Array(R * C);
   for (let i = 0; i < R; i++) {
@@ -487,15 +563,17 @@ function slopeFactors(q0, shape, grid, p, periodic) {
   return g;
 }
 
-/** numpy.gradient of A along one axis (n nodes, `stride` apart; `lines` x `along` the
- * array's shape as rows x cols) with spacing h; central everywhere when `wrap`. */
-function gradient(A, n, stride, R, C, h, wrap) {
+/** numpy.gradient of the R x C array A down its columns (axis 0) or along its rows (axis 1)
+ * with spacing h; 0 along an axis of one node, central everywhere when `wrap`. */
+function gradient(A, axis, R, C, h, wrap) {
   const out = new Float64Array(R * C);
+  const n = axis === 0 ? R : C;
+  const stride = axis === 0 ? C : 1;
+  const lines = axis === 0 ? C : R;
+  const lineStride = axis === 0 ? 1 : C;
   if (n < 2) return out;
-  const other = stride === 1 ? R : C;
-  const otherStride = stride === 1 ? C : 1;
-  for (let o = 0; o < other; o++) {
-    const base = o * otherStride;
+  for (let o = 0; o < lines; o++) {
+    const base = o * lineStride;
     const v = (i) => A[base + i * stride];
     for (let i = 0; i < n; i++) {
       let d;

@@ -265,9 +265,10 @@ export function crc32(...parts) {
   return (c ^ 0xffffffff) >>> 0;
 }
 
-/** Checks the `crc32` line, when present (required when `required`), over the file
- * without that line, before anything after `data` is read. */
-export function checkChecksum(bytes, lines, fields, required) {
+/** Checks the `crc32` line, when present (required when `required`), over the file up to
+ * `end` (all of it, or a tiled file's text header) without that line, before anything after
+ * `data` is read. */
+export function checkChecksum(bytes, lines, fields, required, end = bytes.length) {
   if (!fields.has("crc32")) {
     if (required) fail("crc32", "missing (this version requires a checksum)");
     return;
@@ -276,14 +277,14 @@ export function checkChecksum(bytes, lines, fields, required) {
   if (words.length !== 1 || !/^[0-9a-f]{8}$/.test(words[0])) fail("crc32", "not 8 lowercase hexadecimal digits");
   let start = 0;
   for (const line of lines) {
-    const end = start + new TextEncoder().encode(line).length + 1;
+    const next = start + new TextEncoder().encode(line).length + 1;
     if (/^crc32[ \t]/.test(line)) {
-      if (crc32(bytes.subarray(0, start), bytes.subarray(end)) !== parseInt(words[0], 16)) {
+      if (crc32(bytes.subarray(0, start), bytes.subarray(next, end)) !== parseInt(words[0], 16)) {
         fail("crc32", "checksum mismatch: the file was damaged, cut short or added to");
       }
       return;
     }
-    start = end;
+    start = next;
   }
 }
 
