@@ -65,7 +65,7 @@ def test_error_names_the_line(mzc):
     assert result.stderr.decode().startswith("mzc: <stdin>:9: coefficients:")  # line 9: the second row
 
 
-@pytest.mark.parametrize("arguments", [[], ["--dct", "--dwt"], ["--dct", "--wavelet", "db2"],
+@pytest.mark.parametrize("arguments", [["--rmse", "1", "--size", "10"], ["--dct", "--dwt"], ["--dct", "--wavelet", "db2"],
                                        ["--poly", "3", "-q", "50"], ["--dwt", "-q", "0"]])
 def test_encode_usage_errors(mzc, tmp_path, arguments):
     output = tmp_path / "out"
