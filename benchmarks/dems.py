@@ -39,7 +39,7 @@ import numpy as np  # noqa: E402
 HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE))
 
-from contenders import filled, grid_file, read_grid_file  # noqa: E402
+from contenders import GRID_HEADER, filled, grid_file, read_grid_file  # noqa: E402
 from report import bytes_at, fmt, machine, pareto, terminal_progress, versions  # noqa: E402
 
 PUBLIC = HERE.parent / "tests" / "data" / "public"
@@ -120,26 +120,29 @@ def errors(grid, decoded_z, decoded_valid):
             "mask": bool(np.array_equal(decoded_valid, valid))}
 
 
-def point(grid, contender, setting, encode, decode, repeats=1):
-    """One coded file: bytes, encode and decode seconds and the measured errors."""
+def point(grid, contender, setting, codec, repeats=1):
+    """One coded file of ``codec`` (encode, decode, payload): bytes, the codec's payload bytes
+    (the file without its container's header), encode and decode seconds, the measured errors."""
+    encode, decode, payload = codec
     data, encode_s = timed(encode, repeats)
     (z, valid), decode_s = timed(lambda: decode(data), repeats)
-    return {"contender": contender, "setting": setting, "bytes": len(data), "encode_s": encode_s,
-            "decode_s": decode_s, "valid": errors(grid, z, valid)}
+    return {"contender": contender, "setting": setting, "bytes": len(data), "payload": payload(data),
+            "encode_s": encode_s, "decode_s": decode_s, "valid": errors(grid, z, valid)}
 
 
 # --------------------------------------------------------------------------- contenders
 
 
 def mzc_codec(grid, **options):
-    """(encode, decode) of mzc dwt2d with ``options`` (max_error or rmse)."""
+    """(encode, decode, payload) of mzc dwt2d with ``options`` (max_error or rmse); the payload
+    is the binary part after the text header (mask and coefficients)."""
     import mzc
 
     def decode(data):
         back = mzc.decode(data)
         return back.z, back.valid
 
-    return lambda: mzc.encode(grid, "dwt2d", **options), decode
+    return lambda: mzc.encode(grid, "dwt2d", **options), decode, lambda data: len(data) - header_bytes(data)
 
 
 def header_bytes(data):
@@ -163,8 +166,9 @@ def geotiff_profile(grid):
 
 
 def lerc_geotiff(grid, max_z_error):
-    """(encode, decode) of a north-up GeoTIFF with COMPRESS=LERC, MAX_Z_ERROR, one strip (LERC's
-    whole raster as one blob: its best case on a small DEM), written and read in memory."""
+    """(encode, decode, payload) of a north-up GeoTIFF with COMPRESS=LERC, MAX_Z_ERROR, one strip (LERC's
+    whole raster as one blob: its best case on a small DEM), written and read in memory. The
+    payload is the lerc package's blob of the same values at the same bound."""
     from rasterio.io import MemoryFile
 
     profile = geotiff_profile(grid)
@@ -183,7 +187,7 @@ def lerc_geotiff(grid, max_z_error):
         z = np.flipud(band.astype(np.float64).filled(np.nan))
         return z, np.flipud(~np.ma.getmaskarray(band))
 
-    return encode, decode
+    return encode, decode, lambda data: lerc_blob_bytes(grid, max_z_error)
 
 
 def lerc_blob_bytes(grid, max_z_error):
@@ -198,8 +202,9 @@ def lerc_blob_bytes(grid, max_z_error):
 
 
 def sperr(grid, bound):
-    """(encode, decode) of SPERR's point-wise bound on the filled float64 heights, in
-    contenders.py's container (grid header, mzc's mask coder, SPERR's payload)."""
+    """(encode, decode, payload) of SPERR's point-wise bound on the filled float64 heights, in
+    contenders.py's container (grid header, mzc's mask coder, SPERR's payload); the payload is
+    the mask and SPERR's stream, without the binary grid header and the mask's length."""
     import imagecodecs
 
     heights = np.ascontiguousarray(filled(grid))
@@ -212,7 +217,7 @@ def sperr(grid, bound):
         z = imagecodecs.sperr_decode(payload, shape=shell.shape, dtype=np.float64, header=False, numthreads=1)
         return np.where(valid, z, np.nan), valid
 
-    return encode, decode
+    return encode, decode, lambda data: len(data) - GRID_HEADER.size - 4
 
 
 PEER_CODECS = {LERC_TIF: lerc_geotiff, SPERR: sperr}
@@ -223,11 +228,8 @@ PEER_CODECS = {LERC_TIF: lerc_geotiff, SPERR: sperr}
 
 def at_max_error(grid, error):
     """Every contender asked for max error ``error``."""
-    rows = [point(grid, MZC, error, *mzc_codec(grid, max_error=error), repeats=REPEATS)]
-    rows[0]["header_bytes"] = header_bytes(mzc_codec(grid, max_error=error)[0]())
-    rows += [point(grid, name, error, *codec(grid, error), repeats=REPEATS) for name, codec in PEER_CODECS.items()]
-    rows[1]["lerc_blob_bytes"] = lerc_blob_bytes(grid, error)
-    return rows
+    rows = [point(grid, MZC, error, mzc_codec(grid, max_error=error), repeats=REPEATS)]
+    return rows + [point(grid, name, error, codec(grid, error), repeats=REPEATS) for name, codec in PEER_CODECS.items()]
 
 
 def search(grid, name, target):
@@ -238,7 +240,7 @@ def search(grid, name, target):
     probes = []
     for _ in range(SEARCH_STEPS):
         knob = math.sqrt(low * high)
-        probe = point(grid, name, knob, *PEER_CODECS[name](grid, knob))
+        probe = point(grid, name, knob, PEER_CODECS[name](grid, knob))
         probes.append(probe)
         rms = probe["valid"]["rms"]
         if abs(rms / target - 1) <= TOLERANCE:
@@ -251,7 +253,7 @@ def at_rmse(grid, target):
     """mzc at ``rmse=target``, then each peer searched for the RMSE mzc measured (so all compare at
     one measured RMSE, whether mzc landed a little above or below ``target``); each peer's bytes
     there interpolated on the Pareto front of its lossy probes (None outside their range)."""
-    mzc_point = point(grid, MZC, target, *mzc_codec(grid, rmse=target))
+    mzc_point = point(grid, MZC, target, mzc_codec(grid, rmse=target))
     measured = mzc_point["valid"]["rms"]
     peers = {}
     for name in PEER_CODECS:
@@ -259,8 +261,14 @@ def at_rmse(grid, target):
         nearest = min(probes, key=lambda p: abs(math.log(max(p["valid"]["rms"], 1e-12) / measured)))
         lossy = [p for p in probes if p["valid"]["rms"] > 0]
         peers[name] = {"nearest": nearest, "bytes_at_target": bytes_at(pareto(lossy, "valid rms"), measured),
+                       "payload_at_target": bytes_at(pareto(payloads(lossy), "valid rms"), measured),
                        "probes": len(probes)}
     return {"target": target, "measured": measured, "mzc": mzc_point, "peers": peers}
+
+
+def payloads(points):
+    """The points with their payloads as their bytes (for report.pareto and bytes_at)."""
+    return [{**p, "bytes": p["payload"]} for p in points]
 
 
 def measure_dem(name, loader, why, quick, progress):
@@ -283,16 +291,17 @@ def measure_dem(name, loader, why, quick, progress):
 # --------------------------------------------------------------------------- summary
 
 
-def ratios(items):
-    """{"max_error"|"rmse": {peer: [(geometric mean of peer / mzc bytes, DEMs counted) per target
-    rank]}}: the k-th target of each DEM (same E for the integer DEMs) counted together."""
+def ratios(items, size="bytes"):
+    """{"max_error"|"rmse": {peer: [(geometric mean of peer / mzc ``size`` (bytes of the files, or
+    payload), DEMs counted) per target rank]}}: the k-th target of each DEM (the same E for the
+    integer DEMs) counted together."""
     summary = {}
     for kind in ("max_error", "rmse"):
         collected = {peer: {} for peer in PEERS}
         for item in items:
             for rank, row in enumerate(item[kind]):
                 for peer in PEERS:
-                    value = ratio_of(row, peer, kind)
+                    value = ratio_of(row, peer, kind, size)
                     if value is not None:
                         collected[peer].setdefault(rank, []).append(value)
         summary[kind] = {peer: [(float(np.exp(np.mean(np.log(v)))), len(v)) for _, v in sorted(ranks.items())]
@@ -300,13 +309,13 @@ def ratios(items):
     return summary
 
 
-def ratio_of(row, peer, kind):
-    """Peer bytes / mzc bytes at one target (None when the peer's bytes there are unknown)."""
+def ratio_of(row, peer, kind, size="bytes"):
+    """Peer / mzc ``size`` ("bytes" or "payload") at one target (None when the peer's is unknown)."""
     if kind == "max_error":
-        sizes = {p["contender"]: p["bytes"] for p in row["points"]}
+        sizes = {p["contender"]: p[size] for p in row["points"]}
         return sizes[peer] / sizes[MZC]
-    peer_bytes = row["peers"][peer]["bytes_at_target"]
-    return None if peer_bytes is None else peer_bytes / row["mzc"]["bytes"]
+    peer_size = row["peers"][peer][f"{size}_at_target"]
+    return None if peer_size is None else peer_size / row["mzc"][size]
 
 
 # --------------------------------------------------------------------------- report
@@ -371,6 +380,12 @@ def method_section():
         "Pareto front of its lossy probes (`report.bytes_at`), the nearest probe shown. So the ratios compare "
         "files of one measured RMSE. LERC on integer samples moves in whole steps of its bound, so its search "
         "may not land within 2%: its bytes at M are then interpolated between two real files.",
+        "- Integer DEMs at E = 0.5: mzc and LERC are lossless (they code integers); SPERR's floats are within "
+        "0.5, so rounding them would also give the integers back, which SPERR itself does not do. topobathy's "
+        "heights are whole metres stored as float32: LERC notices integer-valued floats and codes them as "
+        "integers (lossless at 0.5, integers at every E), mzc (float32 sample: no rounding) and SPERR do not. "
+        "At RMSE 0.5 m LERC on integer samples has no file between lossless (RMSE 0) and bound 1 (RMSE about "
+        "0.70): n/a there; its bound-1 file is the cheapest that is not lossless.",
         "- Every error is measured here: |decoded - input| over the input's valid cells (max and RMS), from "
         "the decoded arrays; `mask` checks the decoded validity equals the input's; `int` whether every decoded "
         "valid value is an integer.",
@@ -396,74 +411,78 @@ def targets_text(rows):
 
 
 def summary_section(items, summary):
-    lines = ["## Summary: peer bytes / mzc bytes, geometric means over the DEMs", ""]
-    for kind, label, values in (("max_error", "equal max error", "max_error"), ("rmse", "equal vertical RMSE", "rmse")):
+    lines = ["## Summary: peer size / mzc size, geometric means over the DEMs", "",
+             "Files: the bytes as stored (mzc's file, the LERC GeoTIFF, SPERR in its container). Payloads: without "
+             "the containers' headers (mzc's text header with the CRS's WKT, the TIFF's tags and GeoKeys, the "
+             "133-byte grid header): mzc's binary part, the lerc package's blob, SPERR's stream plus mzc's mask "
+             "coding; on these small DEMs the headers are a large share (mzc's 194-511 bytes, most of it the WKT).",
+             ""]
+    for kind, label in (("max_error", "equal max error"), ("rmse", "equal measured vertical RMSE")):
         ranks = max(len(item[kind]) for item in items)
-        heads = [" / ".join(sorted({f"{item[values][k]['target']:g}" for item in items if k < len(item[values])},
+        heads = [" / ".join(sorted({f"{item[kind][k]['target']:g}" for item in items if k < len(item[kind])},
                                    key=float)) + " m" for k in range(ranks)]
-        lines += [f"At {label}:", "", "| peer | " + " | ".join(heads) + " |", "|---" * (ranks + 1) + "|"]
-        for peer, per in summary[kind].items():
-            lines.append(f"| {peer} | " + " | ".join(f"{fmt(g)} ({n} DEMs)" for g, n in per) + " |")
+        lines += [f"At {label}:", "", "| peer | size | " + " | ".join(heads) + " |", "|---" * (ranks + 2) + "|"]
+        for peer in PEERS:
+            for size, name in (("bytes", "files"), ("payload", "payloads")):
+                lines.append(f"| {peer} | {name} | " + " | ".join(f"{fmt(g)} ({n} DEMs)"
+                                                                  for g, n in summary[size][kind][peer]) + " |")
         lines.append("")
     return lines
 
 
 def max_error_section(items):
     lines = ["## Equal max error (bytes; measured max and RMS error in m; encode / decode ms)", "",
-             "| DEM | E m | contender | bytes | peer / mzc | max err | RMSE | int | mask | enc ms | dec ms | note |",
-             "|---|---|---|---|---|---|---|---|---|---|---|---|"]
+             "| DEM | E m | contender | bytes | peer / mzc | payload | peer / mzc | max err | RMSE | int | mask | "
+             "enc ms | dec ms |", "|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
     for item in items:
         for row in item["max_error"]:
-            mzc_bytes = row["points"][0]["bytes"]
+            mzc_point = row["points"][0]
             for p in row["points"]:
-                note = ""
-                if p["contender"] == MZC:
-                    note = f"header {p['header_bytes']} B"
-                elif "lerc_blob_bytes" in p:
-                    note = f"lerc blob {p['lerc_blob_bytes']:,} B"
                 ok = "" if p["valid"]["max"] <= row["target"] * (1 + 1e-9) else " (over E)"
                 lines.append(f"| {item['dem']} | {row['target']:g} | {p['contender']} | {p['bytes']:,} | "
-                             f"{p['bytes'] / mzc_bytes:.2f} | {p['valid']['max']:.4g}{ok} | {p['valid']['rms']:.4g} | "
+                             f"{p['bytes'] / mzc_point['bytes']:.2f} | {p['payload']:,} | "
+                             f"{p['payload'] / mzc_point['payload']:.2f} | {p['valid']['max']:.4g}{ok} | "
+                             f"{p['valid']['rms']:.4g} | "
                              f"{yes(p['valid']['integers'])} | {yes(p['valid']['mask'])} | "
-                             f"{1e3 * p['encode_s']:.1f} | {1e3 * p['decode_s']:.1f} | {note} |")
+                             f"{1e3 * p['encode_s']:.1f} | {1e3 * p['decode_s']:.1f} |")
     return lines + [""]
 
 
 def rmse_section(items):
     lines = ["## Equal vertical RMSE (mzc at rmse=R measures M; each peer's nearest probe and its bytes at M)", "",
-             "| DEM | R m | contender | bytes at M | peer / mzc | nearest probe: knob | bytes | RMSE | max err | "
-             "enc ms | dec ms | probes |", "|---|---|---|---|---|---|---|---|---|---|---|---|"]
+             "| DEM | R m | contender | bytes at M | peer / mzc | payload at M | peer / mzc | nearest probe: knob | "
+             "bytes | RMSE | max err | enc ms | dec ms | probes |", "|---" * 14 + "|"]
     for item in items:
         for row in item["rmse"]:
             m = row["mzc"]
-            lines.append(f"| {item['dem']} | {row['target']:g} | {MZC} | {m['bytes']:,} | 1 | rmse={row['target']:g} | "
+            lines.append(f"| {item['dem']} | {row['target']:g} | {MZC} | {m['bytes']:,} | 1 | {m['payload']:,} | 1 | "
+                         f"rmse={row['target']:g} | "
                          f"{m['bytes']:,} | {m['valid']['rms']:.4g} | {m['valid']['max']:.4g} | "
                          f"{1e3 * m['encode_s']:.1f} | {1e3 * m['decode_s']:.1f} | 1 |")
             for peer, found in row["peers"].items():
-                p, at = found["nearest"], found["bytes_at_target"]
+                p, at, inner = found["nearest"], found["bytes_at_target"], found["payload_at_target"]
                 lines.append(f"| {item['dem']} | {row['target']:g} | {peer} | {fmt_bytes(at)} | "
-                             f"{fmt(None if at is None else at / m['bytes'])} | {p['setting']:.4g} | {p['bytes']:,} | "
+                             f"{fmt(None if at is None else at / m['bytes'])} | {fmt_bytes(inner)} | "
+                             f"{fmt(None if inner is None else inner / m['payload'])} | {p['setting']:.4g} | "
+                             f"{p['bytes']:,} | "
                              f"{p['valid']['rms']:.4g} | {p['valid']['max']:.4g} | {1e3 * p['encode_s']:.1f} | "
                              f"{1e3 * p['decode_s']:.1f} | {found['probes']} |")
     return lines + [""]
 
 
 def verdict_section(items, summary):
-    """Where each peer is smaller than mzc, said plainly."""
-    lines = ["## Where a peer is smaller", ""]
+    """Where each peer is smaller than mzc (its file or its payload), said plainly."""
     wins = []
     for item in items:
-        for row in item["max_error"]:
-            for peer in PEERS:
-                value = ratio_of(row, peer, "max_error")
-                if value < 1:
-                    wins.append(f"- {peer} on {item['dem']} at max error {row['target']:g} m: {value:.2f} of mzc's bytes")
-        for row in item["rmse"]:
-            for peer in PEERS:
-                value = ratio_of(row, peer, "rmse")
-                if value is not None and value < 1:
-                    wins.append(f"- {peer} on {item['dem']} at RMSE {row['target']:g} m: {value:.2f} of mzc's bytes")
-    return lines + (wins or ["- none: mzc dwt2d is the smallest at every target"]) + [""]
+        for kind, label in (("max_error", "max error"), ("rmse", "RMSE")):
+            for row in item[kind]:
+                for peer in PEERS:
+                    files, inner = (ratio_of(row, peer, kind, size) for size in ("bytes", "payload"))
+                    if min(v for v in (files, inner, 1.0) if v is not None) < 1:
+                        wins.append(f"- {peer} on {item['dem']} at {label} {row['target']:g} m: file {fmt(files)}, "
+                                    f"payload {fmt(inner)} of mzc's")
+    return ["## Where a peer is smaller (peer / mzc below 1)", "",
+            *(wins or ["- nowhere: mzc dwt2d is the smallest at every target"]), ""]
 
 
 def yes(flag):
@@ -493,7 +512,7 @@ def main(argv=None):
                 "tolerance": TOLERANCE, "search_steps": SEARCH_STEPS, "repeats": REPEATS}
     items = [measure_dem(name, loader, why, arguments.quick, progress) for name, loader, why in DEMS
              if not arguments.quick or name in QUICK_DEMS]
-    summary = ratios(items)
+    summary = {"bytes": ratios(items), "payload": ratios(items, "payload")}
     settings["wall_s"] = time.perf_counter() - started
     document = {"settings": settings, "machine": machine(), "versions": versions(PACKAGES), "summary": summary,
                 "items": items}

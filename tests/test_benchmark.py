@@ -485,3 +485,47 @@ def test_objects_quick_run_gives_a_verdict_or_a_reason_for_every_figure(objects_
         assert row["ok"] or row["reason"], row   # a miss or an n/a says why
         assert f"| {row['figure']} | {row['item']} |" in text
     assert document["summary"]["mm"]["faces"]["Draco"][0][1] == 1   # the face's 0.05 mm ratio counted
+
+
+# --------------------------------------------------------------------------- the DEM benchmark
+
+DEMS = REPO / "benchmarks" / "dems.py"
+
+
+@pytest.fixture(scope="module")
+def dems_run(tmp_path_factory):
+    """benchmarks/dems.py --quick (the SRTM tile and the float kootenai grid) into a temporary folder."""
+    for package in ("rasterio", "lerc", "imagecodecs"):
+        pytest.importorskip(package)
+    out = tmp_path_factory.mktemp("dems")
+    subprocess.run([sys.executable, str(DEMS), "--quick", "--out", str(out)], check=True, capture_output=True,
+                   timeout=120)
+    return (out / "dems-results.md").read_text(), json.loads((out / "dems-results.json").read_text())
+
+
+def test_dems_every_contender_keeps_the_max_error_it_was_asked_for(dems_run):
+    text, document = dems_run
+    assert text.startswith("# mzc dwt2d beside LERC and SPERR on public DEMs")
+    assert [item["dem"] for item in document["items"]] == ["srtm_blurred_res", "kootenai"]
+    for item in document["items"]:
+        for row in item["max_error"]:
+            assert [p["contender"] for p in row["points"]] == ["mzc dwt2d", "LERC GeoTIFF", "SPERR"]
+            for p in row["points"]:
+                assert p["valid"]["max"] <= row["target"] * (1 + 1e-9) and p["valid"]["mask"], (item["dem"], p)
+                assert 0 < p["payload"] < p["bytes"]
+            mzc, lerc, sperr = (p["valid"]["integers"] for p in row["points"])
+            assert (mzc, lerc, sperr) == ((True, True, False) if item["sample"] == "int16" else (False,) * 3)
+
+
+def test_dems_peers_are_compared_at_the_rmse_mzc_measured(dems_run):
+    _, document = dems_run
+    for item in document["items"]:
+        for row in item["rmse"]:
+            assert row["measured"] == row["mzc"]["valid"]["rms"]
+            assert abs(row["measured"] / row["target"] - 1) < 0.1
+            sperr = row["peers"]["SPERR"]   # SPERR's bound moves its RMSE smoothly: its search lands
+            assert abs(sperr["nearest"]["valid"]["rms"] / row["measured"] - 1) <= 0.02
+    for size in ("bytes", "payload"):
+        for kind in ("max_error", "rmse"):
+            for per in document["summary"][size][kind].values():
+                assert all(g > 0 and n == 2 for g, n in per)
