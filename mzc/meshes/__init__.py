@@ -38,7 +38,9 @@ class Mesh:
     cloud, whose file may give ``normals`` (n, 3) (they tell a slice which side it was seen
     from) and ``classification`` (n,), the ASPRS class of each point of a LAS/LAZ cloud
     (``with_classes``). ``crs`` is the coordinate reference system the file names (a WKT
-    string, or ``EPSG:code``), None when it names none. ``grid`` is the z-grid the mesh was
+    string, or ``EPSG:code``), None when it names none. ``dropped`` names what the file held
+    that mzc does not keep (colours, texture coordinates, a mesh's normals, other properties),
+    so that slicing can say so in one warning rather than lose it without a word. ``grid`` is the z-grid the mesh was
     derived from, when it was (``grid_to_mesh``): ``mzc diff`` compares a grid at its own
     nodes and in its own frame."""
 
@@ -48,6 +50,7 @@ class Mesh:
     grid: ZGrid | None = None
     classification: np.ndarray | None = None
     crs: str | None = None
+    dropped: tuple[str, ...] = ()
 
     def __post_init__(self):
         self.points = real_array(self.points, "points", in_threes("points")).reshape(-1, 3)

@@ -36,7 +36,8 @@ def sniff(data: bytes) -> bool | None:
 def read(data: bytes, source: str) -> Mesh:
     """Read Wavefront OBJ: ``v`` and ``f`` lines in any dialect (v/vt/vn, negative indices,
     polygons, CRLF or CR line ends, continued lines, trailing comments); every other statement (vt, vn, o, g, s,
-    usemtl, l, ...) is ignored. Works on whole byte arrays: no Python loop per vertex or face."""
+    usemtl, l, ...) is read past, and what it held is named in the Mesh's ``dropped``. Works on whole
+    byte arrays: no Python loop per vertex or face."""
     tokens = ObjTokens(unpadded(data))
     binary = tokens.first_nul_line()
     if binary is not None:
@@ -46,7 +47,19 @@ def read(data: bytes, source: str) -> Mesh:
         raise MzcError("no 'v' lines: the OBJ file has no vertices", source=source)
     points = obj_vertices(tokens, vertex_lines, source)
     triangles = obj_triangles(tokens, face_lines, vertex_lines, source)
-    return Mesh(points, triangles)
+    return Mesh(points, triangles, dropped=obj_dropped(tokens, vertex_lines))
+
+
+def obj_dropped(tokens, vertex_lines):
+    """What an OBJ file holds beside its shape, which mzc does not keep: vertex colours (``v x y
+    z r g b``), texture coordinates (``vt``), normals (``vn``: recomputed from the triangles) and
+    materials (``mtllib``: a texture's image)."""
+    coloured = int((np.bincount(np.searchsorted(vertex_lines, tokens.line[tokens.arguments(vertex_lines)]),
+                                minlength=len(vertex_lines)) >= 6).sum())
+    counts = [(coloured, "vertex colours"), (tokens.statements(b"vt"), "texture coordinates (vt)"),
+              (tokens.statements(b"vn"), "normals (vn; recomputed from the triangles)"),
+              (tokens.statements(b"mtllib"), "materials (mtllib)")]
+    return tuple(f"{count:,} {what}" for count, what in counts if count)
 
 
 class ObjTokens:
@@ -88,6 +101,15 @@ class ObjTokens:
         exporters put any bytes in comments (ZBrush a NUL), but a NUL elsewhere means binary data."""
         nul = np.flatnonzero(self.text == 0)
         return int(np.searchsorted(self.physical, nul[0])) + 1 if len(nul) else None
+
+    def statements(self, keyword):
+        """How many lines start with the token ``keyword`` (bytes: ``b"vt"``)."""
+        length = len(keyword)
+        first = self.starts[self.first_on_line & (self.ends - self.starts == length)]
+        if not len(first):
+            return 0
+        words = np.stack([self.text[first + k] for k in range(length)], axis=1)
+        return int((words == np.frombuffer(keyword, dtype=np.uint8)).all(axis=1).sum())
 
     def lines_of(self, keyword):
         """Sorted line indices (0-based) whose first token is the one-letter ``keyword``."""

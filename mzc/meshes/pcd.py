@@ -30,7 +30,7 @@ z-grid.
 """
 
 import re
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -108,7 +108,10 @@ def read(data: bytes, source: str) -> Mesh:
         columns = compressed_columns(header, data, names, source)
     points = np.column_stack([columns[name] for name in ("x", "y", "z")])
     normals = np.column_stack([columns[name] for name in NORMALS]) if NORMALS[0] in columns else None
-    return cloud_or_lattice(header, points, normals, source)
+    mesh = cloud_or_lattice(header, points, normals, source)
+    kept = ("x", "y", "z", *(NORMALS if mesh.normals is not None else ()))
+    others = [name for name in field_names(header) if name not in kept and name != "_"]   # "_": PCL's padding
+    return replace(mesh, dropped=(f"fields {' '.join(others)}",)) if others else mesh
 
 
 def field_names(header):

@@ -307,7 +307,7 @@ def ply_mesh(elements, tables, source):
     them such an element holding records is refused by name: read as a bare cloud, a file
     whose surface lives in an element mzc does not know would be re-triangulated into noise.
     A cloud (no faces, or ``element face 0``) keeps the normals its vertices carry (nx, ny,
-    nz); colours and other vertex properties are read past."""
+    nz); colours and other properties are read past and named in the Mesh's ``dropped``."""
     unknown = [element for element in elements if element.name not in PLY_ELEMENTS and element.count]
     has_surface = any(element.name in ("face", "tristrips") and element.count for element in elements)
     if unknown and not has_surface:
@@ -321,11 +321,35 @@ def ply_mesh(elements, tables, source):
     triangles = ([ply_face_triangles(faces, source)] if faces is not None else []) + \
         ([strip_triangles(strips, source)] if strips is not None else [])
     if sum(len(part) for part in triangles):   # an ``element face 0`` leaves a cloud
-        return Mesh(points, np.concatenate(triangles))
+        return Mesh(points, np.concatenate(triangles), dropped=ply_dropped(elements, ()))
     normals = None
-    if all(isinstance(vertex.get(axis), np.ndarray) for axis in ("nx", "ny", "nz")):
-        normals = np.column_stack([real_array(vertex[axis], axis) for axis in ("nx", "ny", "nz")])
-    return Mesh(points, normals=normals)
+    if all(isinstance(vertex.get(axis), np.ndarray) for axis in NORMALS):
+        normals = np.column_stack([real_array(vertex[axis], axis) for axis in NORMALS])
+    return Mesh(points, normals=normals, dropped=ply_dropped(elements, NORMALS if normals is not None else ()))
+
+
+NORMALS = ("nx", "ny", "nz")
+
+
+def ply_dropped(elements, normals):
+    """What a PLY file holds beside its shape, which mzc does not keep: each element's other
+    properties (colours, a mesh's normals, texture coordinates, ...) and other elements that
+    hold records, by name; ``normals`` are the vertex properties a cloud keeps."""
+    kept = {"vertex": {"x", "y", "z", *normals}, "face": set(FACE_LIST_NAMES), "tristrips": set(FACE_LIST_NAMES)}
+    dropped = []
+    for element in elements:
+        if not element.count:
+            continue
+        names = [name for name, _ in element.properties if name not in kept.get(element.name, ())]
+        if element.name not in kept:
+            dropped.append(f"{element.count:,} {element.name} records")
+        elif names and set(NORMALS) <= set(names) and element.name == "vertex":   # a mesh's: recomputed
+            rest = [name for name in names if name not in NORMALS]
+            dropped.append("vertex normals nx ny nz (recomputed from the triangles)"
+                           + (f"; vertex properties {' '.join(rest)}" if rest else ""))
+        elif names:
+            dropped.append(f"{element.name} properties {' '.join(names)}")
+    return tuple(dropped)
 
 
 def index_lists(tables, element, source):
