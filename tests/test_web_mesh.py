@@ -1,0 +1,143 @@
+"""The browser mesh of web/ (issue 34, second part): `node web/cli.mjs triangulate IN` writes,
+byte for byte, the OBJ `mzc triangulate IN --format obj` writes (the same vertices, bit for bit,
+and the same triangles in the same order) for planar, cylindrical and spherical grids, full
+turns, poles and depth jumps at several angles; a multi-chart grid gives mzc's chart meshes
+before its zipper closes their seams (web/ does not zip). Skipped when node is not installed."""
+
+import shutil
+import subprocess
+
+import numpy as np
+import pytest
+
+from mzc.formats import read_any, zgrid
+from mzc.grid import Chart, ZGrid
+from mzc.meshes import Mesh
+from mzc.meshes.obj import write as obj_bytes
+from mzc.ops.triangulation import CHART_JUMP_ANGLE, GridMesh, grid_to_mesh
+
+from codec_contract import FIXTURES, fixture_bytes, fixture_names
+from conftest import run_mzc
+
+WEB = FIXTURES.parents[1] / "web"
+NODE = shutil.which("node")
+GEOGRAPHIC = ("dwt2d-6.0.mzw2", "zgrid-3.1.zg", "dft-1.2.mzf", "dwt-1.2.mzw")   # lon/lat: web/ refuses them
+TO_1E12 = ("dft", "dct")   # web/ decodes them within an ulp, so their points may differ in the last bits
+
+pytestmark = pytest.mark.skipif(NODE is None, reason="node is not installed")
+
+
+def node_triangulate(path, *options):
+    """`node web/cli.mjs triangulate PATH OPTIONS` as a finished process."""
+    return subprocess.run([NODE, str(WEB / "cli.mjs"), "triangulate", str(path), *map(str, options)], capture_output=True)
+
+
+def unzipped_obj(grid, jump_angle=None):
+    """The OBJ of mzc's mesh of ``grid`` without the zipper's stitches: its charts' meshes one
+    after the other (mzc.ops.triangulation.charted_mesh before zip_charts), or its whole mesh."""
+    if grid.charts is None:
+        return obj_bytes(grid_to_mesh(grid, jump_angle))
+    angle = CHART_JUMP_ANGLE if jump_angle is None else jump_angle
+    meshes = [GridMesh(chart, angle).mesh() for chart in grid.chart_grids()]
+    offsets = np.cumsum([0] + [len(mesh.points) for mesh in meshes])
+    return obj_bytes(Mesh(np.concatenate([mesh.points for mesh in meshes]),
+                          np.concatenate([mesh.triangles + offset for mesh, offset in zip(meshes, offsets)])))
+
+
+def assert_same_mesh(grid, tmp_path, *jump_angles):
+    """web/'s OBJ of ``grid`` (written as a raw z-grid) is mzc's (unzipped) at each jump angle."""
+    path = tmp_path / "grid.zg"
+    path.write_bytes(zgrid.write(grid, raw="float64"))
+    for angle in jump_angles or (None,):
+        made = node_triangulate(path, *(() if angle is None else ("--jump-angle", angle)))
+        assert made.returncode == 0, made.stderr.decode()
+        assert made.stdout == unzipped_obj(grid, angle), f"jump angle {angle}"
+
+
+@pytest.mark.parametrize("name", [n for n in fixture_names() if n not in GEOGRAPHIC and n.split("-")[0] not in TO_1E12])
+def test_fixtures_triangulate_as_mzc_triangulate_does(name, tmp_path):
+    out = tmp_path / "mesh.obj"
+    run_mzc("triangulate", FIXTURES / name, "--format", "obj", "-o", out, check=True)
+    made = node_triangulate(FIXTURES / name)
+    assert made.returncode == 0, made.stderr.decode()
+    assert made.stdout == out.read_bytes()
+
+
+@pytest.mark.parametrize("name", [n for n in fixture_names() if n not in GEOGRAPHIC and n.split("-")[0] in TO_1E12])
+def test_dct_and_dft_grids_as_mzc_decodes_them_triangulate_as_mzc_does(name, tmp_path):
+    assert_same_mesh(read_any(fixture_bytes(name), name), tmp_path)
+
+
+@pytest.mark.parametrize("name", GEOGRAPHIC)
+def test_geographic_grids_are_refused_in_one_line(name):
+    made = node_triangulate(FIXTURES / name)
+    assert made.returncode == 1 and made.stdout == b""
+    assert b"geographic grid" in made.stderr and made.stderr.count(b"\n") == 1
+
+
+def heights(rng, shape, base, spread, holes):
+    """Random values about ``base`` with ``holes`` of them NaN (invalid)."""
+    z = base + rng.normal(0, spread, shape)
+    z.ravel()[rng.choice(z.size, holes, replace=False)] = np.nan
+    return z
+
+
+def test_planar_grids_with_depth_jumps(tmp_path):
+    rng = np.random.default_rng(34)
+    z = heights(rng, (9, 12), 5, 0.3, 10)
+    z[:, 7:] += 60   # a wall: a jump at 3 degrees, not at 0
+    z[4, 2] -= 40
+    transform = np.array([[0, -1, 0, 4.5], [1, 0, 0, -2], [0, 0, 1, 7.25]], dtype=float)
+    assert_same_mesh(ZGrid(z, d1=0.7, d2=1.3, origin=(-3.1, 2.2), transform=transform), tmp_path, None, 0, 10, 89)
+
+
+def test_cylindrical_full_turn_and_part_turn(tmp_path):
+    rng = np.random.default_rng(35)
+    radius = 20.0
+    for cols, span in ((16, 2 * np.pi), (10, np.pi)):
+        z = heights(rng, (7, cols), radius, 0.5, 6)
+        z[3, 5] = 3 * radius   # a spike: jumps across its neighbours
+        assert_same_mesh(ZGrid(z, d1=2.5, d2=span * radius / cols, origin=(0.3, -4), projection="cylindrical",
+                               radius=radius), tmp_path, None, 0, 20)
+
+
+def test_cylindrical_grid_of_one_column_around_the_turn(tmp_path):
+    z = np.full((5, 1), 10.0)
+    assert_same_mesh(ZGrid(z, d1=1, d2=2 * np.pi * 8, projection="cylindrical", radius=8.0), tmp_path)
+
+
+def test_spherical_grids_with_poles_fans_and_holes(tmp_path):
+    rng = np.random.default_rng(36)
+    radius = 50.0
+    for rows, cols in ((7, 10), (13, 300)):   # 300 columns: a pole's mean summed over many points
+        d1 = np.pi * radius / (rows - 1)
+        z = heights(rng, (rows, cols), radius, 1.0, rows)
+        z[0, :3] = np.nan   # a pole row's first nodes invalid: its vertex is the first valid one
+        grid = ZGrid(z, d1=d1, d2=2 * np.pi * radius / cols, origin=(0.1, -np.pi * radius / 2),
+                     projection="spherical", radius=radius,
+                     transform=np.array([[0, 0, 1, 1], [0, 1, 0, -2], [-1, 0, 0, 3]], dtype=float))
+        assert grid.pole_rows()[[0, -1]].all()
+        assert_same_mesh(grid, tmp_path, None, 0, 30)
+
+
+def test_charts_give_mzc_chart_meshes_before_the_zipper(tmp_path):
+    rng = np.random.default_rng(37)
+    z = np.full((10, 14), np.nan)
+    z[0:6, 0:5] = heights(rng, (6, 5), 3, 0.2, 2)
+    z[1:10, 6:14] = heights(rng, (9, 8), -2, 0.2, 3)
+    z[5, 9] = 40   # a step within a chart: a jump at 30 degrees
+    charts = [Chart("+z", 0, 0, 6, 5, -3, 2), Chart("-x", 1, 6, 9, 8, 4, -1)]
+    transform = np.array([[0, -1, 0, 4.5], [1, 0, 0, -2], [0, 0, 1, 7.25]], dtype=float)
+    assert_same_mesh(ZGrid(z, d1=0.5, d2=0.5, transform=transform, charts=charts), tmp_path, None, 0, 5)
+
+
+def test_the_blob_in_six_charts_gives_mzc_vertices_and_chart_triangles(tmp_path):
+    run_mzc("sample", "blob", "-o", tmp_path / "blob.obj", check=True)
+    run_mzc("slice", tmp_path / "blob.obj", "--charts", "6", "-o", tmp_path / "blob.zg", check=True)
+    run_mzc("encode", "--dwt2d", "--rmse", "0.05", tmp_path / "blob.zg", "-o", tmp_path / "blob.mzw2", check=True)
+    run_mzc("triangulate", tmp_path / "blob.mzw2", "--format", "obj", "-o", tmp_path / "zipped.obj", check=True)
+    made = node_triangulate(tmp_path / "blob.mzw2")
+    assert made.stdout == unzipped_obj(read_any((tmp_path / "blob.mzw2").read_bytes(), "blob.mzw2"))
+    zipped = (tmp_path / "zipped.obj").read_bytes()
+    assert zipped.startswith(made.stdout[:made.stdout.index(b"\nf ") + 1])   # the same vertices, bit for bit
+    assert zipped.count(b"\nf ") > made.stdout.count(b"\nf ")   # and mzc's zipper's stitches

@@ -1,0 +1,234 @@
+// The mesh of a decoded grid, as `mzc triangulate` makes it (spec/zgrid.md, Connectivity;
+// mzc/ops/triangulation.py): its valid nodes' points in the input frame, unused nodes
+// dropped, the triangles 1-2-3 of every cell, row by row, then every 2-4-3; the cells
+// between the last column and the first of a full turn; a pole row's valid nodes one vertex
+// at their mean point; no triangle with a depth-jump edge. Binary64 operations in mzc's
+// order, with spec/arithmetic.md's sin and cos, so the points are mzc's bits.
+//
+//   import { triangulate } from "./triangulate.mjs";
+//   const { positions, indices } = triangulate(decode(bytes));   // Float64Array, Uint32Array
+//
+// A multi-chart grid gives each chart's mesh, one after the other, unzipped: mzc's zipper
+// (mzc/ops/zipper.py), which closes the seams between them, is not ported.
+
+import { fail } from "./header.mjs";
+import { cos, sin } from "./elementary.mjs";
+
+export const JUMP_ANGLE = 3;         // degrees: an edge this close to its node line is a depth jump
+export const CHART_JUMP_ANGLE = 30;  // a chart's (its surface faces its lines within 60 degrees)
+const FULL_TURN_TOLERANCE = 1e-9;
+
+/** The columns of each chart view's rotation (spec/zgrid.md, Charts), row by row. */
+const VIEW_AXES = {
+  "+z": [[1, 0, 0], [0, 1, 0], [0, 0, 1]], "-z": [[-1, 0, 0], [0, 1, 0], [0, 0, -1]],
+  "+x": [[0, 0, -1], [0, 1, 0], [1, 0, 0]], "-x": [[0, 0, 1], [0, 1, 0], [-1, 0, 0]],
+  "+y": [[-1, 0, 0], [0, 0, 1], [0, 1, 0]], "-y": [[1, 0, 0], [0, 0, 1], [0, -1, 0]],
+};
+
+/** {positions: Float64Array (n * 3), indices: Uint32Array (m * 3), charts: the chart of each
+ * vertex (multi-chart grids only)}: the mesh of a decoded grid (see the top). `jumpAngle` in
+ * degrees, 0 joining every neighbour; by default 3, or 30 within a chart. */
+export function triangulate(grid, { jumpAngle } = {}) {
+  if (grid.crs && isGeographic(grid.crs)) fail("crs", "a geographic grid (longitude, latitude) is not triangulated here: mzc places it in metres first");
+  if (!grid.charts) return gridMesh(grid, jumpAngle ?? JUMP_ANGLE);
+  const meshes = chartGrids(grid).map((chart) => gridMesh(chart, jumpAngle ?? CHART_JUMP_ANGLE));
+  return joined(meshes);
+}
+
+/** Whether a WKT's first CRS keyword (outside quoted names) is geographic (spec/zgrid.md, Georeferencing). */
+function isGeographic(wkt) {
+  const found = /\b(GEOGCS|GEOGCRS|GEOGRAPHICCRS|GEODCRS|GEODETICCRS|GEOCCS|PROJCS|PROJCRS|PROJECTEDCRS)\s*\[/i.exec(wkt.replace(/"[^"]*"/g, '""'));
+  if (!found) return false;
+  const keyword = found[1].toUpperCase();
+  if (keyword.startsWith("GEOG")) return true;
+  return keyword.startsWith("GEOD") && /\bCS\s*\[\s*ellipsoidal/i.test(wkt.slice(found.index + found[0].length));
+}
+
+/** Each chart of a multi-chart grid as a planar grid of its own: its block, its origin on the
+ * lattice, the grid's transform turned to look along its view (mzc's ZGrid.chart_grids). */
+function chartGrids(grid) {
+  const t = grid.transform ?? [1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0];
+  return grid.charts.map((c) => {
+    const z = new Float64Array(c.rows * c.cols);
+    for (let r = 0; r < c.rows; r++) z.set(grid.z.subarray((c.row0 + r) * grid.cols + c.col0, (c.row0 + r) * grid.cols + c.col0 + c.cols), r * c.cols);
+    const v = VIEW_AXES[c.view];   // v[k]: the k-th axis (a column of the view's rotation)
+    const transform = [];
+    for (let i = 0; i < 3; i++) {
+      for (let j = 0; j < 3; j++) transform.push(t[4 * i] * v[j][0] + t[4 * i + 1] * v[j][1] + t[4 * i + 2] * v[j][2]);
+      transform.push(t[4 * i + 3]);
+    }
+    return { rows: c.rows, cols: c.cols, z, d1: grid.d1, d2: grid.d2, origin: [c.i0 * grid.d2, c.j0 * grid.d1], projection: "planar", transform };
+  });
+}
+
+/** One mesh of several (the charts'), each's vertices after the last's, with the chart of each vertex. */
+function joined(meshes) {
+  const vertices = meshes.reduce((n, m) => n + m.positions.length / 3, 0);
+  const positions = new Float64Array(vertices * 3);
+  const indices = new Uint32Array(meshes.reduce((n, m) => n + m.indices.length, 0));
+  const charts = new Uint32Array(vertices);
+  let point = 0, corner = 0;
+  meshes.forEach((m, chart) => {
+    positions.set(m.positions, point * 3);
+    for (let k = 0; k < m.indices.length; k++) indices[corner + k] = m.indices[k] + point;
+    charts.fill(chart, point, point + m.positions.length / 3);
+    point += m.positions.length / 3;
+    corner += m.indices.length;
+  });
+  return { positions, indices, charts };
+}
+
+/** The mesh of one grid (no charts): its triangles over the node numbers, then the used nodes' points. */
+function gridMesh(grid, jumpAngle) {
+  const shape = Shape.of(grid);
+  const triangles = nodeTriangles(grid, shape, jumps(grid, shape, jumpAngle));
+  const number = new Int32Array(grid.rows * grid.cols).fill(-1);
+  for (const node of triangles) number[node] = 0;
+  let count = 0;
+  for (let node = 0; node < number.length; node++) if (number[node] === 0) number[node] = count++;
+  const indices = Uint32Array.from(triangles, (node) => number[node]);
+  return { positions: points(grid, shape, number, count), indices };
+}
+
+/** What the grid's projection makes of its rows and columns: u and v of each, the rays'
+ * sines and cosines, whether the columns make a full turn and which rows are poles. */
+class Shape {
+  static of(grid) {
+    const s = new Shape();
+    const { rows, cols, d1, d2, origin, projection, radius } = grid;
+    s.planar = projection === "planar";
+    s.us = Float64Array.from({ length: cols }, (_, c) => origin[0] + d2 * c);
+    s.vs = Float64Array.from({ length: rows }, (_, r) => origin[1] + d1 * r);
+    const turn = 2 * Math.PI * radius;
+    s.periodic = !s.planar && Math.abs(cols * d2 - turn) <= FULL_TURN_TOLERANCE * turn;
+    s.pole = s.vs.map((v) => (projection === "spherical" && Math.abs(v) >= 0.5 * Math.PI * radius * (1 - FULL_TURN_TOLERANCE) ? 1 : 0));
+    if (!s.planar) {
+      s.sinA = s.us.map((u) => sin(u / radius));
+      s.cosA = s.us.map((u) => cos(u / radius));
+    }
+    if (projection === "spherical") {
+      s.ring = s.vs.map((v) => cos(v / radius));
+      s.sinE = s.vs.map((v) => sin(v / radius));
+    }
+    s.cells = cols - 1 + (s.periodic ? 1 : 0);
+    return s;
+  }
+}
+
+/** sin^2 of an angle in radians. */
+const squaredSine = (angle) => sin(angle) * sin(angle);
+
+/** The depth-jump test of each edge kind (mzc's EdgeChords and is_jump): a function of an
+ * edge's two values and its lower row that says whether it lies within the jump angle of the
+ * node line through its midpoint, with no square root or division; null for no jumps. */
+function jumps(grid, shape, angle) {
+  if (angle <= 0) return null;
+  const c = cos(angle * (Math.PI / 180));
+  const cosine2 = c * c;
+  const { d1, d2, radius, projection } = grid;
+  const test = (chord) => (a, b, r) => isJump(a, b, chord(r), cosine2);
+  if (projection === "planar") {
+    return { across: test(() => [null, d1 * d1]), along: test(() => [null, d2 * d2]), diagonal: test(() => [null, d1 * d1 + d2 * d2]) };
+  }
+  const turn = 4 * squaredSine(d2 / radius / 2);
+  if (projection === "cylindrical") {
+    return { across: test(() => [0, d1 * d1]), along: test(() => [turn, 0]), diagonal: test(() => [turn, d1 * d1]) };
+  }
+  const tilt = 4 * squaredSine(d1 / radius / 2);
+  const ring = shape.ring;
+  return { across: test(() => [tilt, 0]), along: test((r) => [ring[r] * ring[r] * turn, 0]),
+    diagonal: test((r) => [tilt + ring[r] * ring[r + 1] * turn, 0]) };
+}
+
+/** Whether the edge between values a and b of chord [spread, rise] is a jump (mzc's is_jump:
+ * (b^2 - a^2)^2 > cos^2 |e|^2 4|m|^2, or on planar grids (b - a)^2 > cos^2 |e|^2). */
+function isJump(a, b, [spread, rise], cosine2) {
+  const delta = b - a;
+  if (spread === null) return delta * delta > cosine2 * (delta * delta + rise);
+  const total = b + a;
+  const product = a * b * spread;
+  const lhs = delta * total;
+  return lhs * lhs > cosine2 * (delta * delta + product + rise) * (total * total - product);
+}
+
+/** The triangles over the grid's node numbers, three a triangle: every cell's 1-2-3 where its
+ * corners are valid and no edge is a jump, row by row, then every 2-4-3; a pole row's nodes
+ * made its first valid one, and the triangles this collapses dropped. */
+function nodeTriangles(grid, shape, jump) {
+  const { rows, cols, z } = grid;
+  const pole = Int32Array.from(shape.pole, (p, r) => (p ? firstValid(z, r, cols) : -1));
+  const triangles = [];
+  for (const which of [0, 1]) {
+    for (let r = 0; r + 1 < rows; r++) {
+      for (let c = 0; c < shape.cells; c++) {
+        const corners = cellTriangle(grid, shape, jump, r, c, which);
+        if (!corners) continue;
+        const merged = corners.map((node) => { const p = pole[Math.floor(node / cols)]; return p >= 0 ? p : node; });
+        if (merged[0] !== merged[1] && merged[1] !== merged[2] && merged[0] !== merged[2]) triangles.push(...merged);
+      }
+    }
+  }
+  return triangles;
+}
+
+/** The node number of row r's first valid node, or -1 for none. */
+function firstValid(z, r, cols) {
+  for (let c = 0; c < cols; c++) if (!Number.isNaN(z[r * cols + c])) return r * cols + c;
+  return -1;
+}
+
+/** Triangle 1-2-3 (`which` 0) or 2-4-3 (1) of the cell at row r, column c, as node numbers,
+ * or null where a corner is invalid or an edge a jump (edges within a pole row never are). */
+function cellTriangle(grid, shape, jump, r, c, which) {
+  const { cols, z } = grid;
+  const n1 = r * cols + c, n2 = r * cols + (c + 1) % cols, n3 = n1 + cols, n4 = n2 + cols;
+  const corners = which === 0 ? [n1, n2, n3] : [n2, n4, n3];
+  if (corners.some((n) => Number.isNaN(z[n]))) return null;
+  if (!jump) return corners;
+  const row = which === 0 ? r : r + 1;
+  const along = !shape.pole[row] && jump.along(z[row * cols + c], z[row * cols + (c + 1) % cols], row);
+  const across = which === 0 ? jump.across(z[n1], z[n3], r) : jump.across(z[n2], z[n4], r);
+  return along || across || jump.diagonal(z[n2], z[n3], r) ? null : corners;
+}
+
+/** The input-frame points (n * 3) of the used nodes (`number` >= 0), in node order: a pole
+ * row's vertex at the mean of its valid nodes' points. */
+function points(grid, shape, number, count) {
+  const { rows, cols, z } = grid;
+  const out = new Float64Array(count * 3);
+  for (let r = 0; r < rows; r++) {
+    for (let c = 0; c < cols; c++) {
+      const k = number[r * cols + c];
+      if (k < 0) continue;
+      const p = shape.pole[r] ? poleMean(grid, shape, r) : gridPoint(grid, shape, r, c);
+      inputFrame(grid.transform, p, out, 3 * k);
+    }
+  }
+  return out;
+}
+
+/** The grid-frame point of node (r, c) (spec/zgrid.md, Projections; mzc's point_components). */
+function gridPoint(grid, shape, r, c) {
+  const w = grid.z[r * grid.cols + c];
+  if (shape.planar) return [shape.us[c], shape.vs[r], w];
+  if (grid.projection === "cylindrical") return [w * shape.sinA[c], shape.vs[r], w * shape.cosA[c]];
+  return [w * (shape.ring[r] * shape.sinA[c]), w * shape.sinE[r], w * (shape.ring[r] * shape.cosA[c])];
+}
+
+/** The mean of the grid-frame points of row r's valid nodes (summed in order, then divided). */
+function poleMean(grid, shape, r) {
+  const sum = [0, 0, 0];
+  let n = 0;
+  for (let c = 0; c < grid.cols; c++) {
+    if (Number.isNaN(grid.z[r * grid.cols + c])) continue;
+    gridPoint(grid, shape, r, c).forEach((x, i) => { sum[i] += x; });
+    n++;
+  }
+  return sum.map((x) => x / n);
+}
+
+/** Writes R p + t ([R | t] the grid's transform, row by row; none: the identity) at out[at..]. */
+function inputFrame(t, [x, y, z], out, at) {
+  if (!t) { out[at] = x; out[at + 1] = y; out[at + 2] = z; return; }
+  for (let i = 0; i < 3; i++) out[at + i] = x * t[4 * i] + y * t[4 * i + 1] + z * t[4 * i + 2] + t[4 * i + 3];
+}
