@@ -32,16 +32,21 @@ def node_triangulate(path, *options):
     return subprocess.run([NODE, str(WEB / "cli.mjs"), "triangulate", str(path), *map(str, options)], capture_output=True)
 
 
-def unzipped_obj(grid, jump_angle=None):
-    """The OBJ of mzc's mesh of ``grid`` without the zipper's stitches: its charts' meshes one
-    after the other (mzc.ops.triangulation.charted_mesh before zip_charts), or its whole mesh."""
+def unzipped_mesh(grid, jump_angle=None):
+    """mzc's Mesh of ``grid`` without the zipper's stitches: its charts' meshes one after the
+    other (mzc.ops.triangulation.charted_mesh before zip_charts), or its whole mesh."""
     if grid.charts is None:
-        return obj_bytes(grid_to_mesh(grid, jump_angle))
+        return grid_to_mesh(grid, jump_angle)
     angle = CHART_JUMP_ANGLE if jump_angle is None else jump_angle
     meshes = [GridMesh(chart, angle).mesh() for chart in grid.chart_grids()]
     offsets = np.cumsum([0] + [len(mesh.points) for mesh in meshes])
-    return obj_bytes(Mesh(np.concatenate([mesh.points for mesh in meshes]),
-                          np.concatenate([mesh.triangles + offset for mesh, offset in zip(meshes, offsets)])))
+    return Mesh(np.concatenate([mesh.points for mesh in meshes]),
+                np.concatenate([mesh.triangles + offset for mesh, offset in zip(meshes, offsets)]))
+
+
+def unzipped_obj(grid, jump_angle=None):
+    """The OBJ mzc writes of ``unzipped_mesh``."""
+    return obj_bytes(unzipped_mesh(grid, jump_angle))
 
 
 def assert_same_mesh(grid, tmp_path, *jump_angles):
@@ -141,3 +146,71 @@ def test_the_blob_in_six_charts_gives_mzc_vertices_and_chart_triangles(tmp_path)
     zipped = (tmp_path / "zipped.obj").read_bytes()
     assert zipped.startswith(made.stdout[:made.stdout.index(b"\nf ") + 1])   # the same vertices, bit for bit
     assert zipped.count(b"\nf ") > made.stdout.count(b"\nf ")   # and mzc's zipper's stitches
+
+
+@pytest.fixture(scope="module")
+def with_three(tmp_path_factory):
+    """A folder holding a copy of web/ as web/ and three.js from npm in node_modules (nothing of
+    it committed); skips when npm is missing or cannot install three."""
+    folder = tmp_path_factory.mktemp("three")
+    npm = shutil.which("npm")
+    if npm is None:
+        pytest.skip("npm is not installed")
+    installed = subprocess.run([npm, "install", "--prefix", str(folder), "--no-audit", "--no-fund", "three"],
+                               capture_output=True, timeout=120)
+    if installed.returncode != 0:
+        pytest.skip(f"npm could not install three: {installed.stderr.decode()[-200:]}")
+    shutil.copytree(WEB, folder / "web", ignore=shutil.ignore_patterns("node_modules"))
+    return folder
+
+
+LOADER_SCRIPT = """
+import { readFileSync } from "node:fs";
+import { MZCLoader } from "./web/MZCLoader.mjs";
+const [path, url] = process.argv.slice(2);
+globalThis.ProgressEvent ??= class extends Event {   // a browser's, which three's FileLoader makes
+  constructor(type, init) { super(type); Object.assign(this, init); }
+};
+const parsed = new MZCLoader().parse(readFileSync(path));
+const loaded = await new MZCLoader().loadAsync(url);
+const array = (attribute) => Array.from(attribute.array);
+process.stdout.write(JSON.stringify({ info: parsed.userData.mzc, position: array(parsed.attributes.position),
+  normal: parsed.attributes.normal.count, index: array(parsed.index), loaded: array(loaded.index) }));
+"""
+
+
+@pytest.fixture(scope="module")
+def served():
+    """The fixtures served over HTTP on a free port by Python's http.server: served(name) -> URL."""
+    import functools
+    import http.server
+    import threading
+
+    class Quiet(http.server.SimpleHTTPRequestHandler):
+        def log_message(self, *args):
+            """Logs nothing (the test's output is its own)."""
+
+    handler = functools.partial(Quiet, directory=str(FIXTURES))
+    server = http.server.ThreadingHTTPServer(("127.0.0.1", 0), handler)
+    threading.Thread(target=server.serve_forever, daemon=True).start()
+    yield lambda name: f"http://127.0.0.1:{server.server_address[1]}/{name}"
+    server.shutdown()
+
+
+@pytest.mark.parametrize("name", ["dwt2d-3.0.mzw2", "zgrid-2.0.zg", "dwt2d-4.0.mzw2"])
+def test_three_loader_gives_mzc_mesh_as_a_buffer_geometry(with_three, served, name):
+    import json
+
+    script = with_three / "loader.mjs"
+    script.write_text(LOADER_SCRIPT)
+    run = subprocess.run([NODE, str(script), str(FIXTURES / name), served(name)], capture_output=True, cwd=with_three)
+    assert run.returncode == 0, run.stderr.decode()
+    made = json.loads(run.stdout)
+    grid = read_any(fixture_bytes(name), name)
+    mesh = unzipped_mesh(grid)
+    info = made["info"]
+    assert (info["bytes"], info["rows"], info["cols"]) == (len(fixture_bytes(name)), *grid.z.shape)
+    assert info["nodes"] == np.count_nonzero(np.isfinite(grid.z))
+    assert (info["vertices"], info["triangles"], made["normal"]) == (len(mesh.points), len(mesh.triangles), len(mesh.points))
+    assert np.array_equal(np.float32(made["position"]), mesh.points.astype(np.float32).ravel())
+    assert made["index"] == made["loaded"] == mesh.triangles.ravel().tolist()
