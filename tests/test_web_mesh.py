@@ -179,9 +179,9 @@ process.stdout.write(JSON.stringify({ info: parsed.userData.mzc, position: array
 """
 
 
-@pytest.fixture(scope="module")
-def served():
-    """The fixtures served over HTTP on a free port by Python's http.server: served(name) -> URL."""
+def serving(folder):
+    """Python's http.server serving ``folder`` on a free port of 127.0.0.1, in a thread: (server, URL
+    of the folder); server.shutdown() stops it."""
     import functools
     import http.server
     import threading
@@ -190,10 +190,16 @@ def served():
         def log_message(self, *args):
             """Logs nothing (the test's output is its own)."""
 
-    handler = functools.partial(Quiet, directory=str(FIXTURES))
-    server = http.server.ThreadingHTTPServer(("127.0.0.1", 0), handler)
+    server = http.server.ThreadingHTTPServer(("127.0.0.1", 0), functools.partial(Quiet, directory=str(folder)))
     threading.Thread(target=server.serve_forever, daemon=True).start()
-    yield lambda name: f"http://127.0.0.1:{server.server_address[1]}/{name}"
+    return server, f"http://127.0.0.1:{server.server_address[1]}"
+
+
+@pytest.fixture(scope="module")
+def served():
+    """The fixtures served over HTTP: served(name) -> URL."""
+    server, url = serving(FIXTURES)
+    yield lambda name: f"{url}/{name}"
     server.shutdown()
 
 
@@ -203,7 +209,8 @@ def test_three_loader_gives_mzc_mesh_as_a_buffer_geometry(with_three, served, na
 
     script = with_three / "loader.mjs"
     script.write_text(LOADER_SCRIPT)
-    run = subprocess.run([NODE, str(script), str(FIXTURES / name), served(name)], capture_output=True, cwd=with_three)
+    run = subprocess.run([NODE, str(script), str(FIXTURES / name), served(name)], capture_output=True, cwd=with_three,
+                         timeout=60)
     assert run.returncode == 0, run.stderr.decode()
     made = json.loads(run.stdout)
     grid = read_any(fixture_bytes(name), name)
@@ -214,3 +221,49 @@ def test_three_loader_gives_mzc_mesh_as_a_buffer_geometry(with_three, served, na
     assert (info["vertices"], info["triangles"], made["normal"]) == (len(mesh.points), len(mesh.triangles), len(mesh.points))
     assert np.array_equal(np.float32(made["position"]), mesh.points.astype(np.float32).ravel())
     assert made["index"] == made["loaded"] == mesh.triangles.ravel().tolist()
+
+
+CHROMIUM = shutil.which("chromium") or shutil.which("chromium-browser")
+CDN = "https://cdn.jsdelivr.net/npm/three@0.187.0/"   # viewer.html's import map: served from npm's copy here
+BACKGROUND = (0x20, 0x24, 0x2A)   # viewer.mjs's scene background
+
+
+def chromium(url, *options):
+    """Headless Chromium's output (``--dump-dom``, or a ``--screenshot``) of ``url``, given five
+    seconds of the page's (virtual) time, WebGL in SwiftShader (no GPU)."""
+    run = subprocess.run([CHROMIUM, "--headless=new", "--no-sandbox", "--disable-gpu", "--enable-unsafe-swiftshader",
+                          "--use-angle=swiftshader", "--window-size=800,600", "--virtual-time-budget=5000",
+                          *options, url], capture_output=True, timeout=60)
+    assert run.returncode == 0, run.stderr.decode()[-500:]
+    return run.stdout.decode()
+
+
+@pytest.mark.skipif(CHROMIUM is None, reason="Debian's chromium is not installed (apt-get install chromium)")
+def test_viewer_in_headless_chromium_shows_the_surface_and_its_nodes(with_three, tmp_path):
+    import re
+
+    PIL = pytest.importorskip("PIL.Image")
+    name = "dwt2d-3.0.mzw2"
+    site = with_three / "web"
+    page = (WEB / "viewer.html").read_text()
+    assert CDN in page
+    (site / "viewer.html").write_text(page.replace(CDN, "../node_modules/three/"))
+    shutil.copy(FIXTURES / name, site / name)
+    run_mzc("triangulate", FIXTURES / name, "--format", "ply", "-o", site / "original.ply", check=True)
+    server, url = serving(with_three)
+    try:
+        address = f"{url}/web/viewer.html?file={name}&original=original.ply"
+        dom = chromium(address, "--dump-dom")
+        chromium(address, f"--screenshot={tmp_path / 'shot.png'}")
+    finally:
+        server.shutdown()
+    assert 'data-state="ready"' in dom, dom[-2000:]
+    nodes = re.search(r'<tr id="nodes"><td>nodes</td><td>([0-9,]+)</td>', dom)
+    grid = read_any(fixture_bytes(name), name)
+    assert nodes and int(nodes[1].replace(",", "")) == np.count_nonzero(np.isfinite(grid.z))
+    largest = re.search(r"<td>largest error</td><td>([0-9.e+-]+)( [^<]*)?</td>", dom)
+    assert largest and float(largest[1]) < 1e-4   # its own mesh: float32 positions' rounding
+    shot = np.asarray(PIL.open(tmp_path / "shot.png").convert("RGB"))[:, 330:]   # right of the panel
+    surface = np.any(np.abs(shot.astype(int) - BACKGROUND) > 8, axis=-1)
+    assert surface.mean() > 0.02, "the canvas is blank"
+    assert len(np.unique(shot[surface].reshape(-1, 3) // 8, axis=0)) > 10, "the surface is not lit (one flat colour)"
