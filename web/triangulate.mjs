@@ -29,19 +29,62 @@ const VIEW_AXES = {
  * vertex (multi-chart grids only)}: the mesh of a decoded grid (see the top). `jumpAngle` in
  * degrees, 0 joining every neighbour; by default 3, or 30 within a chart. */
 export function triangulate(grid, { jumpAngle } = {}) {
-  if (grid.crs && isGeographic(grid.crs)) fail("crs", "a geographic grid (longitude, latitude) is not triangulated here: mzc places it in metres first");
-  if (!grid.charts) return gridMesh(grid, jumpAngle ?? JUMP_ANGLE);
+  if (!grid.charts) return gridMesh(metricFrame(grid), jumpAngle ?? JUMP_ANGLE);
   const meshes = chartGrids(grid).map((chart) => gridMesh(chart, jumpAngle ?? CHART_JUMP_ANGLE));
   return joined(meshes);
 }
 
-/** Whether a WKT's first CRS keyword (outside quoted names) is geographic (spec/zgrid.md, Georeferencing). */
+// mzc/georef.py's reading of a WKT: the keywords that open a CRS, by kind, and its ellipsoid and unit.
+const CRS_KINDS = {
+  geographic: ["GEOGCS", "GEOGCRS", "GEOGRAPHICCRS"], projected: ["PROJCS", "PROJCRS", "PROJECTEDCRS"],
+  geodetic: ["GEODCRS", "GEODETICCRS", "GEOCCS"], engineering: ["LOCAL_CS", "ENGCRS", "ENGINEERINGCRS"],
+};
+const FIRST_CRS = new RegExp(`\\b(${Object.values(CRS_KINDS).flat().join("|")})\\s*\\[`, "i");
+const QUOTED = /"(?:[^"]|"")*"/g;
+const ELLIPSOID = /\b(?:SPHEROID|ELLIPSOID)\s*\[\s*"[^"]*"\s*,\s*([-+0-9.eE]+)\s*,\s*([-+0-9.eE]+)/i;
+const ANGLE_UNIT = /\bANGLEUNIT\s*\[\s*"[^"]*"\s*,\s*([-+0-9.eE]+)/i;
+const WKT1_UNIT = /\bUNIT\s*\[\s*"[^"]*"\s*,\s*([-+0-9.eE]+)/i;
+const WGS84 = [6378137, 298.257223563];
+
+/** Whether a WKT's first CRS (outside quoted names) is geographic: x and y longitude and latitude. */
 function isGeographic(wkt) {
-  const found = /\b(GEOGCS|GEOGCRS|GEOGRAPHICCRS|GEODCRS|GEODETICCRS|GEOCCS|PROJCS|PROJCRS|PROJECTEDCRS)\s*\[/i.exec(wkt.replace(/"[^"]*"/g, '""'));
+  const found = FIRST_CRS.exec(wkt.replace(QUOTED, '""'));
   if (!found) return false;
   const keyword = found[1].toUpperCase();
-  if (keyword.startsWith("GEOG")) return true;
-  return keyword.startsWith("GEOD") && /\bCS\s*\[\s*ellipsoidal/i.test(wkt.slice(found.index + found[0].length));
+  if (CRS_KINDS.geographic.includes(keyword)) return true;
+  return keyword !== "GEOCCS" && CRS_KINDS.geodetic.includes(keyword) && /\bCS\s*\[\s*ellipsoidal/i.test(wkt.slice(found.index + found[0].length));
+}
+
+/** A number of a WKT as Python's float reads the regular expressions' matches (NaN: not one). */
+const wktNumber = (text) => (/^[-+]?(\d+\.?\d*|\.\d+)([eE][-+]?\d+)?$/.test(text) ? Number(text) : NaN);
+
+/** [metres per unit of longitude, per unit of latitude] at `latitude` on the WKT's ellipsoid (mzc's metres_per_unit). */
+function metresPerUnit(wkt, latitude) {
+  const ellipsoid = ELLIPSOID.exec(wkt);
+  const numbers = ellipsoid ? [wktNumber(ellipsoid[1]), wktNumber(ellipsoid[2])] : WGS84;
+  const [axis, inverse] = numbers.some(Number.isNaN) ? WGS84 : numbers;
+  const flattening = inverse > 0 ? 1 / inverse : 0;
+  const squared = flattening * (2 - flattening);
+  const found = ANGLE_UNIT.exec(wkt) ?? WKT1_UNIT.exec(wkt);
+  const factor = found ? wktNumber(found[1]) : Math.PI / 180;
+  const unit = factor > 0 && factor < 10 ? factor : Math.PI / 180;
+  const phi = latitude * unit;
+  const sine = sin(phi);
+  const across = 1 - squared * sine * sine;
+  return [axis / Math.sqrt(across) * cos(phi) * unit, axis * (1 - squared) / (across * Math.sqrt(across)) * unit];
+}
+
+/** The grid itself, or a geographic one's nodes in metres of the local equirectangular
+ * projection about its centre, as mzc measures it before it triangulates (mzc's metric_frame). */
+function metricFrame(grid) {
+  if (!grid.crs || !isGeographic(grid.crs)) return grid;
+  if (grid.transform && grid.transform.some((v, i) => v !== [1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0][i])) {
+    fail("transform", "a geographic grid turned by a transform cannot be measured in metres");
+  }
+  const centre = [grid.origin[0] + grid.d2 * (grid.cols - 1) / 2, grid.origin[1] + grid.d1 * (grid.rows - 1) / 2];
+  const [east, north] = metresPerUnit(grid.crs, centre[1]);
+  return { ...grid, d1: grid.d1 * north, d2: grid.d2 * east, crs: undefined,
+    origin: [(grid.origin[0] - centre[0]) * east, (grid.origin[1] - centre[1]) * north] };
 }
 
 /** Each chart of a multi-chart grid as a planar grid of its own: its block, its origin on the
