@@ -129,7 +129,7 @@ function gridMesh(grid, jumpAngle) {
   for (const node of triangles) number[node] = 0;
   let count = 0;
   for (let node = 0; node < number.length; node++) if (number[node] === 0) number[node] = count++;
-  const indices = Uint32Array.from(triangles, (node) => number[node]);
+  const indices = triangles.map((node) => number[node]);
   return { positions: points(grid, shape, number, count), indices };
 }
 
@@ -161,57 +161,64 @@ class Shape {
 /** sin^2 of an angle in radians. */
 const squaredSine = (angle) => sin(angle) * sin(angle);
 
-/** The depth-jump test of each edge kind (mzc's EdgeChords and is_jump): a function of an
- * edge's two values and its lower row that says whether it lies within the jump angle of the
- * node line through its midpoint, with no square root or division; null for no jumps. */
+/** The geometry of each edge kind as mzc's EdgeChords gives it: {across, along, diagonal},
+ * each {spread (per row; null on planar grids), rise}, such that an edge between values a and
+ * b has |e|^2 = (b - a)^2 + a b spread + rise and 4|m|^2 = (a + b)^2 - a b spread; with
+ * cosine2, cos^2 of the jump angle. Null for no jumps (an angle of 0). */
 function jumps(grid, shape, angle) {
   if (angle <= 0) return null;
   const c = cos(angle * (Math.PI / 180));
-  const cosine2 = c * c;
-  const { d1, d2, radius, projection } = grid;
-  const test = (chord) => (a, b, r) => isJump(a, b, chord(r), cosine2);
+  const { d1, d2, radius, projection, rows } = grid;
+  const perRow = (f) => Float64Array.from({ length: rows }, (_, r) => f(r));
+  const kinds = (across, along, diagonal) => ({ cosine2: c * c, across, along, diagonal });
   if (projection === "planar") {
-    return { across: test(() => [null, d1 * d1]), along: test(() => [null, d2 * d2]), diagonal: test(() => [null, d1 * d1 + d2 * d2]) };
+    return kinds({ spread: null, rise: d1 * d1 }, { spread: null, rise: d2 * d2 }, { spread: null, rise: d1 * d1 + d2 * d2 });
   }
   const turn = 4 * squaredSine(d2 / radius / 2);
   if (projection === "cylindrical") {
-    return { across: test(() => [0, d1 * d1]), along: test(() => [turn, 0]), diagonal: test(() => [turn, d1 * d1]) };
+    return kinds({ spread: perRow(() => 0), rise: d1 * d1 }, { spread: perRow(() => turn), rise: 0 },
+      { spread: perRow(() => turn), rise: d1 * d1 });
   }
   const tilt = 4 * squaredSine(d1 / radius / 2);
   const ring = shape.ring;
-  return { across: test(() => [tilt, 0]), along: test((r) => [ring[r] * ring[r] * turn, 0]),
-    diagonal: test((r) => [tilt + ring[r] * ring[r + 1] * turn, 0]) };
+  return kinds({ spread: perRow(() => tilt), rise: 0 }, { spread: perRow((r) => ring[r] * ring[r] * turn), rise: 0 },
+    { spread: perRow((r) => (r + 1 < rows ? tilt + ring[r] * ring[r + 1] * turn : 0)), rise: 0 });
 }
 
-/** Whether the edge between values a and b of chord [spread, rise] is a jump (mzc's is_jump:
- * (b^2 - a^2)^2 > cos^2 |e|^2 4|m|^2, or on planar grids (b - a)^2 > cos^2 |e|^2). */
-function isJump(a, b, [spread, rise], cosine2) {
+/** Whether the edge between values a and b of an edge kind ({spread, rise} of `jumps`) from
+ * row r is a jump (mzc's is_jump: (b^2 - a^2)^2 > cos^2 |e|^2 4|m|^2, or on planar grids
+ * (b - a)^2 > cos^2 |e|^2): no square root or division. */
+function isJump(a, b, { spread, rise }, r, cosine2) {
   const delta = b - a;
   if (spread === null) return delta * delta > cosine2 * (delta * delta + rise);
   const total = b + a;
-  const product = a * b * spread;
+  const product = a * b * spread[r];
   const lhs = delta * total;
   return lhs * lhs > cosine2 * (delta * delta + product + rise) * (total * total - product);
 }
 
-/** The triangles over the grid's node numbers, three a triangle: every cell's 1-2-3 where its
- * corners are valid and no edge is a jump, row by row, then every 2-4-3; a pole row's nodes
- * made its first valid one, and the triangles this collapses dropped. */
+/** The triangles over the grid's node numbers (Uint32Array, three a triangle): every cell's
+ * 1-2-3 where its corners are valid and no edge is a jump, row by row, then every 2-4-3; a
+ * pole row's nodes made its first valid one, and the triangles this collapses dropped. */
 function nodeTriangles(grid, shape, jump) {
   const { rows, cols, z } = grid;
   const pole = Int32Array.from(shape.pole, (p, r) => (p ? firstValid(z, r, cols) : -1));
-  const triangles = [];
+  const merged = (node) => { const p = pole[(node / cols) | 0]; return p >= 0 ? p : node; };
+  const out = new Uint32Array(Math.max(rows - 1, 0) * shape.cells * 6);
+  let size = 0;
   for (const which of [0, 1]) {
     for (let r = 0; r + 1 < rows; r++) {
       for (let c = 0; c < shape.cells; c++) {
-        const corners = cellTriangle(grid, shape, jump, r, c, which);
-        if (!corners) continue;
-        const merged = corners.map((node) => { const p = pole[Math.floor(node / cols)]; return p >= 0 ? p : node; });
-        if (merged[0] !== merged[1] && merged[1] !== merged[2] && merged[0] !== merged[2]) triangles.push(...merged);
+        const n1 = r * cols + c, n2 = r * cols + (c + 1) % cols;
+        const [a, b, d] = which === 0 ? [n1, n2, n1 + cols] : [n2, n2 + cols, n1 + cols];
+        if (Number.isNaN(z[a]) || Number.isNaN(z[b]) || Number.isNaN(z[d])) continue;
+        if (jump && cellJumps(z, cols, shape, jump, r, n1, n2, which)) continue;
+        const [ma, mb, md] = [merged(a), merged(b), merged(d)];
+        if (ma !== mb && mb !== md && ma !== md) { out[size++] = ma; out[size++] = mb; out[size++] = md; }
       }
     }
   }
-  return triangles;
+  return out.subarray(0, size);
 }
 
 /** The node number of row r's first valid node, or -1 for none. */
@@ -220,18 +227,14 @@ function firstValid(z, r, cols) {
   return -1;
 }
 
-/** Triangle 1-2-3 (`which` 0) or 2-4-3 (1) of the cell at row r, column c, as node numbers,
- * or null where a corner is invalid or an edge a jump (edges within a pole row never are). */
-function cellTriangle(grid, shape, jump, r, c, which) {
-  const { cols, z } = grid;
-  const n1 = r * cols + c, n2 = r * cols + (c + 1) % cols, n3 = n1 + cols, n4 = n2 + cols;
-  const corners = which === 0 ? [n1, n2, n3] : [n2, n4, n3];
-  if (corners.some((n) => Number.isNaN(z[n]))) return null;
-  if (!jump) return corners;
-  const row = which === 0 ? r : r + 1;
-  const along = !shape.pole[row] && jump.along(z[row * cols + c], z[row * cols + (c + 1) % cols], row);
-  const across = which === 0 ? jump.across(z[n1], z[n3], r) : jump.across(z[n2], z[n4], r);
-  return along || across || jump.diagonal(z[n2], z[n3], r) ? null : corners;
+/** Whether triangle 1-2-3 (`which` 0) or 2-4-3 (1) of the cell of corners n1 (row r) and n2
+ * has a jump edge (edges within a pole row never are jumps). */
+function cellJumps(z, cols, shape, jump, r, n1, n2, which) {
+  const { cosine2 } = jump;
+  const row = r + which;
+  const along = !shape.pole[row] && isJump(z[n1 + which * cols], z[n2 + which * cols], jump.along, row, cosine2);
+  const across = which === 0 ? isJump(z[n1], z[n1 + cols], jump.across, r, cosine2) : isJump(z[n2], z[n2 + cols], jump.across, r, cosine2);
+  return along || across || isJump(z[n2], z[n1 + cols], jump.diagonal, r, cosine2);
 }
 
 /** The input-frame points (n * 3) of the used nodes (`number` >= 0), in node order: a pole
