@@ -270,3 +270,42 @@ def test_geographic_grids_in_metres_about_their_centre(tmp_path):
         z = heights(rng, (8, 11), 1200, 40, 5)
         z[2, 3] += 30000   # a cliff: a jump in metres, not in degrees
         assert_same_mesh(ZGrid(z, d1=1 / 1200, d2=1 / 1200, origin=(7.25, 46.5), crs=crs), tmp_path, None, 0)
+
+
+ORIGINAL_SCRIPT = """
+import { readFileSync } from "node:fs";
+import { readMesh, Distance } from "./original.mjs";
+const [path, lift] = [process.argv[1], Number(process.argv[2])];
+const mesh = readMesh(readFileSync(path), path);
+const distance = new Distance(mesh);
+const lifted = Array.from({ length: mesh.points.length / 3 }, (_, i) =>
+  distance.to(mesh.points[3 * i], mesh.points[3 * i + 1], mesh.points[3 * i + 2] + lift));
+process.stdout.write(JSON.stringify({ points: Array.from(mesh.points), triangles: Array.from(mesh.triangles), lifted }));
+"""
+
+
+@pytest.mark.parametrize("file_format", ["ply", "obj"])
+def test_viewer_reads_the_original_mesh_and_measures_distances_to_it(file_format, tmp_path):
+    import json
+
+    grid = ZGrid(np.add.outer(np.arange(7.0) * 0.1, np.arange(9.0) * 0.05), d1=1, d2=1)   # a tilted plane
+    mesh = grid_to_mesh(grid)
+    path = tmp_path / f"original.{file_format}"
+    run_mzc("triangulate", *write_grid(grid, tmp_path), "--format", file_format, "-o", path, check=True)
+    run = subprocess.run([NODE, "--input-type=module", "-e", ORIGINAL_SCRIPT, str(path), "0.5"], capture_output=True,
+                         cwd=WEB, timeout=60)
+    assert run.returncode == 0, run.stderr.decode()
+    made = json.loads(run.stdout)
+    assert np.array_equal(np.reshape(made["points"], (-1, 3)), mesh.points)
+    assert np.array_equal(np.reshape(made["triangles"], (-1, 3)), mesh.triangles)
+    normal = np.array([-0.05, -0.1, 1.0])
+    inside = np.zeros((7, 9), dtype=bool)
+    inside[1:-1, 1:-1] = True   # whose foot on the plane lies within the mesh
+    assert np.allclose(np.array(made["lifted"])[inside.ravel()], 0.5 / np.linalg.norm(normal), rtol=1e-12, atol=0)
+
+
+def write_grid(grid, folder):
+    """``grid`` written as a raw z-grid in ``folder``: [its path]."""
+    path = folder / "grid.zg"
+    path.write_bytes(zgrid.write(grid, raw="float64"))
+    return [path]

@@ -1,13 +1,14 @@
 // web/viewer.html's page: an mzc file opened, dropped or named in the address
 // (viewer.html?file=URL&original=URL) is decoded and triangulated by MZCLoader and shown lit
 // and orbitable, with its bytes, nodes and decode time; with the original mesh (PLY or OBJ)
-// each vertex is coloured by its distance to the original's nearest vertex.
+// each vertex is coloured by its distance to the original (to its triangles about its vertex
+// nearest the point).
 // document.body.dataset.state becomes "ready" (or "error") when a file is shown.
 
 import * as THREE from "three";
 import { OrbitControls } from "three/addons/controls/OrbitControls.js";
 import { MZCLoader } from "./MZCLoader.mjs";
-import { meshPoints } from "./meshpoints.mjs";
+import { Distance, readMesh } from "./original.mjs";
 
 const ORIGINAL = /\.(ply|obj)$/i;
 
@@ -55,89 +56,20 @@ function show(view, geometry) {
   view.controls.update();
 }
 
-/** Colours each vertex of `geometry` by its distance to the nearest of `points` (n * 3), blue
- * at 0 to red at the largest; returns {largest, rms} of those distances. */
-function colourByError(geometry, points) {
-  const nearest = new NearestVertex(points);
+/** Colours each vertex of `geometry` by its distance to the `original` mesh (original.mjs's
+ * Distance), blue at 0 to red at the 99th percentile and beyond (a few stray vertices would
+ * make the rest blue); returns {largest, rms, red} of those distances. */
+function colourByError(geometry, original) {
+  const distance = new Distance(original);
   const position = geometry.attributes.position;
-  const distance = Float64Array.from({ length: position.count }, (_, i) => nearest.distance(position.getX(i), position.getY(i), position.getZ(i)));
-  const largest = distance.reduce((a, b) => Math.max(a, b), 0);
+  const d = Float64Array.from({ length: position.count }, (_, i) => distance.to(position.getX(i), position.getY(i), position.getZ(i)));
+  const sorted = d.slice().sort();
+  const red = sorted[Math.floor(0.99 * (sorted.length - 1))] ?? 0;
   const colours = new Float32Array(position.count * 3);
   const colour = new THREE.Color();
-  distance.forEach((d, i) => colour.setHSL(0.66 * (1 - (largest > 0 ? d / largest : 0)), 0.9, 0.5).toArray(colours, 3 * i));
+  d.forEach((x, i) => colour.setHSL(0.66 * (1 - (red > 0 ? Math.min(x / red, 1) : 0)), 0.9, 0.5).toArray(colours, 3 * i));
   geometry.setAttribute("color", new THREE.BufferAttribute(colours, 3));
-  return { largest, rms: Math.sqrt(distance.reduce((a, d) => a + d * d, 0) / Math.max(distance.length, 1)) };
-}
-
-/** The nearest of a set of points, by a grid of cubic cells holding about one point each. */
-class NearestVertex {
-  constructor(points) {
-    this.points = points;
-    const n = points.length / 3;
-    this.low = [0, 1, 2].map((k) => minimum(points, k));
-    const extent = [0, 1, 2].map((k) => maximum(points, k) - this.low[k]);
-    this.size = Math.max(Math.cbrt(extent[0] * extent[1] * extent[2] / Math.max(n, 1)), Math.max(...extent) / 1024, 1e-300);
-    const dims = () => extent.map((e) => Math.floor(e / this.size) + 1);
-    while (dims().reduce((a, b) => a * b) > 4 * n + 64) this.size *= 1.25;   // a flat set: cells of its area
-    this.dims = dims();
-    this.cell = (k, x) => Math.min(Math.max(Math.floor((x - this.low[k]) / this.size), 0), this.dims[k] - 1);
-    const key = Uint32Array.from({ length: n }, (_, i) => this.key(this.cell(0, points[3 * i]), this.cell(1, points[3 * i + 1]), this.cell(2, points[3 * i + 2])));
-    this.start = new Uint32Array(this.dims[0] * this.dims[1] * this.dims[2] + 1);
-    for (const k of key) this.start[k + 1]++;
-    for (let k = 1; k < this.start.length; k++) this.start[k] += this.start[k - 1];
-    const fill = this.start.slice(0, -1);
-    this.order = new Uint32Array(n);
-    key.forEach((k, i) => { this.order[fill[k]++] = i; });
-  }
-
-  /** The number of cell (i, j, k). */
-  key(i, j, k) {
-    return i + this.dims[0] * (j + this.dims[1] * k);
-  }
-
-  /** The distance from (x, y, z) to the nearest point: shells of cells about its own, outwards,
-   * until the next shell can hold none nearer. */
-  distance(x, y, z) {
-    const at = [this.cell(0, x), this.cell(1, y), this.cell(2, z)];
-    let best = Infinity;   // squared
-    for (let shell = 0; shell <= Math.max(...this.dims); shell++) {
-      this.forShell(at, shell, (cell) => {
-        for (let s = this.start[cell]; s < this.start[cell + 1]; s++) {
-          const p = 3 * this.order[s];
-          const dx = this.points[p] - x, dy = this.points[p + 1] - y, dz = this.points[p + 2] - z;
-          best = Math.min(best, dx * dx + dy * dy + dz * dz);
-        }
-      });
-      if (best <= (shell * this.size) ** 2) break;   // the points beyond lie farther
-    }
-    return Math.sqrt(best);
-  }
-
-  /** Calls visit(cell) for each cell of the grid at Chebyshev distance `shell` from cell `at`. */
-  forShell(at, shell, visit) {
-    const [ci, cj, ck] = at;
-    for (let i = Math.max(ci - shell, 0); i <= Math.min(ci + shell, this.dims[0] - 1); i++) {
-      for (let j = Math.max(cj - shell, 0); j <= Math.min(cj + shell, this.dims[1] - 1); j++) {
-        const edge = Math.abs(i - ci) === shell || Math.abs(j - cj) === shell;
-        const step = edge ? 1 : 2 * shell;
-        for (let k = ck - shell; k <= ck + shell; k += Math.max(step, 1)) {
-          if (k >= 0 && k < this.dims[2]) visit(this.key(i, j, k));
-        }
-      }
-    }
-  }
-}
-
-/** The smallest and largest of coordinate k of points (n * 3). */
-function minimum(points, k) {
-  let m = Infinity;
-  for (let i = k; i < points.length; i += 3) m = Math.min(m, points[i]);
-  return Number.isFinite(m) ? m : 0;
-}
-function maximum(points, k) {
-  let m = -Infinity;
-  for (let i = k; i < points.length; i += 3) m = Math.max(m, points[i]);
-  return Number.isFinite(m) ? m : 0;
+  return { largest: sorted.at(-1) ?? 0, red, rms: Math.sqrt(d.reduce((a, x) => a + x * x, 0) / Math.max(d.length, 1)) };
 }
 
 /** Fills the info table with [label, value] rows. */
@@ -159,8 +91,8 @@ function infoRows(name, info, error) {
     ["grid", `${n(info.rows)} x ${n(info.cols)}`], ["nodes", n(info.nodes)], ["vertices", n(info.vertices)],
     ["triangles", n(info.triangles)], ["decode", `${info.decodeMs.toFixed(1)} ms`],
     ["triangulate", `${info.triangulateMs.toFixed(1)} ms`]];
-  if (error) rows.push(["largest error", `${error.largest.toPrecision(3)}${unit}`], ["rms error", `${error.rms.toPrecision(3)}${unit}`],
-    ["", "to the original's nearest vertex"]);
+  const length = (x) => `${x.toPrecision(3)}${unit}`;
+  if (error) rows.push(["largest error", length(error.largest)], ["rms error", length(error.rms)], ["red from", length(error.red)]);
   return rows;
 }
 
@@ -168,7 +100,7 @@ function infoRows(name, info, error) {
  * PLY or OBJ, or null). */
 function open(view, name, bytes, originalName, original) {
   const geometry = new MZCLoader().parse(bytes);
-  const error = original ? colourByError(geometry, meshPoints(original, originalName)) : null;
+  const error = original ? colourByError(geometry, readMesh(original, originalName)) : null;
   show(view, geometry);
   tell(infoRows(name, geometry.userData.mzc, error));
   document.getElementById("error").textContent = "";
