@@ -309,3 +309,8 @@ def write_grid(grid, folder):
     path = folder / "grid.zg"
     path.write_bytes(zgrid.write(grid, raw="float64"))
     return [path]
+
+
+def test_negative_zeros_come_out_as_mzc_writes_them(tmp_path):
+    z = np.array([[-0.0, 1, -0.0], [2, -0.0, 3], [-0.0, -0.0, -0.0]])   # an identity transform makes them 0
+    assert_same_mesh(ZGrid(z, d1=1, d2=1, origin=(-0.0, -0.0)), tmp_path)

@@ -11,7 +11,7 @@
 // A multi-chart grid gives each chart's mesh, one after the other, unzipped: mzc's zipper
 // (mzc/ops/zipper.py), which closes the seams between them, is not ported.
 
-import { fail } from "./header.mjs";
+import { IDENTITY, fail } from "./header.mjs";
 import { cos, sin } from "./elementary.mjs";
 
 export const JUMP_ANGLE = 3;         // degrees: an edge this close to its node line is a depth jump
@@ -78,7 +78,7 @@ function metresPerUnit(wkt, latitude) {
  * projection about its centre, as mzc measures it before it triangulates (mzc's metric_frame). */
 function metricFrame(grid) {
   if (!grid.crs || !isGeographic(grid.crs)) return grid;
-  if (grid.transform && grid.transform.some((v, i) => v !== [1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0][i])) {
+  if (grid.transform && grid.transform.some((v, i) => v !== IDENTITY[i])) {
     fail("transform", "a geographic grid turned by a transform cannot be measured in metres");
   }
   const centre = [grid.origin[0] + grid.d2 * (grid.cols - 1) / 2, grid.origin[1] + grid.d1 * (grid.rows - 1) / 2];
@@ -90,7 +90,7 @@ function metricFrame(grid) {
 /** Each chart of a multi-chart grid as a planar grid of its own: its block, its origin on the
  * lattice, the grid's transform turned to look along its view (mzc's ZGrid.chart_grids). */
 function chartGrids(grid) {
-  const t = grid.transform ?? [1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0];
+  const t = grid.transform ?? IDENTITY;
   return grid.charts.map((c) => {
     const z = new Float64Array(c.rows * c.cols);
     for (let r = 0; r < c.rows; r++) z.set(grid.z.subarray((c.row0 + r) * grid.cols + c.col0, (c.row0 + r) * grid.cols + c.col0 + c.cols), r * c.cols);
@@ -273,8 +273,8 @@ function poleMean(grid, shape, r) {
   return sum.map((x) => x / n);
 }
 
-/** Writes R p + t ([R | t] the grid's transform, row by row; none: the identity) at out[at..]. */
-function inputFrame(t, [x, y, z], out, at) {
-  if (!t) { out[at] = x; out[at + 1] = y; out[at + 2] = z; return; }
+/** Writes R p + t ([R | t] the grid's transform, row by row; none: the identity, applied all
+ * the same, as mzc applies it: -0 becomes 0) at out[at..]. */
+function inputFrame(t = IDENTITY, [x, y, z], out, at) {
   for (let i = 0; i < 3; i++) out[at + i] = x * t[4 * i] + y * t[4 * i + 1] + z * t[4 * i + 2] + t[4 * i + 3];
 }
