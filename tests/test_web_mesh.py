@@ -29,7 +29,8 @@ pytestmark = pytest.mark.skipif(NODE is None, reason="node is not installed")
 
 def node_triangulate(path, *options):
     """`node web/cli.mjs triangulate PATH OPTIONS` as a finished process."""
-    return subprocess.run([NODE, str(WEB / "cli.mjs"), "triangulate", str(path), *map(str, options)], capture_output=True)
+    return subprocess.run([NODE, str(WEB / "cli.mjs"), "triangulate", str(path), *map(str, options)],
+                          capture_output=True)
 
 
 def unzipped_mesh(grid, jump_angle=None):
@@ -211,7 +212,8 @@ def test_three_loader_gives_mzc_mesh_as_a_buffer_geometry(with_three, served, na
     info = made["info"]
     assert (info["bytes"], info["rows"], info["cols"]) == (len(fixture_bytes(name)), *grid.z.shape)
     assert info["nodes"] == np.count_nonzero(np.isfinite(grid.z))
-    assert (info["vertices"], info["triangles"], made["normal"]) == (len(mesh.points), len(mesh.triangles), len(mesh.points))
+    assert (info["vertices"], info["triangles"]) == (len(mesh.points), len(mesh.triangles))
+    assert made["normal"] == len(mesh.points)
     assert np.array_equal(np.float32(made["position"]), mesh.points.astype(np.float32).ravel())
     assert made["index"] == made["loaded"] == mesh.triangles.ravel().tolist()
 
@@ -266,7 +268,8 @@ def test_geographic_grids_in_metres_about_their_centre(tmp_path):
     rng = np.random.default_rng(38)
     wkt = ('GEOGCRS["a sphere",DATUM["d",ELLIPSOID["s",6371000,0]],CS[ellipsoidal,2],'
            'ANGLEUNIT["grad",0.015707963267948967]]')
-    for crs in (wkt, 'GEOGCS["WGS 84",DATUM["x",SPHEROID["WGS 84",6378137,298.257223563]],UNIT["degree",0.0174532925199433]]'):
+    wgs84 = 'GEOGCS["WGS 84",DATUM["x",SPHEROID["WGS 84",6378137,298.257223563]],UNIT["degree",0.0174532925199433]]'
+    for crs in (wkt, wgs84):
         z = heights(rng, (8, 11), 1200, 40, 5)
         z[2, 3] += 30000   # a cliff: a jump in metres, not in degrees
         assert_same_mesh(ZGrid(z, d1=1 / 1200, d2=1 / 1200, origin=(7.25, 46.5), crs=crs), tmp_path, None, 0)
@@ -280,7 +283,8 @@ const mesh = readMesh(readFileSync(path), path);
 const distance = new Distance(mesh);
 const lifted = Array.from({ length: mesh.points.length / 3 }, (_, i) =>
   distance.to(mesh.points[3 * i], mesh.points[3 * i + 1], mesh.points[3 * i + 2] + lift));
-process.stdout.write(JSON.stringify({ points: Array.from(mesh.points), triangles: Array.from(mesh.triangles), lifted }));
+const [points, triangles] = [Array.from(mesh.points), Array.from(mesh.triangles)];
+process.stdout.write(JSON.stringify({ points, triangles, lifted }));
 """
 
 
@@ -314,3 +318,32 @@ def write_grid(grid, folder):
 def test_negative_zeros_come_out_as_mzc_writes_them(tmp_path):
     z = np.array([[-0.0, 1, -0.0], [2, -0.0, 3], [-0.0, -0.0, -0.0]])   # an identity transform makes them 0
     assert_same_mesh(ZGrid(z, d1=1, d2=1, origin=(-0.0, -0.0)), tmp_path)
+
+
+def random_grid(rng):
+    """A small grid of a random projection, extent (full turns and poles often), holes, spread
+    of values and transform."""
+    projection = str(rng.choice(["planar", "cylindrical", "spherical"]))
+    rows, cols = int(rng.integers(1, 9)), int(rng.integers(1, 12))
+    z = rng.normal(0, rng.choice([0.01, 1, 30]), (rows, cols))
+    z[rng.random((rows, cols)) < rng.uniform(0, 0.4)] = np.nan
+    rotation = np.linalg.qr(rng.normal(size=(3, 3)))[0]
+    rotation[:, 0] *= np.sign(np.linalg.det(rotation))   # a rotation, not a reflection
+    turned = {"transform": np.hstack([rotation, rng.normal(0, 50, (3, 1))])} if rng.random() < 0.5 else {}
+    if projection == "planar":
+        return ZGrid(z, d1=rng.uniform(0.1, 3), d2=rng.uniform(0.1, 3), origin=tuple(rng.normal(0, 10, 2)), **turned)
+    radius = rng.uniform(1, 100)
+    d2 = 2 * np.pi * radius / cols if rng.random() < 0.6 else rng.uniform(0.1, 2 * np.pi * radius / cols)
+    d1, origin = rng.uniform(0.1, 3), tuple(rng.normal(0, 10, 2))
+    if projection == "spherical":
+        poles = rows > 1 and rng.random() < 0.6
+        d1 = np.pi * radius / (rows - 1) if poles else rng.uniform(0.01, np.pi * radius / (rows + 1))
+        span, room = (rows - 1) * d1, np.pi * radius / 2 - (rows - 1) * d1 / 2   # without poles: within them
+        origin = (rng.normal(), -np.pi * radius / 2) if poles else (0.0, rng.uniform(-0.9, 0.9) * room - span / 2)
+    return ZGrid(np.abs(radius + z), d1=d1, d2=d2, origin=origin, projection=projection, radius=radius, **turned)
+
+
+@pytest.mark.parametrize("seed", range(40))
+def test_random_grids(seed, tmp_path):
+    rng = np.random.default_rng(seed)
+    assert_same_mesh(random_grid(rng), tmp_path, rng.choice([None, 0, 1, 3, 20, 60]))
