@@ -98,7 +98,7 @@ function infoRows(name, info, error) {
 
 /** Decodes and shows an mzc file's bytes, coloured by the error to `original` (bytes of a
  * PLY or OBJ, or null). */
-function open(view, name, bytes, originalName, original) {
+function display(view, name, bytes, originalName, original) {
   const geometry = new MZCLoader().parse(bytes);
   const error = original ? colourByError(geometry, readMesh(original, originalName)) : null;
   show(view, geometry);
@@ -123,7 +123,7 @@ function openFiles(view, files) {
   const original = list.find((f) => ORIGINAL.test(f.name));
   const file = list.find((f) => !ORIGINAL.test(f.name));
   if (!file) return;
-  reporting(async () => open(view, file.name, new Uint8Array(await file.arrayBuffer()), original?.name,
+  reporting(async () => display(view, file.name, new Uint8Array(await file.arrayBuffer()), original?.name,
     original ? new Uint8Array(await original.arrayBuffer()) : null));
 }
 
@@ -147,7 +147,7 @@ function main() {
   });
   const query = new URLSearchParams(location.search);
   const file = query.get("file"), original = query.get("original");
-  if (file) reporting(async () => open(view, file, await fetched(file), original, original ? await fetched(original) : null));
+  if (file) reporting(async () => display(view, file, await fetched(file), original, original ? await fetched(original) : null));
 }
 
 main();
