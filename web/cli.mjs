@@ -1,24 +1,52 @@
 #!/usr/bin/env node
 // node web/cli.mjs decode IN > OUT: the raw float64 z-grid of an mzc file, as `mzc decode`
-// writes it. A bad file gets one line on stderr and exit status 1, and nothing on stdout.
+// writes it; node web/cli.mjs triangulate IN [--jump-angle A] > OUT.obj: its mesh as the OBJ
+// `mzc triangulate IN --format obj` writes. A bad file gets one line on stderr and exit
+// status 1, and nothing on stdout.
 
 import { readFileSync } from "node:fs";
-import { decode, writeZgrid } from "./mzc.mjs";
+import { decode, writeZgrid, formatNumber } from "./mzc.mjs";
+import { triangulate } from "./triangulate.mjs";
 
-const USAGE = "usage: node web/cli.mjs decode IN > OUT";
+const USAGE = "usage: node web/cli.mjs decode IN > OUT\n       node web/cli.mjs triangulate IN [--jump-angle A] > OUT.obj";
+
+/** Each command's output bytes from the decoded grid and its options. */
+const COMMANDS = {
+  decode: (grid) => writeZgrid(grid),
+  triangulate: (grid, options) => objText(triangulate(grid, options)),
+};
+
+/** The OBJ mzc writes: `v x y z` in Python's repr of each float, then `f a b c` from 1. */
+function objText({ positions, indices }) {
+  const repr = (x) => { const s = formatNumber(x); return /^-?\d+$/.test(s) ? `${s}.0` : s; };
+  const lines = [];
+  for (let i = 0; i < positions.length; i += 3) lines.push(`v ${repr(positions[i])} ${repr(positions[i + 1])} ${repr(positions[i + 2])}\n`);
+  for (let i = 0; i < indices.length; i += 3) lines.push(`f ${indices[i] + 1} ${indices[i + 1] + 1} ${indices[i + 2] + 1}\n`);
+  return lines.join("");
+}
+
+/** The command, input name and options of the arguments, or null when they are not a usage. */
+function parsed(args) {
+  const [command, name, flag, value] = args;
+  if (!COMMANDS[command] || name === undefined) return null;
+  if (args.length === 2) return { command, name, options: {} };
+  const angle = Number(value);
+  if (command !== "triangulate" || args.length !== 4 || flag !== "--jump-angle" || value === "" || !(angle >= 0)) return null;
+  return { command, name, options: { jumpAngle: angle } };
+}
 
 /** Runs the command line; returns the exit status. */
 function main(args) {
-  if (args.length !== 2 || args[0] !== "decode") {
+  const run = parsed(args);
+  if (!run) {
     process.stderr.write(`${USAGE}\n`);
     return 2;
   }
-  const name = args[1];
   let out;
   try {
-    out = writeZgrid(decode(readFileSync(name === "-" ? 0 : name)));
+    out = COMMANDS[run.command](decode(readFileSync(run.name === "-" ? 0 : run.name)), run.options);
   } catch (error) {
-    process.stderr.write(`mzc: ${name}: ${error.code === "ENOENT" ? "no such file" : error.message}\n`);
+    process.stderr.write(`mzc: ${run.name}: ${error.code === "ENOENT" ? "no such file" : error.message}\n`);
     return 1;
   }
   process.stdout.on("error", (error) => {

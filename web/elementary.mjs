@@ -1,6 +1,6 @@
 // The elementary functions of spec/arithmetic.md that the decoders need (dwt2d's slope
-// factors need cos): binary64 operations in the order written, so every machine computes
-// the bits mzc computes.
+// factors need cos; triangulate.mjs's rays sin and cos): binary64 operations in the order
+// written, so every machine computes the bits mzc computes.
 
 /** A binary64 constant from C's hexadecimal notation `1.HHHH` and a binary exponent. */
 const hex = (mantissa, exponent) => {
@@ -38,17 +38,26 @@ function cosPoly(r) {
   return w + (((1 - w) - h) + (r2 * r2) * (F4 + r2 * (-F6 + r2 * (F8 + r2 * (-F10 + r2 * (F12 + r2 * (-F14 + r2 * (F16 - r2 * F18))))))));
 }
 
+/** [q, r]: the quadrant and reduced argument of |x| (spec/arithmetic.md, sin and cos). */
+function reduced(x) {
+  let a = Math.abs(x);
+  if (a <= PIO4) return [0, a];
+  if (a >= 2 ** 20) a %= 2 * PI_HI;
+  const k = Math.floor(a * TWO_OVER_PI + 0.5);
+  return [k - 4 * Math.floor(k * 0.25), ((a - k * PIO2_1) - k * PIO2_2) - k * PIO2_3];
+}
+
 /** cos(x) as spec/arithmetic.md computes it (within 1 ulp for |x| < 2^20). */
 export function cos(x) {
   if (!Number.isFinite(x)) return NaN;
-  let a = Math.abs(x);
-  let r = a;
-  let q = 0;
-  if (a > PIO4) {
-    if (a >= 2 ** 20) a %= 2 * PI_HI;
-    const k = Math.floor(a * TWO_OVER_PI + 0.5);
-    q = k - 4 * Math.floor(k * 0.25);
-    r = ((a - k * PIO2_1) - k * PIO2_2) - k * PIO2_3;
-  }
+  const [q, r] = reduced(x);
   return [cosPoly(r), -sinPoly(r), -cosPoly(r), sinPoly(r)][q];
+}
+
+/** sin(x) as spec/arithmetic.md computes it (the central projections' rays). */
+export function sin(x) {
+  if (!Number.isFinite(x)) return NaN;
+  const [q, r] = reduced(x);
+  const s = [sinPoly(r), cosPoly(r), -sinPoly(r), -cosPoly(r)][q];
+  return x < 0 || Object.is(x, -0) ? -s : s;
 }

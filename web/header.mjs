@@ -308,7 +308,8 @@ export function formatNumber(x) {
   return `${sign}${digits.slice(0, e + 1)}.${digits.slice(e + 1)}`;
 }
 
-const IDENTITY = [1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0];
+/** The identity transform [R | t], row by row. */
+export const IDENTITY = [1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0];
 
 /** The header lines of a grid as mzc's z-grid writer writes them, without magic and data. */
 function zgridHeaderLines(grid) {

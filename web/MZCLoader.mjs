@@ -1,0 +1,74 @@
+// A three.js loader of mzc's files, used as DRACOLoader is (three is a peer: imported from
+// "three", which a page maps with an import map and node finds in node_modules):
+//
+//   import { MZCLoader } from "./MZCLoader.mjs";
+//   new MZCLoader().load("face.mzw2", (geometry) => scene.add(new Mesh(geometry, material)));
+//   const geometry = new MZCLoader().parse(arrayBuffer);
+//
+// The geometry has `position` (float32, the input frame), `index` and computed `normal`
+// attributes: web/triangulate.mjs's mesh of the decoded grid, as `mzc triangulate` makes it.
+// Its userData.mzc says what was read: {bytes, rows, cols, nodes (valid), vertices, triangles,
+// decodeMs, triangulateMs, kind, version, units}.
+
+import { BufferAttribute, BufferGeometry, FileLoader, Loader } from "three";
+import { decode } from "./mzc.mjs";
+import { triangulate } from "./triangulate.mjs";
+
+export class MZCLoader extends Loader {
+  /** A loader whose meshes take `jumpAngle` degrees (undefined: mzc's default) as their depth-jump angle. */
+  constructor(manager) {
+    super(manager);
+    this.jumpAngle = undefined;
+  }
+
+  /** Sets the depth-jump angle in degrees (0 joins every neighbour); returns the loader. */
+  setJumpAngle(degrees) {
+    this.jumpAngle = degrees;
+    return this;
+  }
+
+  /** Fetches `url` and calls onLoad with its BufferGeometry (onError with a bad file's MzcError). */
+  load(url, onLoad, onProgress, onError) {
+    const loader = new FileLoader(this.manager);
+    loader.setPath(this.path);
+    loader.setResponseType("arraybuffer");
+    loader.setRequestHeader(this.requestHeader);
+    loader.setWithCredentials(this.withCredentials);
+    loader.load(url, (buffer) => {
+      try {
+        onLoad(this.parse(buffer));
+      } catch (error) {
+        if (onError) onError(error);
+        else console.error(error);
+        this.manager.itemError(url);
+      }
+    }, onProgress, onError);
+  }
+
+  /** The BufferGeometry of an mzc file's bytes (an ArrayBuffer or a Uint8Array). */
+  parse(buffer) {
+    const bytes = buffer instanceof Uint8Array ? buffer : new Uint8Array(buffer);
+    const start = performance.now();
+    const grid = decode(bytes);
+    const decoded = performance.now();
+    const { positions, indices } = triangulate(grid, { jumpAngle: this.jumpAngle });
+    const geometry = new BufferGeometry();
+    geometry.setAttribute("position", new BufferAttribute(new Float32Array(positions), 3));
+    geometry.setIndex(new BufferAttribute(indices, 1));
+    geometry.computeVertexNormals();
+    geometry.userData.mzc = {
+      bytes: bytes.length, rows: grid.rows, cols: grid.cols, nodes: validNodes(grid.z),
+      vertices: positions.length / 3, triangles: indices.length / 3,
+      decodeMs: decoded - start, triangulateMs: performance.now() - decoded,
+      kind: grid.kind, version: grid.version, units: grid.units,
+    };
+    return geometry;
+  }
+}
+
+/** The number of valid (not NaN) values of a grid. */
+function validNodes(z) {
+  let count = 0;
+  for (const value of z) if (!Number.isNaN(value)) count++;
+  return count;
+}
