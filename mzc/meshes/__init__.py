@@ -105,6 +105,18 @@ class Mesh:
         return len(self.points), len(self.triangles), [self.points], [self.triangles]
 
 
+def warn_dropped(mesh):
+    """One MzcWarning naming what the mesh's file held that a grid does not carry (its colours,
+    texture coordinates, normals, other properties: ``Mesh.dropped``), so that nothing is lost
+    without a word (a grid, which has none, passes)."""
+    if getattr(mesh, "dropped", ()):
+        import warnings
+
+        from mzc.errors import MzcWarning
+
+        warnings.warn(MzcWarning(f"not kept, mzc codes the shape alone: {'; '.join(mesh.dropped)}"), stacklevel=3)
+
+
 def optional_module(name):
     """The module ``name``, imported now; an MzcError naming it when it is not installed."""
     import importlib

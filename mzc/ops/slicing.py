@@ -74,18 +74,6 @@ def facing_direction(points, triangles):
 # --------------------------------------------------------------------------- slicing
 
 
-def warn_dropped(mesh):
-    """One MzcWarning naming what the mesh's file held that a grid does not carry (its colours,
-    texture coordinates, normals, other properties: ``Mesh.dropped``), so that nothing is lost
-    without a word."""
-    if mesh.dropped:
-        import warnings
-
-        from mzc.errors import MzcWarning
-
-        warnings.warn(MzcWarning(f"not kept, mzc codes the shape alone: {'; '.join(mesh.dropped)}"), stacklevel=3)
-
-
 def slice_surface(surface, d1=None, d2=None, rows=None, cols=None, align="none", units=None,
                   projection="auto", center=None, axis=None, view="auto", thesis_grid=False, classes=None,
                   cloud="auto", charts="auto", tap=False):
@@ -110,8 +98,7 @@ def slice_surface(surface, d1=None, d2=None, rows=None, cols=None, align="none",
     ``auto`` for one grid when it holds SINGLE_COVER of the surface's area (a face, terrain, a
     star-shaped ball) and charts otherwise (a closed or many-part object); cutting options that
     shape one grid (projection, view, centre, axis, counts, the thesis's grid) ask for one.
-    Warns (MzcWarning) when one grid's lines meet less than SEEN_WARNING of the area well, and,
-    once, of what the file held beside the shape that the grid does not keep (``warn_dropped``).
+    Warns (MzcWarning) when one grid's lines meet less than SEEN_WARNING of the area well.
 
     ``tap`` (target-aligned pixels, as gdalwarp -tap): a map grid, planar and looking down the
     input's z, whose cells (each node the centre of a d2 x d1 cell, as a GeoTIFF holds it) have
@@ -130,7 +117,6 @@ def slice_surface(surface, d1=None, d2=None, rows=None, cols=None, align="none",
                                 charts=None if charts in ("auto", 1) else charts, tap=tap or None)
     mesh = surface if classes is None else surface.with_classes(classes)
     check_magnitude(mesh.points, "coordinates")
-    warn_dropped(surface)
     if tap:
         check_tap(rows=rows is not None, cols=cols is not None, thesis_grid=thesis_grid, align=align != "none",
                   projection=projection not in ("auto", "planar"), view=view not in ("auto", "+z"),
