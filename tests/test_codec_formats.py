@@ -65,8 +65,9 @@ def test_error_names_the_line(mzc):
     assert result.stderr.decode().startswith("mzc: <stdin>:9: coefficients:")  # line 9: the second row
 
 
-@pytest.mark.parametrize("arguments", [["--rmse", "1", "--size", "10"], ["--dct", "--dwt"], ["--dct", "--wavelet", "db2"],
-                                       ["--poly", "3", "-q", "50"], ["--dwt", "-q", "0"]])
+@pytest.mark.parametrize("arguments", [["--rmse", "1", "--size", "10"], ["--dct", "--dwt"],
+                                       ["--dct", "--wavelet", "db2"], ["--poly", "3", "-q", "50"],
+                                       ["--dwt", "-q", "0"]])
 def test_encode_usage_errors(mzc, tmp_path, arguments):
     output = tmp_path / "out"
     result = mzc("encode", *arguments, "-o", output, input=b"mzc-zgrid 1.0\nrows 1\ncols 1\nd1 1\nd2 1\ndata\n1\n")
