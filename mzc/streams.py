@@ -34,6 +34,7 @@ output name gets:
   that are one file before any work is done.
 """
 
+import contextlib
 import errno
 import fcntl
 import os
@@ -383,8 +384,9 @@ def new_file(directory):
                 raise
     import tempfile  # here, not at the top: only where O_TMPFILE is refused (its imports cost every command)
 
-    fd, name = tempfile.mkstemp(prefix=HIDDEN_PREFIX, dir=directory)
-    remember(name)
+    with signals_held():   # a signal that comes meanwhile waits until the handler knows the name
+        fd, name = tempfile.mkstemp(prefix=HIDDEN_PREFIX, dir=directory)
+        remember(name)
     os.fchmod(fd, mode & ~current_umask())   # mkstemp makes it 0600; a new file should follow the umask
     return fd, name
 
@@ -448,6 +450,21 @@ def write_all(fd, data, offset=None):
             done += os.write(fd, view[done:])
         else:
             done += os.pwrite(fd, view[done:], offset + done)
+
+
+@contextlib.contextmanager
+def signals_held():
+    """Hold CLEANUP_SIGNALS back from this thread inside the block and deliver them after it (a
+    SIGHUP between creating a temporary and remembering its name had left the file behind);
+    nothing is held where the system has no signal masks."""
+    if not hasattr(signal, "pthread_sigmask"):
+        yield
+        return
+    previous = signal.pthread_sigmask(signal.SIG_BLOCK, CLEANUP_SIGNALS)
+    try:
+        yield
+    finally:
+        signal.pthread_sigmask(signal.SIG_SETMASK, previous)
 
 
 def remember(name):
