@@ -200,14 +200,17 @@ def slice(surface: Any, d1: float | None = None, d2: float | None = None, *, row
     an option that would cut it otherwise is refused (resample a raster first; triangulate a
     z-grid and slice its mesh)."""
     from mzc.formats import read_file
+    from mzc.meshes import warn_dropped
     from mzc.ops.slicing import slice_surface
 
     numbers = slicing_numbers({"d1": d1, "d2": d2, "rows": rows, "cols": cols, "center": center, "axis": axis,
                                "classes": classes, "tap": tap})
     surface = given(surface)
-    return slice_surface(read_file(surface) if isinstance(surface, str) else surface, align=align, units=units,
-                         projection=projection, view=view, thesis_grid=thesis_grid, cloud=cloud, charts=charts,
-                         **numbers)
+    read = read_file(surface) if isinstance(surface, str) else surface
+    grid = slice_surface(read, align=align, units=units, projection=projection, view=view, thesis_grid=thesis_grid,
+                         cloud=cloud, charts=charts, **numbers)
+    warn_dropped(read)   # once the grid is made: a refused slice is one line, its error alone
+    return grid
 
 
 def slicing_numbers(options: dict[str, Any]) -> dict[str, Any]:

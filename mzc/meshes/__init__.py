@@ -114,7 +114,7 @@ def warn_dropped(mesh):
 
         from mzc.errors import MzcWarning
 
-        warnings.warn(MzcWarning(f"not kept, mzc codes the shape alone: {'; '.join(mesh.dropped)}"), stacklevel=3)
+        warnings.warn(MzcWarning(f"not kept, mzc codes the shape alone: {'; '.join(mesh.dropped)}"), stacklevel=2)
 
 
 def optional_module(name):

@@ -98,8 +98,7 @@ def slice_surface(surface, d1=None, d2=None, rows=None, cols=None, align="none",
     ``auto`` for one grid when it holds SINGLE_COVER of the surface's area (a face, terrain, a
     star-shaped ball) and charts otherwise (a closed or many-part object); cutting options that
     shape one grid (projection, view, centre, axis, counts, the thesis's grid) ask for one.
-    Warns (MzcWarning) when one grid's lines meet less than SEEN_WARNING of the area well, and
-    of what the surface's file held beside its shape (``mzc.meshes.warn_dropped``).
+    Warns (MzcWarning) when one grid's lines meet less than SEEN_WARNING of the area well.
 
     ``tap`` (target-aligned pixels, as gdalwarp -tap): a map grid, planar and looking down the
     input's z, whose cells (each node the centre of a d2 x d1 cell, as a GeoTIFF holds it) have
@@ -107,7 +106,6 @@ def slice_surface(surface, d1=None, d2=None, rows=None, cols=None, align="none",
     round (``round_spacing``), as a cloud with a CRS's is.
     """
     from mzc.limits import check_magnitude
-    from mzc.meshes import warn_dropped
     from mzc.ops.charts import SINGLE_COVER, chart_surface, single_grid_cover
     from mzc.ops.views import SEEN_WARNING, choose_view
 
@@ -117,7 +115,6 @@ def slice_surface(surface, d1=None, d2=None, rows=None, cols=None, align="none",
                                 projection=None if projection in ("auto", "planar") else projection,
                                 view=None if view in ("auto", "+z") else view,
                                 charts=None if charts in ("auto", 1) else charts, tap=tap or None)
-    warn_dropped(surface)
     mesh = surface if classes is None else surface.with_classes(classes)
     check_magnitude(mesh.points, "coordinates")
     if tap:
