@@ -293,10 +293,15 @@ def speed_run(tmp_path_factory):
     for package in ("DracoPy", "imagecodecs"):
         pytest.importorskip(package)
     face_path("f18.ply")
-    out = tmp_path_factory.mktemp("speed")
-    subprocess.run([sys.executable, str(SPEED), "--quick", "--out", str(out)], check=True, capture_output=True,
+    return quick_report(SPEED, "speed", tmp_path_factory)
+
+
+def quick_report(script, stem, tmp_path_factory):
+    """(the text of STEM-results.md, its JSON) of ``script --quick`` run into a temporary folder."""
+    out = tmp_path_factory.mktemp(stem)
+    subprocess.run([sys.executable, str(script), "--quick", "--out", str(out)], check=True, capture_output=True,
                    timeout=120)
-    return (out / "speed-results.md").read_text(), json.loads((out / "speed-results.json").read_text())
+    return (out / f"{stem}-results.md").read_text(), json.loads((out / f"{stem}-results.json").read_text())
 
 
 def test_speed_report_has_every_section_and_a_verdict_per_check(speed_run):
@@ -497,10 +502,7 @@ def dems_run(tmp_path_factory):
     """benchmarks/dems.py --quick (the SRTM tile and the float kootenai grid) into a temporary folder."""
     for package in ("rasterio", "lerc", "imagecodecs"):
         pytest.importorskip(package)
-    out = tmp_path_factory.mktemp("dems")
-    subprocess.run([sys.executable, str(DEMS), "--quick", "--out", str(out)], check=True, capture_output=True,
-                   timeout=120)
-    return (out / "dems-results.md").read_text(), json.loads((out / "dems-results.json").read_text())
+    return quick_report(DEMS, "dems", tmp_path_factory)
 
 
 def test_dems_every_contender_keeps_the_max_error_it_was_asked_for(dems_run):
