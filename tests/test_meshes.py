@@ -1,5 +1,6 @@
 """Reading and writing meshes and point clouds: the dialects real files come in, and bad input."""
 
+import importlib.util
 import struct
 
 import hypothesis.extra.numpy as hnp
@@ -323,6 +324,9 @@ def test_what_a_file_holds_beside_its_shape_is_named_not_dropped_silently(tmp_pa
     plain = b"ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\nproperty float z\n"
     assert mesh_from_bytes(plain + b"end_header\n0 0 0\n", "p.ply").dropped == ()
     assert read_mesh(REPO / "tests" / "data" / "public" / "colored_cloud.pcd").dropped == ("fields rgb curvature",)
+    if importlib.util.find_spec("laspy"):
+        assert read_mesh(REPO / "tests" / "data" / "public" / "simple.laz").dropped == ("RGB colours",)   # format 3
+        assert read_mesh(REPO / "tests" / "data" / "public" / "autzen_geo_proj.las").dropped == ()       # format 1
     (tmp_path / "a.obj").write_bytes(obj + b"v 1 1 0.2\nf 2 4 3\n")
     stderr = run_mzc("slice", tmp_path / "a.obj", "-o", tmp_path / "a.zg", check=True).stderr.decode()
     assert stderr.count("mzc: warning: not kept, mzc codes the shape alone: 3 vertex colours; ") == 1

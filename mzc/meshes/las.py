@@ -42,7 +42,9 @@ VLR_HEADER, EVLR_HEADER, EVLR_HEADER_SIZE = 54, 60, 375   # bytes of a record's 
 
 
 def read(data: bytes, source: str) -> Mesh:
-    """The point cloud of LAS or LAZ ``data``, with its classes and CRS."""
+    """The point cloud of LAS or LAZ ``data``, with its classes and CRS; its RGB colours, when its
+    point format has them, are named in ``dropped`` (the other dimensions are the survey's, not the
+    surface's)."""
     try:
         import laspy
     except ImportError:
@@ -60,6 +62,7 @@ def read(data: bytes, source: str) -> Mesh:
                 chunks.append((np.column_stack([np.asarray(chunk.x), np.asarray(chunk.y), np.asarray(chunk.z)]),
                                np.asarray(chunk.classification, dtype=np.uint8)))
             crs, geographic = header_crs(reader.header)
+            coloured = "red" in set(reader.header.point_format.dimension_names)
     except MzcError:
         raise
     except BaseException as error:   # a PanicException is one: lazrs's Rust panics on damaged points
@@ -78,7 +81,7 @@ def read(data: bytes, source: str) -> Mesh:
                        source=source, field="crs")
     points = np.concatenate([chunk[0] for chunk in chunks] or [np.empty((0, 3))])
     classes = np.concatenate([chunk[1] for chunk in chunks] or [np.empty(0, dtype=np.uint8)])
-    return Mesh(points, classification=classes, crs=crs)
+    return Mesh(points, classification=classes, crs=crs, dropped=("RGB colours",) if coloured else ())
 
 
 @contextlib.contextmanager
