@@ -20,12 +20,10 @@ error is measured here, from the decoded arrays against the input over its valid
 Writes dems-results.md and dems-results.json into --out (default: this directory).
 """
 
-import argparse
 import datetime
 import json
 import math
 import os
-import subprocess
 import sys
 import time
 from dataclasses import replace
@@ -40,7 +38,7 @@ HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE))
 
 from contenders import GRID_HEADER, filled, grid_file, read_grid_file  # noqa: E402
-from report import bytes_at, fmt, machine, pareto, terminal_progress, versions  # noqa: E402
+from report import benchmark_parser, bytes_at, fmt, git_commit, machine, pareto, terminal_progress, versions  # noqa: E402
 
 PUBLIC = HERE.parent / "tests" / "data" / "public"
 PACKAGES = ("numpy", "PyWavelets", "constriction", "imagecodecs", "lerc", "rasterio")
@@ -321,11 +319,6 @@ def ratio_of(row, peer, kind, size="bytes"):
 # --------------------------------------------------------------------------- report
 
 
-def commit():
-    return subprocess.run(["git", "rev-parse", "--short", "HEAD"], cwd=HERE, capture_output=True,
-                          text=True).stdout.strip()
-
-
 def markdown(items, summary, settings):
     """The report text."""
     import rasterio
@@ -520,17 +513,14 @@ def fmt_bytes(value):
 
 
 def parse_arguments(argv=None):
-    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("--quick", action="store_true", help=f"{' and '.join(QUICK_DEMS)} at fewer targets")
-    parser.add_argument("--out", type=Path, default=HERE, help="output directory (default: benchmarks/)")
-    return parser.parse_args(argv)
+    return benchmark_parser(__doc__, f"{' and '.join(QUICK_DEMS)} at fewer targets").parse_args(argv)
 
 
 def main(argv=None):
     arguments = parse_arguments(argv)
     progress = terminal_progress()
     started = time.perf_counter()
-    settings = {"quick": arguments.quick, "commit": commit(),
+    settings = {"quick": arguments.quick, "commit": git_commit(),
                 "started": f"{datetime.datetime.now(datetime.timezone.utc):%Y-%m-%d %H:%M}",
                 "tolerance": TOLERANCE, "search_steps": SEARCH_STEPS, "repeats": REPEATS}
     items = [measure_dem(name, loader, why, arguments.quick, progress) for name, loader, why in DEMS

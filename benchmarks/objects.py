@@ -18,7 +18,6 @@ the rebuild. Writes objects-results.md, objects-results.json and objects-rd.png 
 (default: this directory). Progress goes to stderr only when it is a terminal.
 """
 
-import argparse
 import datetime
 import functools
 import json
@@ -40,10 +39,12 @@ sys.path.insert(0, str(HERE))
 from contenders import Contender, draco_contender, load  # noqa: E402
 from rd import TARGETS  # noqa: E402
 from report import (  # noqa: E402
+    benchmark_parser,
     bytes_at,
     curves_of,
     draw_curves,
     fmt,
+    git_commit,
     item_ratios,
     machine,
     measure_ratios,
@@ -843,17 +844,6 @@ def plot(path, results):
 # --------------------------------------------------------------------------- running
 
 
-def git_commit():
-    """The short commit of the repository, "+" when its tracked files have changes."""
-    import subprocess
-
-    def git(*words):
-        return subprocess.run(["git", *words], cwd=HERE, capture_output=True, text=True).stdout.strip()
-
-    changed = git("status", "--porcelain", "--untracked-files=no", "--", ".")
-    return (git("rev-parse", "--short", "HEAD") or "unknown") + ("+" if changed else "")
-
-
 def run_all(specs, samples, quick, workers, progress):
     """run_item over every item in a process pool, the largest files first; results in spec order."""
     import multiprocessing
@@ -871,12 +861,8 @@ def run_all(specs, samples, quick, workers, progress):
 
 
 def parse_args(argv):
-    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("--quick", action="store_true",
-                        help=f"{' and '.join(QUICK_OBJECTS)}, one face, every other setting, fewer samples")
-    parser.add_argument("--out", type=Path, default=HERE, help="output directory (default: benchmarks/)")
-    parser.add_argument("--workers", type=int, default=min(2, os.cpu_count() or 1))
-    return parser.parse_args(argv)
+    quick = f"{' and '.join(QUICK_OBJECTS)}, one face, every other setting, fewer samples"
+    return benchmark_parser(__doc__, quick, workers=True).parse_args(argv)
 
 
 def main(argv=None):

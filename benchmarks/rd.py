@@ -11,7 +11,6 @@ rd-results.md, rd-results.json and one rd-<corpus>.png per corpus into --out (de
 this directory). Progress goes to stderr only when it is a terminal.
 """
 
-import argparse
 import functools
 import os
 import sys
@@ -261,11 +260,10 @@ def run_all(specs, samples, repeats, quick, workers, progress):
 
 
 def parse_args(argv):
-    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("--quick", action="store_true", help="one face and the small DEM, fewer samples")
+    from report import benchmark_parser
+
+    parser = benchmark_parser(__doc__, "one face and the small DEM, fewer samples", workers=True)
     parser.add_argument("--faces", type=int, help="number of faces (default: all, or 1 with --quick)")
-    parser.add_argument("--out", type=Path, default=HERE, help="output directory (default: benchmarks/)")
-    parser.add_argument("--workers", type=int, default=min(2, os.cpu_count() or 1))
     return parser.parse_args(argv)
 
 

@@ -4,6 +4,7 @@ Also the whole-process timings of the CLI (``mzc --help`` and the README pipelin
 need subprocesses rather than the in-process timing of the codecs.
 """
 
+import argparse
 import datetime
 import json
 import os
@@ -496,3 +497,28 @@ def write_outputs(out, results, missing, checks, pipeline, settings):
     for corpus in dict.fromkeys(r["corpus"] for r in results):
         units = next(r["units"] for r in results if r["corpus"] == corpus)
         plot_corpus(out / f"rd-{corpus}.png", results, corpus, units, list(settings["targets"]))
+
+
+def benchmark_parser(doc, quick_help, workers=False):
+    """The arguments every benchmark script takes: ``--quick`` (``quick_help`` says what it
+    keeps), ``--out`` (the folder of the reports, benchmarks/ by default) and, with
+    ``workers``, ``--workers`` (processes; two at most, this machine's cores); its description
+    the first paragraph of the script's ``doc``."""
+    parser = argparse.ArgumentParser(description=doc.split("\n\n")[0])
+    parser.add_argument("--quick", action="store_true", help=quick_help)
+    parser.add_argument("--out", type=Path, default=Path(__file__).resolve().parent,
+                        help="output directory (default: benchmarks/)")
+    if workers:
+        parser.add_argument("--workers", type=int, default=min(2, os.cpu_count() or 1))
+    return parser
+
+
+def git_commit():
+    """The short commit of the repository the benchmarks are in, "+" when its tracked files
+    have changes: the code a report measured."""
+    def git(*words):
+        return subprocess.run(["git", *words], cwd=Path(__file__).resolve().parent, capture_output=True,
+                              text=True).stdout.strip()
+
+    changed = git("status", "--porcelain", "--untracked-files=no", "--", ".")
+    return (git("rev-parse", "--short", "HEAD") or "unknown") + ("+" if changed else "")

@@ -27,7 +27,6 @@ and speed-results.json (every run) into --out (default: this directory). Progres
 stderr only when it is a terminal.
 """
 
-import argparse
 import datetime
 import gc
 import json
@@ -49,7 +48,7 @@ HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE))
 
 import contenders  # noqa: E402 - after the path to this folder
-from report import machine, run_stages, versions  # noqa: E402
+from report import benchmark_parser, git_commit, machine, run_stages, versions  # noqa: E402
 from scaling import RMSE as TERRAIN_RMSE  # noqa: E402
 from scaling import terrain_grid  # noqa: E402
 
@@ -552,15 +551,6 @@ def surface_checks(diffs, rebuilt_grid):
 # --------------------------------------------------------------------------- report
 
 
-def git_commit():
-    """The commit of the working tree (with "+ changes" when it differs), for the report."""
-    def git(*args):
-        return subprocess.run(["git", "-C", str(HERE), *args], capture_output=True, text=True).stdout.strip()
-
-    commit = git("rev-parse", "--short=12", "HEAD") or "unknown"
-    return commit + (" + uncommitted changes" if git("status", "--porcelain", "--untracked-files=no") else "")
-
-
 def ms(seconds):
     return "n/a" if seconds is None else f"{1000 * seconds:.1f}"
 
@@ -772,13 +762,11 @@ def compile_bytecode():
 
 
 def parse_args(argv):
-    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("--quick", action="store_true", help="one round, the 0.5 mm grid only, tiny scaling sizes")
+    parser = benchmark_parser(__doc__, "one round, the 0.5 mm grid only, tiny scaling sizes")
     parser.add_argument("--repeats", type=int,
                         help=f"rounds of parts 1 and 2 (default {REPEATS}; quick {QUICK_REPEATS})")
     parser.add_argument("--sizes", help="scaling sizes in M nodes, comma-separated (default "
                         f"{','.join(f'{s:g}' for s in SIZES)}; quick {','.join(f'{s:g}' for s in QUICK_SIZES)})")
-    parser.add_argument("--out", type=Path, default=HERE, help="output directory (default: benchmarks/)")
     parser.add_argument("--stage-timeout", type=float, default=STAGE_TIMEOUT,
                         help=f"seconds a scaling stage may take (default {STAGE_TIMEOUT:g})")
     parser.add_argument("--memory-cap-gb", type=float, default=MEMORY_CAP_GB,

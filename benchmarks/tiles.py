@@ -128,8 +128,9 @@ def rate(nodes, seconds):
 
 def report(rows, started):
     """The markdown report."""
-    commit = subprocess.run(["git", "rev-parse", "--short", "HEAD"], cwd=HERE, capture_output=True,
-                            text=True).stdout.strip()
+    from report import git_commit
+
+    commit = git_commit()
     lines = [
         "# Rasters of any size: tiled encode and decode (issue 30)",
         "",
