@@ -1,6 +1,7 @@
 """The numcodecs codec (mzc.zarr) in a real Zarr store: a terrain in chunks within its bound."""
 
 import os
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -237,3 +238,20 @@ def test_dask_to_zarr_codes_a_time_stack_on_a_local_cluster(tmp_path, zarr_forma
     back = zarr.open_array(str(tmp_path / "stack.zarr"), mode="r")
     assert back.nchunks == 18 and within(back[:], z, bound)
     assert stored_bytes(tmp_path) * 4 < z.nbytes
+
+
+def test_the_spec_example_of_a_stacked_chunk_decodes_as_stated_and_is_what_the_codec_writes():
+    """spec/zarr.md's worked example of the N layout: its bytes decode to the values it states,
+    within 1 of its input, and the codec writes exactly those bytes for that input."""
+    import ast
+    import re
+
+    page = (Path(__file__).resolve().parents[1] / "spec" / "zarr.md").read_text()
+    example = page[page.index("## Worked example of `N`"):]
+    chunk = np.array(ast.literal_eval(re.search(r"```\n(\[.*?\])\n```", example, re.S)[1]), dtype="<i2")
+    data = bytes.fromhex(re.search(r"```zarr-chunk-hex\n(.*?)```", example, re.S)[1])
+    stated = np.array(ast.literal_eval(re.search(r"```zarr-chunk-values\n(.*?)```", example, re.S)[1]))
+    decoded = Dwt2d(max_error=1).decode(data)
+    assert decoded.dtype == np.dtype("<i2") and np.array_equal(decoded, stated)
+    assert np.abs(decoded.astype(int) - chunk).max() <= 1
+    assert Dwt2d(max_error=1).encode(chunk) == data
