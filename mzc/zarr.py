@@ -7,8 +7,8 @@ and no-data stays NaN. A chunk of integers (8 to 32 bits) or of any other number
 dimensions (a time stack of DEMs: time x rows x columns) is a stack of 2D slices along its
 last two axes, each its own ``mzc-dwt2d`` file (``STACK``); integers are coded as a raster
 of integer samples, so they come back integers within floor(E) <= E of their own, in their
-type (spec/dwt2d.md, Rounding). The chunk's bytes are specified in spec/zarr.md. Every chunk is coded on its own, so ``dask.array.to_zarr``
-codes a store of any size chunk by chunk on a cluster.
+type (spec/dwt2d.md, Rounding); spec/zarr.md gives a chunk's bytes. Every chunk is coded on its
+own, so ``dask.array.to_zarr`` codes a store of any size chunk by chunk on a cluster.
 
 It is registered under the codec id ``mzc_dwt2d`` through the
 ``numcodecs.codecs`` entry point, so ``numcodecs.get_codec({"id": "mzc_dwt2d",
