@@ -30,7 +30,7 @@ z-grid.
 """
 
 import re
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -108,10 +108,8 @@ def read(data: bytes, source: str) -> Mesh:
         columns = compressed_columns(header, data, names, source)
     points = np.column_stack([columns[name] for name in ("x", "y", "z")])
     normals = np.column_stack([columns[name] for name in NORMALS]) if NORMALS[0] in columns else None
-    mesh = cloud_or_lattice(header, points, normals, source)
-    kept = ("x", "y", "z", *(NORMALS if mesh.normals is not None else ()))
-    others = [name for name in field_names(header) if name not in kept and name != "_"]   # "_": PCL's padding
-    return replace(mesh, dropped=(f"fields {' '.join(others)}",)) if others else mesh
+    others = [name for name in field_names(header) if name not in ("x", "y", "z", *NORMALS, "_")]   # "_": padding
+    return cloud_or_lattice(header, points, normals, source, others)
 
 
 def field_names(header):
@@ -294,22 +292,29 @@ def compressed_columns(header, data, names, source):
                                            offset=starts[name] * header.points), name) for name in names}
 
 
-def cloud_or_lattice(header, points, normals, source):
+def cloud_or_lattice(header, points, normals, source, others=()):
     """The Mesh of the points: an organised cloud (HEIGHT and WIDTH above 1) triangulated along
     its lattice (``lattice_triangles``, whose sight lines square and multiply the coordinates:
     they must be within mzc.limits'), any other a cloud; points with a NaN or infinite
-    coordinate dropped either way."""
+    coordinate dropped either way. The ``others`` fields, and a lattice's normals (its triangles
+    say which way it faces), are named in the Mesh's ``dropped``."""
     valid = np.isfinite(points).all(axis=1)
     new_index = np.cumsum(valid) - 1
     if header.height > 1 and header.width > 1:
         check_magnitude(points[valid], "coordinates", source=source)
         triangles = lattice_triangles(points.reshape(header.height, header.width, 3),
                                       valid.reshape(header.height, header.width), header.origin)
-        if len(triangles):   # a surface: its triangles say which way it faces
-            return Mesh(points[valid], new_index[triangles])
+        if len(triangles):
+            unused = [*(NORMALS if normals is not None else ()), *others]
+            return Mesh(points[valid], new_index[triangles], dropped=fields_named(unused))
     if normals is not None:
         normals = np.where(np.isfinite(normals), normals, 0.0)[valid]
-    return Mesh(points[valid], normals=normals)
+    return Mesh(points[valid], normals=normals, dropped=fields_named(others))
+
+
+def fields_named(names):
+    """``Mesh.dropped`` of the fields ``names``: one entry naming them, or none."""
+    return (f"fields {' '.join(names)}",) if names else ()
 
 
 def lattice_triangles(points, valid, origin):
