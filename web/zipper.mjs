@@ -24,14 +24,14 @@ const QUALITY = 0.05;     // the least quality an ear's cost divides by
  * points, then any added; the triangles (over welded vertices), then the stitches. */
 export function zipCharts(positions, indices, charts, spacing) {
   const n = positions.length / 3;
-  let triangles = Int32Array.from(indices);
+  let triangles = new Int32Array(indices);
   let boundary = boundaryEdges(triangles, n);
   if (!boundary.tail.length) return { positions, indices };
   let near = neighbours(positions, boundary, spacing);
   const welding = welded(positions, triangles, charts, boundary, near, spacing);
   if (welding) {
     ({ triangles, boundary } = welding);
-    if (!boundary.tail.length) return { positions, indices: Uint32Array.from(triangles) };
+    if (!boundary.tail.length) return { positions, indices: new Uint32Array(triangles) };
     near = neighbours(positions, boundary, spacing);
   }
   const { added, stitches } = new Gap(positions, triangles, charts, boundary, near, spacing).filled();
@@ -48,25 +48,27 @@ export function zipCharts(positions, indices, charts, spacing) {
  * only (no other runs them either way, and they run once), each as its triangle runs it, in
  * the order of the triangles' edges 0-1, 1-2, 2-0. */
 function boundaryEdges(t, n) {
-  const first = new Int32Array(n + 1), out = new Int32Array(t.length);
-  const head = (e) => t[e % 3 === 2 ? e - 2 : e + 1];
-  for (let e = 0; e < t.length; e++) first[t[e] + 1]++;
+  const first = new Int32Array(n + 1), out = new Int32Array(t.length), heads = new Int32Array(t.length);
+  for (let e = 0; e < t.length; e++) {
+    heads[e] = t[e % 3 === 2 ? e - 2 : e + 1];
+    first[t[e] + 1]++;
+  }
   for (let v = 0; v < n; v++) first[v + 1] += first[v];
   const fill = first.slice();
-  for (let e = 0; e < t.length; e++) out[fill[t[e]]++] = head(e);
-  const tail = [], heads = [], triangle = [];
+  for (let e = 0; e < t.length; e++) out[fill[t[e]]++] = heads[e];
+  const tail = [], head = [], triangle = [];
   for (let e = 0; e < t.length; e++) {
-    const a = t[e], b = head(e);
+    const a = t[e], b = heads[e];
     let j = first[b], runs = 0;
     while (j < first[b + 1] && out[j] !== a) j++;
     for (let i = first[a]; j === first[b + 1] && i < first[a + 1]; i++) runs += out[i] === b ? 1 : 0;
     if (runs === 1) {
       tail.push(a);
-      heads.push(b);
+      head.push(b);
       triangle.push((e / 3) | 0);
     }
   }
-  return { tail: Int32Array.from(tail), head: Int32Array.from(heads), triangle: Int32Array.from(triangle) };
+  return { tail: Int32Array.from(tail), head: Int32Array.from(head), triangle: Int32Array.from(triangle) };
 }
 
 /** The boundary vertices (`vertex`, ascending) and for each its `k` nearest boundary vertices
@@ -76,38 +78,47 @@ function boundaryEdges(t, n) {
 function neighbours(p, boundary, spacing) {
   const vertex = Int32Array.from(new Set([...boundary.tail, ...boundary.head])).sort();
   const size = vertex.length, k = Math.min(CANDIDATES, size);
-  const reach = REACH * spacing, bound = reach * reach, side = reach * 1.001;
-  const cells = new Map();
-  const cell = (v) => [0, 1, 2].map((d) => Math.floor(p[3 * v + d] / side));
+  const reach = REACH * spacing, bound = reach * reach, side = reach * 1.001;   // cells a little wider than the reach
+  const cells = new Map(), cell = new Float64Array(3 * size);
   vertex.forEach((v, r) => {
-    const key = cell(v).join(",");
+    for (let d = 0; d < 3; d++) cell[3 * r + d] = Math.floor(p[3 * v + d] / side);
+    const key = cellKey(cell[3 * r], cell[3 * r + 1], cell[3 * r + 2]);
     if (!cells.has(key)) cells.set(key, []);
     cells.get(key).push(r);
   });
   const candidate = new Int32Array(size * k).fill(size), distance = new Float64Array(size * k).fill(Infinity);
-  const found = [];
   for (let r = 0; r < size; r++) {
-    const v = vertex[r], [x, y, z] = cell(v);
-    found.length = 0;
-    for (let i = x - 1; i <= x + 1; i++) {
-      for (let j = y - 1; j <= y + 1; j++) {
-        for (let l = z - 1; l <= z + 1; l++) {
-          for (const s of cells.get(`${i},${j},${l}`) ?? []) {
+    const v = vertex[r], at = r * k;
+    let count = 0;
+    for (let i = -1; i <= 1; i++) {
+      for (let j = -1; j <= 1; j++) {
+        for (let l = -1; l <= 1; l++) {
+          for (const s of cells.get(cellKey(cell[3 * r] + i, cell[3 * r + 1] + j, cell[3 * r + 2] + l)) ?? []) {
             const w = vertex[s];
             const dx = p[3 * w] - p[3 * v], dy = p[3 * w + 1] - p[3 * v + 1], dz = p[3 * w + 2] - p[3 * v + 2];
             const d = dx * dx + dy * dy + dz * dz;
-            if (d < bound) found.push([d, s]);
+            if (!(d < bound) || (count === k && !(d < distance[at + k - 1] || (d === distance[at + k - 1] && s < candidate[at + k - 1])))) continue;
+            let place = Math.min(count, k - 1);   // insertion into the row, kept in (d, number) order
+            while (place > 0 && (d < distance[at + place - 1] || (d === distance[at + place - 1] && s < candidate[at + place - 1]))) {
+              distance[at + place] = distance[at + place - 1];
+              candidate[at + place] = candidate[at + place - 1];
+              place--;
+            }
+            distance[at + place] = d;
+            candidate[at + place] = s;
+            count = Math.min(count + 1, k);
           }
         }
       }
     }
-    found.sort((a, b) => a[0] - b[0] || a[1] - b[1]);
-    for (let c = 0; c < Math.min(k, found.length); c++) {
-      candidate[r * k + c] = found[c][1];
-      distance[r * k + c] = Math.sqrt(found[c][0]);
-    }
+    for (let c = 0; c < count; c++) distance[at + c] = Math.sqrt(distance[at + c]);
   }
   return { vertex, k, candidate, distance };
+}
+
+/** The key of cell (i, j, l), integers: one number while each is under 2^17 in magnitude, else a string. */
+function cellKey(i, j, l) {
+  return Math.abs(i) < 131072 && Math.abs(j) < 131072 && Math.abs(l) < 131072 ? (i * 262144 + j) * 262144 + l : `${i},${j},${l}`;
 }
 
 /** {triangles, boundary} with the boundary vertices of different charts within WELD spacings
@@ -247,12 +258,16 @@ class Gap {
     const size = this.size = this.vertex.length;
     this.p = new Float64Array(3 * size);
     const rank = new Int32Array(this.pointCount).fill(-1);
-    this.vertex.forEach((v, r) => { rank[v] = r; this.p.set(points.subarray(3 * v, 3 * v + 3), 3 * r); });
+    for (let r = 0; r < size; r++) {
+      const v = this.vertex[r];
+      rank[v] = r;
+      for (let d = 0; d < 3; d++) this.p[3 * r + d] = points[3 * v + d];
+    }
     const normal = new Float64Array(3 * size);
     this.edges = new Set();
     for (let f = 0; f < triangles.length; f += 3) {
+      if (rank[triangles[f]] < 0 && rank[triangles[f + 1]] < 0 && rank[triangles[f + 2]] < 0) continue;
       const r = [rank[triangles[f]], rank[triangles[f + 1]], rank[triangles[f + 2]]];
-      if (r[0] < 0 && r[1] < 0 && r[2] < 0) continue;
       const m = normalOf(points, triangles[f], triangles[f + 1], triangles[f + 2]);
       for (let d = 0; d < 3; d++) for (const c of r) if (c >= 0) normal[3 * c + d] += m[d];
       for (let i = 0; i < 3; i++) if (r[i] >= 0 && r[(i + 1) % 3] >= 0) this.edges.add(this.key(r[i], r[(i + 1) % 3]));
