@@ -1,24 +1,28 @@
 """The browser mesh of web/ (issue 34, second part): `node web/cli.mjs triangulate IN` writes,
 byte for byte, the OBJ `mzc triangulate IN --format obj` writes (the same vertices, bit for bit,
 and the same triangles in the same order) for planar, cylindrical and spherical grids, full
-turns, poles and depth jumps at several angles, and geographic grids (placed in metres about
-their centre as mzc places them); a multi-chart grid gives mzc's chart meshes
-before its zipper closes their seams (web/ does not zip). Skipped when node is not installed."""
+turns, poles and depth jumps at several angles, geographic grids (placed in metres about
+their centre as mzc places them), and multi-chart grids, their seams zipped by web/zipper.mjs
+as mzc's zipper zips them (spec/zgrid.md, Zipping the charts): the fixtures, the sample blob,
+a shared object, and web/zipper.mjs's zipCharts against mzc.ops.zipper.zip_charts on the
+zipper tests' closed surfaces and on triangle soups. Skipped when node is not installed."""
 
 import shutil
 import subprocess
 
 import numpy as np
 import pytest
+from test_zipper import bored_box, cube, hemisphere, sphere, torus, two_spheres
 
 from mzc.formats import read_any, zgrid
 from mzc.grid import Chart, ZGrid
-from mzc.meshes import Mesh
 from mzc.meshes.obj import write as obj_bytes
 from mzc.ops.triangulation import CHART_JUMP_ANGLE, GridMesh, grid_to_mesh
+from mzc.ops.zipper import zip_charts
 
+from charts import chart_meshes
 from codec_contract import FIXTURES, fixture_bytes, fixture_names
-from conftest import run_mzc
+from conftest import REPO, run_mzc
 
 WEB = FIXTURES.parents[1] / "web"
 NODE = shutil.which("node")
@@ -33,31 +37,19 @@ def node_triangulate(path, *options):
                           capture_output=True)
 
 
-def unzipped_mesh(grid, jump_angle=None):
-    """mzc's Mesh of ``grid`` without the zipper's stitches: its charts' meshes one after the
-    other (mzc.ops.triangulation.charted_mesh before zip_charts), or its whole mesh."""
-    if grid.charts is None:
-        return grid_to_mesh(grid, jump_angle)
-    angle = CHART_JUMP_ANGLE if jump_angle is None else jump_angle
-    meshes = [GridMesh(chart, angle).mesh() for chart in grid.chart_grids()]
-    offsets = np.cumsum([0] + [len(mesh.points) for mesh in meshes])
-    return Mesh(np.concatenate([mesh.points for mesh in meshes]),
-                np.concatenate([mesh.triangles + offset for mesh, offset in zip(meshes, offsets)]))
-
-
-def unzipped_obj(grid, jump_angle=None):
-    """The OBJ mzc writes of ``unzipped_mesh``."""
-    return obj_bytes(unzipped_mesh(grid, jump_angle))
+def mesh_obj(grid, jump_angle=None):
+    """The OBJ mzc writes of ``grid``'s mesh (its charts' zipped)."""
+    return obj_bytes(grid_to_mesh(grid, jump_angle))
 
 
 def assert_same_mesh(grid, tmp_path, *jump_angles):
-    """web/'s OBJ of ``grid`` (written as a raw z-grid) is mzc's (unzipped) at each jump angle."""
+    """web/'s OBJ of ``grid`` (written as a raw z-grid) is mzc's at each jump angle."""
     path = tmp_path / "grid.zg"
     path.write_bytes(zgrid.write(grid, raw="float64"))
     for angle in jump_angles or (None,):
         made = node_triangulate(path, *(() if angle is None else ("--jump-angle", angle)))
         assert made.returncode == 0, made.stderr.decode()
-        assert made.stdout == unzipped_obj(grid, angle), f"jump angle {angle}"
+        assert made.stdout == mesh_obj(grid, angle), f"jump angle {angle}"
 
 
 @pytest.mark.parametrize("name", [n for n in fixture_names() if n.split("-")[0] not in TO_1E12])
@@ -119,7 +111,7 @@ def test_spherical_grids_with_poles_fans_and_holes(tmp_path):
         assert_same_mesh(grid, tmp_path, None, 0, 30)
 
 
-def test_charts_give_mzc_chart_meshes_before_the_zipper(tmp_path):
+def test_charts_zip_as_mzc_zips_them(tmp_path):
     rng = np.random.default_rng(37)
     z = np.full((10, 14), np.nan)
     z[0:6, 0:5] = heights(rng, (6, 5), 3, 0.2, 2)
@@ -130,16 +122,94 @@ def test_charts_give_mzc_chart_meshes_before_the_zipper(tmp_path):
     assert_same_mesh(ZGrid(z, d1=0.5, d2=0.5, transform=transform, charts=charts), tmp_path, None, 0, 5)
 
 
-def test_the_blob_in_six_charts_gives_mzc_vertices_and_chart_triangles(tmp_path):
+def chart_triangle_count(grid):
+    """How many triangles ``grid``'s charts' meshes have before the zipper."""
+    return sum(len(GridMesh(chart, CHART_JUMP_ANGLE).mesh().triangles) for chart in grid.chart_grids())
+
+
+def assert_zipped_as_mzc(path, tmp_path):
+    """web/'s OBJ of the multi-chart file ``path`` is `mzc triangulate`'s, stitches and all."""
+    run_mzc("triangulate", path, "--format", "obj", "-o", tmp_path / "zipped.obj", check=True)
+    made = node_triangulate(path)
+    assert made.returncode == 0, made.stderr.decode()
+    assert made.stdout == (tmp_path / "zipped.obj").read_bytes()
+    grid = read_any(path.read_bytes(), path.name)
+    assert made.stdout.count(b"\nf ") > chart_triangle_count(grid)   # the zipper's stitches
+
+
+def test_the_blob_in_six_charts_zips_as_mzc_zips_it(tmp_path):
     run_mzc("sample", "blob", "-o", tmp_path / "blob.obj", check=True)
     run_mzc("slice", tmp_path / "blob.obj", "--charts", "6", "-o", tmp_path / "blob.zg", check=True)
     run_mzc("encode", "--dwt2d", "--rmse", "0.05", tmp_path / "blob.zg", "-o", tmp_path / "blob.mzw2", check=True)
-    run_mzc("triangulate", tmp_path / "blob.mzw2", "--format", "obj", "-o", tmp_path / "zipped.obj", check=True)
-    made = node_triangulate(tmp_path / "blob.mzw2")
-    assert made.stdout == unzipped_obj(read_any((tmp_path / "blob.mzw2").read_bytes(), "blob.mzw2"))
-    zipped = (tmp_path / "zipped.obj").read_bytes()
-    assert zipped.startswith(made.stdout[:made.stdout.index(b"\nf ") + 1])   # the same vertices, bit for bit
-    assert zipped.count(b"\nf ") > made.stdout.count(b"\nf ")   # and mzc's zipper's stitches
+    assert_zipped_as_mzc(tmp_path / "blob.mzw2", tmp_path)
+
+
+def test_a_shared_object_in_charts_zips_as_mzc_zips_it(tmp_path):
+    import mzc
+
+    path = REPO.parent / "shared" / "data" / "objects" / "hand.ply"
+    if not path.is_file():
+        pytest.skip(f"shared object data not available ({path})")
+    grid = mzc.slice(str(path))
+    assert grid.charts is not None and len(grid.charts) > 1
+    (tmp_path / "hand.zg").write_bytes(zgrid.write(grid, raw="float64"))
+    run_mzc("encode", "--dwt2d", "--rmse", "0.05", tmp_path / "hand.zg", "-o", tmp_path / "hand.mzw2", check=True)
+    assert_zipped_as_mzc(tmp_path / "hand.mzw2", tmp_path)
+
+
+ZIP_SCRIPT = """
+import { readFileSync } from "node:fs";
+import { zipCharts } from "./zipper.mjs";
+const cases = JSON.parse(readFileSync(process.argv[1], "utf8"));
+process.stdout.write(JSON.stringify(cases.map(({ points, triangles, chart, spacing }) => {
+  const { positions, indices } = zipCharts(Float64Array.from(points), Uint32Array.from(triangles), chart, spacing);
+  return { points: Array.from(positions), triangles: Array.from(indices) };
+})));
+"""
+
+
+SURFACE_SHAPES = (sphere, cube, torus, two_spheres, bored_box, hemisphere)
+SURFACES = {shape.__name__ for shape in SURFACE_SHAPES}
+
+
+def zip_cases():
+    """(name, points, triangles, chart, spacing) of chart meshes to zip: the zipper tests' closed
+    and open surfaces in charts at D/150 (welds on lattice edges, flat faces whose equally far
+    neighbours tie, junctions of three charts), and seeded triangle soups on random charts
+    (repeated, degenerate and inconsistently wound triangles, coincident points)."""
+    for shape in SURFACE_SHAPES:
+        points, triangles = shape()
+        points = np.asarray(points, dtype=float)
+        spacing = float(np.linalg.norm(points.max(axis=0) - points.min(axis=0))) / 150
+        yield (shape.__name__, *chart_meshes(points, triangles, spacing), spacing)
+    for seed in range(150):
+        rng = np.random.default_rng(seed)
+        count = int(rng.integers(3, 31))
+        points = rng.normal(size=(count, 3))
+        points = np.round(points, 1) if rng.random() < 0.5 else points
+        triangles = rng.integers(0, count, (int(rng.integers(0, 41)), 3))
+        yield (f"soup {seed}", points, triangles, rng.integers(0, int(rng.integers(1, 5)), count),
+               float(rng.choice([1e-3, 0.1, 1.0, 10.0])))
+
+
+def test_zip_charts_gives_mzc_zippers_points_and_triangles(tmp_path):
+    import json
+
+    cases = list(zip_cases())
+    (tmp_path / "cases.json").write_text(json.dumps([
+        {"points": points.ravel().tolist(), "triangles": np.ravel(triangles).tolist(),
+         "chart": np.ravel(chart).tolist(), "spacing": spacing} for _name, points, triangles, chart, spacing in cases]))
+    run = subprocess.run([NODE, "--input-type=module", "-e", ZIP_SCRIPT, str(tmp_path / "cases.json")],
+                         capture_output=True, cwd=WEB, timeout=300)
+    assert run.returncode == 0, run.stderr.decode()
+    stitched = []
+    for (name, points, triangles, chart, spacing), made in zip(cases, json.loads(run.stdout), strict=True):
+        zipped_points, zipped_triangles = zip_charts(points, triangles, chart, spacing)
+        assert np.array_equal(np.reshape(made["points"], (-1, 3)), zipped_points), name
+        assert np.array_equal(np.reshape(made["triangles"], (-1, 3)), zipped_triangles), name
+        stitched += [name] if len(zipped_triangles) > len(triangles) else []
+    assert not SURFACES.difference(stitched)   # not meshes the zipper leaves alone
+    assert len(stitched) > len(SURFACES) + 20   # nor soups
 
 
 @pytest.fixture(scope="module")
@@ -208,14 +278,47 @@ def test_three_loader_gives_mzc_mesh_as_a_buffer_geometry(with_three, served, na
     assert run.returncode == 0, run.stderr.decode()
     made = json.loads(run.stdout)
     grid = read_any(fixture_bytes(name), name)
-    mesh = unzipped_mesh(grid)
+    mesh = grid_to_mesh(grid)
     info = made["info"]
     assert (info["bytes"], info["rows"], info["cols"]) == (len(fixture_bytes(name)), *grid.z.shape)
     assert info["nodes"] == np.count_nonzero(np.isfinite(grid.z))
     assert (info["vertices"], info["triangles"]) == (len(mesh.points), len(mesh.triangles))
     assert made["normal"] == len(mesh.points)
-    assert np.array_equal(np.float32(made["position"]), mesh.points.astype(np.float32).ravel())
+    centre = (mesh.points.min(axis=0) + mesh.points.max(axis=0)) / 2
+    assert info["centre"] == centre.tolist()
+    assert np.array_equal(np.float32(made["position"]), (mesh.points - centre).astype(np.float32).ravel())
     assert made["index"] == made["loaded"] == mesh.triangles.ravel().tolist()
+
+
+RECENTRED_SCRIPT = """
+import { readFileSync } from "node:fs";
+import { decode } from "./mzc.mjs";
+import { recentred, triangulate } from "./triangulate.mjs";
+const { local, centre } = recentred(triangulate(decode(readFileSync(process.argv[1]))).positions);
+process.stdout.write(JSON.stringify({ local: Array.from(local), centre }));
+"""
+
+
+def test_positions_about_their_centre_keep_a_far_off_grids_detail(tmp_path):
+    import json
+
+    rng = np.random.default_rng(39)
+    z = 1500 + np.cumsum(rng.normal(0, 0.01, (40, 50)), axis=1)   # centimetre relief
+    transform = np.array([[0, -1, 0, 4_000_100.123], [1, 0, 0, 500_000.456], [0, 0, 1, 0.0]])   # UTM-like metres
+    grid = ZGrid(z, d1=0.37, d2=0.41, origin=(250.3, -12.7), transform=transform)
+    path = write_grid(grid, tmp_path)[0]
+    run = subprocess.run([NODE, "--input-type=module", "-e", RECENTRED_SCRIPT, str(path)], capture_output=True,
+                         cwd=WEB, timeout=60)
+    assert run.returncode == 0, run.stderr.decode()
+    made = json.loads(run.stdout)
+    points = grid_to_mesh(grid).points
+    centre = (points.min(axis=0) + points.max(axis=0)) / 2
+    assert made["centre"] == centre.tolist()
+    local = np.float32(made["local"]).reshape(-1, 3)
+    assert np.array_equal(local, (points - centre).astype(np.float32))
+    extent = np.ptp(points, axis=0).max()
+    assert np.abs(local + centre - points).max() <= extent * 2.0 ** -24   # float32's rounding of the extent
+    assert np.abs(points.astype(np.float32) - points).max() > 0.05   # as the input frame's float32: decimetres
 
 
 CHROMIUM = shutil.which("chromium") or shutil.which("chromium-browser")

@@ -17,7 +17,7 @@ from scipy.spatial import cKDTree
 
 from mzc.measure.metrics import nearest_triangles, surface_distance_parts
 from mzc.meshes import read_mesh
-from mzc.ops.zipper import boundary_edges, zip_charts
+from mzc.ops.zipper import CANDIDATES, Neighbours, boundary_edges, zip_charts
 from mzc.samples import icosphere
 
 from charts import chart_meshes
@@ -223,6 +223,27 @@ def test_the_same_triangles_with_numpys_simd_loops_switched_off(case):
         pytest.skip(f"{case}: this numpy cannot switch those loops off")
     assert result.returncode == 0, result.stderr[-2000:]
     assert result.stdout.strip() == zipped_digest()
+
+
+@pytest.mark.parametrize("seed", range(5))
+def test_equally_far_neighbours_are_taken_by_number(seed):
+    """Boundary vertices on a square lattice (a flat face), numbered at random: each one's
+    candidates are the nearest, equally far ones by number (spec/zgrid.md, Zipping the
+    charts), not in the order a KD-tree happens to visit them. Every inner vertex has itself,
+    four at one spacing and four at sqrt(2), of which the three lowest-numbered are kept."""
+    rng = np.random.default_rng(seed)
+    side = 24
+    lattice = np.stack(np.meshgrid(np.arange(side), np.arange(side), indexing="ij"), axis=-1).reshape(-1, 2)
+    points = np.c_[lattice, np.zeros(len(lattice))][rng.permutation(len(lattice))] + (100.0, 200.0, 5.0)
+    boundary = np.stack([np.arange(len(points)), np.roll(np.arange(len(points)), -1), np.zeros(len(points), int)], 1)
+    near = Neighbours(points, boundary, 1.0)
+    offset = points[:, None, :2] - points[None, :, :2]
+    squared = np.sum(offset * offset, axis=-1)
+    inner = np.flatnonzero(np.all((points[:, :2] > (100, 200)) & (points[:, :2] < (100 + side - 1, 200 + side - 1)), 1))
+    for v in inner:
+        diagonal = sorted(np.flatnonzero(squared[v] == 2))[:CANDIDATES - 5]
+        assert near.candidate[v].tolist() == [v, *sorted(np.flatnonzero(squared[v] == 1)), *diagonal]
+    assert np.array_equal(near.distance[inner], np.tile([0.0, 1, 1, 1, 1] + [np.sqrt(2.0)] * 3, (len(inner), 1)))
 
 
 def test_charts_that_coincide_on_a_lattice_edge_are_welded():

@@ -5,14 +5,19 @@
 //   new MZCLoader().load("face.mzw2", (geometry) => scene.add(new Mesh(geometry, material)));
 //   const geometry = new MZCLoader().parse(arrayBuffer);
 //
-// The geometry has `position` (float32, the input frame), `index` and computed `normal`
-// attributes: web/triangulate.mjs's mesh of the decoded grid, as `mzc triangulate` makes it.
+// The geometry has `position`, `index` and computed `normal` attributes: web/triangulate.mjs's
+// mesh of the decoded grid, as `mzc triangulate` makes it, its positions float32 about the
+// centre of their bounding box (recentred: a georeferenced or far-off grid keeps its detail),
+// which userData.mzc.centre holds in float64: place the mesh at it for the input frame,
+//
+//   mesh.position.fromArray(geometry.userData.mzc.centre);
+//
 // Its userData.mzc says what was read: {bytes, rows, cols, nodes (valid), vertices, triangles,
-// decodeMs, triangulateMs, kind, version, units}.
+// decodeMs, triangulateMs, kind, version, units, centre}.
 
 import { BufferAttribute, BufferGeometry, FileLoader, Loader } from "three";
 import { decode } from "./mzc.mjs";
-import { triangulate } from "./triangulate.mjs";
+import { recentred, triangulate } from "./triangulate.mjs";
 
 export class MZCLoader extends Loader {
   /** A loader whose meshes take `jumpAngle` degrees (undefined: mzc's default) as their depth-jump angle. */
@@ -52,15 +57,16 @@ export class MZCLoader extends Loader {
     const grid = decode(bytes);
     const decoded = performance.now();
     const { positions, indices } = triangulate(grid, { jumpAngle: this.jumpAngle });
+    const { local, centre } = recentred(positions);
     const geometry = new BufferGeometry();
-    geometry.setAttribute("position", new BufferAttribute(new Float32Array(positions), 3));
+    geometry.setAttribute("position", new BufferAttribute(local, 3));
     geometry.setIndex(new BufferAttribute(indices, 1));
     geometry.computeVertexNormals();
     geometry.userData.mzc = {
       bytes: bytes.length, rows: grid.rows, cols: grid.cols, nodes: validNodes(grid.z),
       vertices: positions.length / 3, triangles: indices.length / 3,
       decodeMs: decoded - start, triangulateMs: performance.now() - decoded,
-      kind: grid.kind, version: grid.version, units: grid.units,
+      kind: grid.kind, version: grid.version, units: grid.units, centre,
     };
     return geometry;
   }

@@ -8,11 +8,14 @@
 //   import { triangulate } from "./triangulate.mjs";
 //   const { positions, indices } = triangulate(decode(bytes));   // Float64Array, Uint32Array
 //
-// A multi-chart grid gives each chart's mesh, one after the other, unzipped: mzc's zipper
-// (mzc/ops/zipper.py), which closes the seams between them, is not ported.
+//   const { local, centre } = recentred(positions);   // Float32Array about the box's centre
+//
+// A multi-chart grid gives each chart's mesh, one after the other, zipped along their seams
+// into one surface by web/zipper.mjs (spec/zgrid.md, Zipping the charts), as mzc zips them.
 
 import { IDENTITY, fail } from "./header.mjs";
 import { cos, sin } from "./elementary.mjs";
+import { zipCharts } from "./zipper.mjs";
 
 export const JUMP_ANGLE = 3;         // degrees: an edge this close to its node line is a depth jump
 export const CHART_JUMP_ANGLE = 30;  // a chart's (its surface faces its lines within 60 degrees)
@@ -25,13 +28,32 @@ const VIEW_AXES = {
   "+y": [[-1, 0, 0], [0, 0, 1], [0, 1, 0]], "-y": [[1, 0, 0], [0, 0, 1], [0, -1, 0]],
 };
 
-/** {positions: Float64Array (n * 3), indices: Uint32Array (m * 3), charts: the chart of each
- * vertex (multi-chart grids only)}: the mesh of a decoded grid (see the top). `jumpAngle` in
- * degrees, 0 joining every neighbour; by default 3, or 30 within a chart. */
-export function triangulate(grid, { jumpAngle } = {}) {
+/** {positions: Float64Array (n * 3), indices: Uint32Array (m * 3)}: the mesh of a decoded
+ * grid (see the top). `jumpAngle` in degrees, 0 joining every neighbour; by default 3, or 30
+ * within a chart. `zip` false leaves a multi-chart grid's seams open: its charts' meshes one
+ * after the other, with `charts`, the chart of each vertex. */
+export function triangulate(grid, { jumpAngle, zip = true } = {}) {
   if (!grid.charts) return gridMesh(metricFrame(grid), jumpAngle ?? JUMP_ANGLE);
   const meshes = chartGrids(grid).map((chart) => gridMesh(chart, jumpAngle ?? CHART_JUMP_ANGLE));
-  return joined(meshes);
+  const charts = joined(meshes);
+  return zip ? zipCharts(charts.positions, charts.indices, charts.charts, Math.max(grid.d1, grid.d2)) : charts;
+}
+
+/** {local: Float32Array, centre: [x, y, z]}: `positions` (Float64Array, n * 3) less the centre
+ * of their bounding box ((min + max) / 2 on each axis; 0 0 0 for none), rounded to float32.
+ * float32 holds about 7 digits: a georeferenced grid (UTM metres in the millions) or any far
+ * from the origin would lose its detail to the offset; about its centre only the mesh's own
+ * extent counts. The input frame is local + centre (three.js: a mesh's `position`). */
+export function recentred(positions) {
+  const low = [Infinity, Infinity, Infinity], high = [-Infinity, -Infinity, -Infinity];
+  for (let i = 0; i < positions.length; i++) {
+    low[i % 3] = Math.min(low[i % 3], positions[i]);
+    high[i % 3] = Math.max(high[i % 3], positions[i]);
+  }
+  const centre = positions.length ? low.map((x, d) => (x + high[d]) / 2) : [0, 0, 0];
+  const local = new Float32Array(positions.length);
+  for (let i = 0; i < positions.length; i++) local[i] = positions[i] - centre[i % 3];
+  return { local, centre };
 }
 
 // mzc/georef.py's reading of a WKT: the keywords that open a CRS, by kind, and its ellipsoid and unit.

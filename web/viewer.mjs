@@ -58,11 +58,12 @@ function show(view, geometry) {
 
 /** Colours each vertex of `geometry` by its distance to the `original` mesh (original.mjs's
  * Distance), blue at 0 to red at the 99th percentile and beyond (a few stray vertices would
- * make the rest blue); returns {largest, rms, red} of those distances. */
+ * make the rest blue), its positions back in the input frame (plus userData.mzc.centre);
+ * returns {largest, rms, red} of those distances. */
 function colourByError(geometry, original) {
   const distance = new Distance(original);
-  const position = geometry.attributes.position;
-  const d = Float64Array.from({ length: position.count }, (_, i) => distance.to(position.getX(i), position.getY(i), position.getZ(i)));
+  const position = geometry.attributes.position, [x, y, z] = geometry.userData.mzc.centre;
+  const d = Float64Array.from({ length: position.count }, (_, i) => distance.to(position.getX(i) + x, position.getY(i) + y, position.getZ(i) + z));
   const sorted = d.slice().sort();
   const red = sorted[Math.floor(0.99 * (sorted.length - 1))] ?? 0;
   const colours = new Float32Array(position.count * 3);

@@ -92,15 +92,31 @@ def boundary_edges(triangles, count):
 
 class Neighbours:
     """The boundary vertices (``vertex``, the indices of the boundary edges' ends in order) and,
-    for each, the CANDIDATES nearest within REACH spacings (``candidate``, numbered as
-    ``vertex``; its own count where there are fewer) and how far (``distance``; inf)."""
+    for each, the CANDIDATES nearest closer than REACH spacings (``candidate``, numbered as
+    ``vertex``; its own count where there are fewer) and how far (``distance``; inf).
+
+    Nearest by squared distance (dx dx + dy dy + dz dz < (REACH spacing)^2), a tie by the lower
+    number (spec/zgrid.md, Zipping the charts): a KD-tree's k nearest would keep whichever of
+    equally far vertices its tree visits first (lattice points on a flat face are equally far),
+    so the tree only finds the pairs within reach and the order is made here."""
 
     def __init__(self, points, boundary, spacing):
         self.vertex = np.unique(boundary[:, :2])
-        size = len(self.vertex)
-        distance, candidate = cKDTree(points[self.vertex]).query(
-            points[self.vertex], k=min(CANDIDATES, size), distance_upper_bound=REACH * spacing)
-        self.distance, self.candidate = distance.reshape(size, -1), candidate.reshape(size, -1)
+        size, p, reach = len(self.vertex), points[self.vertex], REACH * spacing
+        pairs = cKDTree(p).query_pairs(reach * (1 + 1e-6), output_type="ndarray")   # a margin: the test below decides
+        here = np.concatenate([np.arange(size), pairs[:, 0], pairs[:, 1]])
+        there = np.concatenate([np.arange(size), pairs[:, 1], pairs[:, 0]])
+        offset = p[there] - p[here]
+        squared = dotted(offset, offset)
+        within = squared < reach * reach
+        here, there, squared = here[within], there[within], squared[within]
+        order = np.lexsort((there, squared, here))
+        here, there, squared = here[order], there[order], squared[order]
+        column = np.arange(len(here)) - np.searchsorted(here, here)
+        kept, count = column < CANDIDATES, min(CANDIDATES, size)
+        self.candidate, self.distance = np.full((size, count), size), np.full((size, count), np.inf)
+        self.candidate[here[kept], column[kept]] = there[kept]
+        self.distance[here[kept], column[kept]] = np.sqrt(squared[kept])
 
 
 def welded(points, triangles, chart, boundary, near, spacing):
