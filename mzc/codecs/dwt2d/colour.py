@@ -27,8 +27,8 @@ from mzc.codecs.dwt2d import (
     decode_bands,
     encode_bands,
     encode_corrections,
+    lifting,
 )
-from mzc.codecs.dwt2d import lifting
 from mzc.codecs.dwt2d import wavelet as w2
 from mzc.errors import MzcError
 
@@ -164,10 +164,10 @@ def reconstructed(qflat, steps, levels):
 class Prepared:
     """An image ready to be coded at any steps: its three filled YCoCg-R channels' bands."""
 
-    def __init__(self, rgb, mask):
+    def __init__(self, rgb, mask, levels=None):
         rgb, self.mask = check_image(rgb, mask)
         self.rgb = rgb.astype(np.int64)
-        self.levels = w2.default_levels(self.mask.shape, COARSEST)
+        self.levels = w2.default_levels(self.mask.shape, COARSEST) if levels is None else levels
         self.relevant = w2.flatten(lifting.relevance(self.mask, "bior2.2", self.levels))
         self.bands = [[np.where(relevant, band, 0) for band, relevant in zip(flat_bands(plane, self.levels),
                                                                              self.relevant)]
@@ -242,16 +242,20 @@ def check_image(rgb, mask):
     return rgb, mask
 
 
-def encode_colour(rgb, mask, *, max_error=None, psnr=None):
+def encode_colour(rgb, mask, *, max_error=None, psnr=None, levels=None):
     """Section bytes of an (R, C, 3) uint8 image at the True nodes of ``mask``.
 
     ``max_error`` E (whole 8-bit levels, 0..127): |decoded - rgb| <= E at every valid node (E = 0:
     lossless); ``psnr`` (dB): the largest luma step found whose PSNR over the valid nodes meets it;
-    neither: psnr DEFAULT_PSNR.
+    neither: psnr DEFAULT_PSNR. ``levels``: of the wavelet, 0..12 (default: until the coarsest band
+    is about COARSEST nodes across).
     """
+    if levels is not None and not (isinstance(levels, int | np.integer) and 0 <= levels <= w2.MAX_LEVELS):
+        raise MzcError(f"levels {levels} is not a whole number 0..{w2.MAX_LEVELS}", field="levels",
+                       options=("levels",))
     if max_error is not None and psnr is not None:
         raise MzcError("give max_error or psnr, not both", field="max_error", options=("max_error", "psnr"))
-    prepared = Prepared(rgb, mask)
+    prepared = Prepared(rgb, mask, levels)
     if max_error is not None:
         if not (0 <= max_error <= MAX_CORRECTION_ERROR and float(max_error).is_integer()):
             raise MzcError(f"max_error {max_error} is not a whole number of levels 0..{MAX_CORRECTION_ERROR}",
