@@ -24,7 +24,7 @@ sys.path.insert(0, str(REPO / "benchmarks"))
 import colour as benchmark  # noqa: E402
 
 FIXTURES = REPO / "tests" / "fixtures" / "colour"
-FIXTURE = FIXTURES / "colour-section-1.bin"
+FIXTURE_NAMES = {"colour-section-1": 1, "colour-section-1-integer": 0}   # name: its transform
 SPEC = REPO / "spec" / "colour.md"
 
 
@@ -67,21 +67,22 @@ def images(draw):
 
 
 @settings(max_examples=150, deadline=None)
-@given(images(), st.integers(0, 40))
-def test_max_error_holds_at_every_valid_node_and_invalid_nodes_decode_to_0(image, max_error):
+@given(images(), st.integers(0, 40), st.one_of(st.none(), st.integers(0, 4)))
+def test_max_error_holds_at_every_valid_node_and_invalid_nodes_decode_to_0(image, max_error, levels):
     rgb, mask = image
-    decoded = colour.decode_colour(colour.encode_colour(rgb, mask, max_error=max_error), mask)
+    decoded = colour.decode_colour(colour.encode_colour(rgb, mask, max_error=max_error, levels=levels), mask)
     assert decoded.dtype == np.uint8 and decoded.shape == rgb.shape
     assert np.abs(decoded.astype(int) - rgb)[mask].max(initial=0) <= max_error
     assert not decoded[~mask].any()
 
 
 @settings(max_examples=60, deadline=None)
-@given(images())
-def test_max_error_0_is_lossless(image):
+@given(images(), st.integers(0, 5))
+def test_max_error_0_is_lossless_by_the_integer_lifting_alone(image, levels):
     rgb, mask = image
-    decoded = colour.decode_colour(colour.encode_colour(rgb, mask, max_error=0), mask)
-    assert np.array_equal(decoded[mask], rgb[mask])
+    section = colour.encode_colour(rgb, mask, max_error=0, levels=levels)
+    assert np.array_equal(colour.decode_colour(section, mask)[mask], rgb[mask])
+    assert colour.read_header(section, "x")[5:10] == (0, 16, 16, 16, 0)   # the 5/3 at step 1, no correction
 
 
 @settings(max_examples=100, deadline=None)
@@ -129,7 +130,7 @@ def test_a_psnr_target_is_met_within_a_tenth_of_a_db(target):
 def test_chroma_is_quantised_coarser_than_luma():
     rgb, mask = benchmark.height_field_image(64, 64)
     fields = colour.read_header(colour.encode_colour(rgb, mask, psnr=32), "x")
-    luma, co, cg = fields[5:8]
+    luma, co, cg = fields[6:9]
     assert co > luma and cg > luma
 
 
@@ -199,15 +200,17 @@ def test_section_length_lets_a_container_append_more_sections():
 # --------------------------------------------------------------------------- fixture, spec, golden
 
 
-def fixture():
-    """(section bytes, mask, expected image) of tests/fixtures/colour."""
-    expected = np.load(FIXTURES / "colour-section-1.expected.npz")
-    return FIXTURE.read_bytes(), expected["mask"], expected["rgb"]
+def fixture(name):
+    """(section bytes, mask, expected image) of a fixture of tests/fixtures/colour."""
+    expected = np.load(FIXTURES / f"{name}.expected.npz")
+    return (FIXTURES / f"{name}.bin").read_bytes(), expected["mask"], expected["rgb"]
 
 
-def test_the_fixture_decodes_to_its_expected_image_and_is_never_regenerated():
-    section, mask, rgb = fixture()
-    assert np.array_equal(colour.decode_colour(section, mask), rgb)
+def test_the_fixtures_decode_to_their_expected_images_and_are_never_regenerated():
+    for name, transform in FIXTURE_NAMES.items():
+        section, mask, rgb = fixture(name)
+        assert colour.read_header(section, name)[5] == transform
+        assert np.array_equal(colour.decode_colour(section, mask), rgb)
     for line in (FIXTURES / "SHA256SUMS").read_text().splitlines():
         digest, name = line.split()
         assert hashlib.sha256((FIXTURES / name).read_bytes()).hexdigest() == digest, name
@@ -234,8 +237,10 @@ def test_the_spec_worked_example_decodes_to_the_image_it_shows():
 
 def decoded_digests():
     """{case: SHA-256 of the decoded image} of the fixture and of fresh sections of real images."""
-    section, mask, _rgb = fixture()
-    cases = {"fixture": colour.decode_colour(section, mask)}
+    cases = {}
+    for name in FIXTURE_NAMES:
+        section, mask, _rgb = fixture(name)
+        cases[name] = colour.decode_colour(section, mask)
     rgb, mask = benchmark.height_field_image(64, 48, seed=5)
     cases["height field psnr 33"] = colour.decode_colour(colour.encode_colour(rgb, mask, psnr=33.0), mask)
     cases["height field section"] = np.frombuffer(colour.encode_colour(rgb, mask, max_error=2), dtype=np.uint8)
