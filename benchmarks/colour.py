@@ -213,8 +213,18 @@ def peer_points(name, filled, rgb, mask):
 
 
 def at_psnr(points, psnr):
-    """Bytes at the RMS of ``psnr`` interpolated log-log on the points' Pareto front (None outside it)."""
-    return bytes_at(pareto(points, "colour rms"), 255.0 / 10 ** (psnr / 20))
+    """Bytes at the RMS of ``psnr`` interpolated log-log on the points' Pareto front (None outside it;
+    an exact point, RMS 0, has no logarithm and is left out)."""
+    return bytes_at(pareto([p for p in points if p["colour"]["rms"] > 0], "colour rms"), 255.0 / 10 ** (psnr / 20))
+
+
+def peer_cell(item, peer, target):
+    """A peer's bytes at a PSNR target, or the best PSNR its ladder reached when that is below the target."""
+    found = item["at_psnr"][str(target)][peer]
+    if found is not None:
+        return fmt(found, 4)
+    best = max(p["colour"]["psnr"] for p in item["peers"][peer])
+    return f"n/a (reaches {best:.1f} dB)" if best < target else "n/a"
 
 
 def lossless_bytes(filled):
@@ -278,7 +288,7 @@ def markdown(items, settings, targets):
             known = [b for b in peers.values() if b]
             lines.append(f"| {item['name']} | {point['target']:g} | {point['bytes']} | "
                          f"{point['colour']['psnr']:.2f} | {point['colour']['rms']:.2f} | "
-                         + " | ".join(fmt(peers[p], 4) for p in PEERS)
+                         + " | ".join(peer_cell(item, p, point["target"]) for p in PEERS)
                          + f" | {fmt(point['bytes'] / min(known) if known else None)} |")
     lines += ["", "## Lossless and Draco's colour attribute", "",
               "Draco: the valid nodes (the gridded images: the source cloud's points) as a point cloud, positions at "
