@@ -262,3 +262,16 @@ def test_decode_gives_the_same_bytes_with_numpys_simd_loops_switched_off():
     assert result.returncode == 0, result.stderr[-2000:]
     assert json.loads(result.stdout) == decoded_digests()
 
+
+
+def test_the_benchmark_measures_every_contender_on_one_image():
+    """benchmarks/colour.py on a small generated image: mzc meets its target, every peer is probed,
+    Draco's colour bytes are positive, and the report names every image and peer."""
+    rgb, mask = benchmark.height_field_image(48, 64, seed=2)
+    item = benchmark.measure_image("small", rgb, mask, *benchmark.node_cloud(rgb, mask), "generated", (32.0,),
+                                   lambda _text: None)
+    assert item["mzc"][0]["colour"]["psnr"] >= 32.0 and item["mzc"][-1]["colour"]["rms"] == 0
+    assert all(len(points) == len(benchmark.PEERS[peer][2]) for peer, points in item["peers"].items())
+    assert item["draco"]["colour"] > 0 and item["draco"]["points"] == mask.sum()
+    report = benchmark.markdown([item], {"quick": True, "commit": "x", "started": "now", "wall_s": 1.0}, (32.0,))
+    assert "| small | 32 |" in report and all(peer in report for peer in benchmark.PEERS)
