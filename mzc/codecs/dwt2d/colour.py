@@ -312,15 +312,15 @@ def encode_colour(rgb, mask, *, max_error=None, psnr=None, levels=None):
                        options=("levels",))
     if max_error is not None and psnr is not None:
         raise MzcError("give max_error or psnr, not both", field="max_error", options=("max_error", "psnr"))
-    prepared = Prepared(rgb, mask, levels)
-    if max_error is not None:
-        if not (0 <= max_error <= MAX_CORRECTION_ERROR and float(max_error).is_integer()):
-            raise MzcError(f"max_error {max_error} is not a whole number of levels 0..{MAX_CORRECTION_ERROR}",
-                           field="max_error", options=("max_error",))
-        return bounded_section(prepared, int(max_error))
+    if max_error is not None and not (0 <= max_error <= MAX_CORRECTION_ERROR and float(max_error).is_integer()):
+        raise MzcError(f"max_error {max_error} is not a whole number of levels 0..{MAX_CORRECTION_ERROR}",
+                       field="max_error", options=("max_error",))
     target = DEFAULT_PSNR if psnr is None else float(psnr)
     if not 0 < target < 200:
         raise MzcError(f"psnr {psnr} is not in 0..200 dB", field="psnr", options=("psnr",))
+    prepared = Prepared(rgb, mask, levels)
+    if max_error is not None:
+        return bounded_section(prepared, int(max_error))
     return psnr_section(prepared, target)
 
 
