@@ -56,13 +56,13 @@ MZC = "mzc colour"
 PEERS = {   # name: (encode(image, knob), decode, the knob's ladder from coarse to fine)
     "JPEG XL": (lambda im, k: __import__("imagecodecs").jpegxl_encode(im, distance=k, effort=7),
                 lambda b: __import__("imagecodecs").jpegxl_decode(b),
-                (12.0, 8.0, 5.0, 3.5, 2.5, 1.8, 1.3, 0.9, 0.6, 0.4, 0.25, 0.15, 0.08)),
+                (25.0, 18.0, 12.0, 8.0, 5.0, 3.5, 2.5, 1.8, 1.3, 0.9, 0.6, 0.4, 0.25, 0.15, 0.08)),
     "AVIF": (lambda im, k: __import__("imagecodecs").avif_encode(im, level=k, speed=6),
-             lambda b: __import__("imagecodecs").avif_decode(b), (5, 15, 25, 35, 45, 55, 65, 75, 85, 92, 97, 99)),
-    "WebP": (lambda im, k: __import__("imagecodecs").webp_encode(im, level=k, method=6),
-             lambda b: __import__("imagecodecs").webp_decode(b), (2, 10, 20, 35, 50, 65, 80, 90, 95, 100)),
+             lambda b: __import__("imagecodecs").avif_decode(b), (0, 2, 5, 15, 25, 35, 45, 55, 65, 75, 85, 92, 97, 99)),
+    "WebP": (lambda im, k: __import__("imagecodecs").webp_encode(im, level=k, lossless=False, method=6),
+             lambda b: __import__("imagecodecs").webp_decode(b), (0, 2, 10, 20, 35, 50, 65, 80, 90, 95, 100)),
     "JPEG 2000": (lambda im, k: __import__("imagecodecs").jpeg2k_encode(im, level=k, codecformat="j2k"),
-                  lambda b: __import__("imagecodecs").jpeg2k_decode(b), (22, 26, 30, 34, 38, 42, 46, 50, 55)),
+                  lambda b: __import__("imagecodecs").jpeg2k_decode(b), (18, 22, 26, 30, 34, 38, 42, 46, 50, 55)),
 }
 LOSSLESS = {
     "JPEG XL": lambda im: __import__("imagecodecs").jpegxl_encode(im, lossless=True, effort=7),
@@ -213,18 +213,25 @@ def peer_points(name, filled, rgb, mask):
 
 
 def at_psnr(points, psnr):
-    """Bytes at the RMS of ``psnr`` interpolated log-log on the points' Pareto front (None outside it;
-    an exact point, RMS 0, has no logarithm and is left out)."""
-    return bytes_at(pareto([p for p in points if p["colour"]["rms"] > 0], "colour rms"), 255.0 / 10 ** (psnr / 20))
+    """Bytes at the RMS of ``psnr`` interpolated log-log on the points' Pareto front; when even the
+    coarsest setting probed is better than ``psnr``, its bytes (an upper bound); None when no setting
+    reaches it. (An exact point, RMS 0, has no logarithm and is left out.)"""
+    front = pareto([p for p in points if p["colour"]["rms"] > 0], "colour rms")
+    return bytes_at(front, 255.0 / 10 ** (psnr / 20), below_cheapest=True)
+
+
+def coarsest_psnr(points):
+    """The PSNR of a peer's cheapest setting probed."""
+    return min(points, key=lambda p: p["bytes"])["colour"]["psnr"]
 
 
 def peer_cell(item, peer, target):
-    """A peer's bytes at a PSNR target, or the best PSNR its ladder reached when that is below the target."""
-    found = item["at_psnr"][str(target)][peer]
-    if found is not None:
-        return fmt(found, 4)
-    best = max(p["colour"]["psnr"] for p in item["peers"][peer])
-    return f"n/a (reaches {best:.1f} dB)" if best < target else "n/a"
+    """A peer's bytes at a PSNR target: '<=' its cheapest setting's when that is already better than the
+    target, or the best PSNR its ladder reached when that is below the target."""
+    found, points = item["at_psnr"][str(target)][peer], item["peers"][peer]
+    if found is None:
+        return f"n/a (reaches {max(p['colour']['psnr'] for p in points):.1f} dB)"
+    return f"<= {found:.0f}" if coarsest_psnr(points) > target else f"{found:.0f}"
 
 
 def lossless_bytes(filled):
