@@ -16,6 +16,7 @@ import warnings
 
 import numpy as np
 
+from mzc.colours import to_8_bits
 from mzc.errors import MzcError
 from mzc.meshes import Mesh
 from mzc.meshes.common import fan_triangulate_ragged
@@ -47,15 +48,38 @@ def read(data: bytes, source: str) -> Mesh:
         raise MzcError("no 'v' lines: the OBJ file has no vertices", source=source)
     points = obj_vertices(tokens, vertex_lines, source)
     triangles = obj_triangles(tokens, face_lines, vertex_lines, source)
-    return Mesh(points, triangles, dropped=obj_dropped(tokens, vertex_lines))
+    colors = obj_colours(tokens, vertex_lines, source)
+    return Mesh(points, triangles, dropped=obj_dropped(tokens, vertex_lines, colors is not None), colors=colors)
 
 
-def obj_dropped(tokens, vertex_lines):
+def vertex_arguments(tokens, vertex_lines):
+    """(token indices of the ``v`` lines' arguments, each one's position on its line from 1,
+    how many arguments each ``v`` line has)."""
+    arguments = tokens.arguments(vertex_lines)
+    line = tokens.line[arguments]
+    position = arguments - np.searchsorted(tokens.line, line)  # 1 = first argument
+    return arguments, position, np.bincount(np.searchsorted(vertex_lines, line), minlength=len(vertex_lines))
+
+
+def obj_colours(tokens, vertex_lines, source):
+    """(n, 3) uint8 colours of ``v x y z r g b`` lines, when every ``v`` line has them (floats in
+    0..1, or 0..255 when one exceeds 1: ``mzc.colours.to_8_bits``), else None."""
+    arguments, position, counts = vertex_arguments(tokens, vertex_lines)
+    if not (counts >= 6).all():
+        return None
+    rgb = arguments[(position >= 4) & (position <= 6)]
+    values = tokens.numbers(rgb, np.float64)
+    if values is None:
+        raise first_bad_token(tokens, rgb, is_number, "not a number", source)
+    return to_8_bits(values.reshape(-1, 3))
+
+
+def obj_dropped(tokens, vertex_lines, coloured_read):
     """What an OBJ file holds beside its shape, which mzc does not keep: vertex colours (``v x y
-    z r g b``), texture coordinates (``vt``), normals (``vn``: recomputed from the triangles) and
-    materials (``mtllib``: a texture's image)."""
-    coloured = int((np.bincount(np.searchsorted(vertex_lines, tokens.line[tokens.arguments(vertex_lines)]),
-                                minlength=len(vertex_lines)) >= 6).sum())
+    z r g b``) when not every vertex has them (``coloured_read``: they are read), texture
+    coordinates (``vt``), normals (``vn``: recomputed from the triangles) and materials
+    (``mtllib``: a texture's image)."""
+    coloured = 0 if coloured_read else int((vertex_arguments(tokens, vertex_lines)[2] >= 6).sum())
     counts = [(coloured, "vertex colours"), (tokens.statements(b"vt"), "texture coordinates (vt)"),
               (tokens.statements(b"vn"), "normals (vn; recomputed from the triangles)"),
               (tokens.statements(b"mtllib"), "materials (mtllib)")]
@@ -166,11 +190,8 @@ def last_index(mask):
 
 
 def obj_vertices(tokens, vertex_lines, source):
-    """(n, 3) x y z of the ``v`` lines; w and colour columns are ignored."""
-    arguments = tokens.arguments(vertex_lines)
-    line = tokens.line[arguments]
-    position = arguments - np.searchsorted(tokens.line, line)  # 1 = first argument
-    counts = np.bincount(np.searchsorted(vertex_lines, line), minlength=len(vertex_lines))
+    """(n, 3) x y z of the ``v`` lines; w and colour columns are ignored (``obj_colours``)."""
+    arguments, position, counts = vertex_arguments(tokens, vertex_lines)
     if (counts < 3).any():
         raise MzcError("a vertex needs x y z", source=source,
                        line=tokens.number(int(vertex_lines[np.argmax(counts < 3)])))
@@ -219,7 +240,14 @@ def first_bad_token(tokens, indices, accept, message, source):
 
 
 def write(mesh: Mesh) -> bytes:
-    """OBJ bytes of ``mesh``: one string-format call over the whole arrays, shortest exact floats."""
-    vertices = ("v %r %r %r\n" * len(mesh.points)) % tuple(mesh.points.ravel().tolist())
+    """OBJ bytes of ``mesh``: one string-format call over the whole arrays, shortest exact floats;
+    colours as ``v x y z r g b``, each the 0..1 fraction of its 8-bit level (``level / 255``,
+    shortest exact, which reads back as that level)."""
+    colors = getattr(mesh, "colors", None)
+    if colors is not None:
+        values = np.column_stack([mesh.points, colors / 255.0])
+        vertices = ("v %r %r %r %r %r %r\n" * len(mesh.points)) % tuple(values.ravel().tolist())
+    else:
+        vertices = ("v %r %r %r\n" * len(mesh.points)) % tuple(mesh.points.ravel().tolist())
     faces = ("f %d %d %d\n" * len(mesh.triangles)) % tuple((mesh.triangles.ravel() + 1).tolist())
     return (vertices + faces).encode("ascii")

@@ -16,6 +16,7 @@ from typing import NamedTuple
 
 import numpy as np
 
+from mzc.colours import to_8_bits
 from mzc.errors import MzcError
 from mzc.meshes import Mesh
 from mzc.meshes.common import as_indices, decode_text, fan_triangulate_ragged, flat_numbers
@@ -320,22 +321,39 @@ def ply_mesh(elements, tables, source):
     faces, strips = index_lists(tables, "face", source), index_lists(tables, "tristrips", source)
     triangles = ([ply_face_triangles(faces, source)] if faces is not None else []) + \
         ([strip_triangles(strips, source)] if strips is not None else [])
+    colors = ply_colours(elements, vertex)
+    colour_names = COLOURS if colors is not None else ()
     if sum(len(part) for part in triangles):   # an ``element face 0`` leaves a cloud
-        return Mesh(points, np.concatenate(triangles), dropped=ply_dropped(elements, ()))
+        return Mesh(points, np.concatenate(triangles), dropped=ply_dropped(elements, colour_names), colors=colors)
     normals = None
     if all(isinstance(vertex.get(axis), np.ndarray) for axis in NORMALS):
         normals = np.column_stack([real_array(vertex[axis], axis) for axis in NORMALS])
-    return Mesh(points, normals=normals, dropped=ply_dropped(elements, NORMALS if normals is not None else ()))
+    return Mesh(points, normals=normals, colors=colors,
+                dropped=ply_dropped(elements, (*(NORMALS if normals is not None else ()), *colour_names)))
 
 
 NORMALS = ("nx", "ny", "nz")
+COLOURS = ("red", "green", "blue")
 
 
-def ply_dropped(elements, normals):
+def ply_colours(elements, vertex):
+    """(n, 3) uint8 colours of the vertex properties ``red green blue`` (``mzc.colours.to_8_bits``
+    by the type the header declares for red: uchar as they are, ushort scaled, float as 0..1), or
+    None."""
+    if not all(isinstance(vertex.get(name), np.ndarray) for name in COLOURS):
+        return None
+    declared = np.dtype(dict(next(element for element in elements if element.name == "vertex").properties)["red"])
+    values = np.column_stack([real_array(vertex[name], name) for name in COLOURS])
+    return to_8_bits(values, 8 * declared.itemsize if declared.kind in "iu" else None)
+
+
+def ply_dropped(elements, kept_vertex):
     """What a PLY file holds beside its shape, which mzc does not keep: each element's other
-    properties (colours, a mesh's normals, texture coordinates, ...) and other elements that
-    hold records, by name; ``normals`` are the vertex properties a cloud keeps."""
-    kept = {"vertex": {"x", "y", "z", *normals}, "face": set(FACE_LIST_NAMES), "tristrips": set(FACE_LIST_NAMES)}
+    properties (a mesh's normals, alpha, texture coordinates, ...) and other elements that
+    hold records, by name; ``kept_vertex`` are the vertex properties the Mesh keeps (a cloud's
+    normals, colours)."""
+    kept = {"vertex": {"x", "y", "z", *kept_vertex}, "face": set(FACE_LIST_NAMES),
+            "tristrips": set(FACE_LIST_NAMES)}
     dropped = []
     for element in elements:
         if not element.count:

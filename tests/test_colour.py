@@ -1,0 +1,170 @@
+"""Colour through the uncompressed pipeline: readers fill Mesh.colors, slice samples it at the
+nodes, the z-grid carries it, triangulate writes it back (issue 32).
+
+The surfaces are generated: a height field over [0, 10] x [0, 8] whose colour is a smooth
+function of (x, y) (``analytic_colour``), written in each format, so every node's colour can be
+checked against the colour the function gives at the node's own (x, y).
+"""
+
+import importlib.util
+import io
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from mzc.colours import to_8_bits, unpack_rgb
+from mzc.meshes import Mesh, mesh_from_bytes
+from mzc.ops.triangulation import grid_triangles
+
+WIDTH, HEIGHT = 10.0, 8.0
+
+
+def analytic_colour(x, y):
+    """(n, 3) float colours in 0..255 of the generated surface at (x, y): linear ramps in red and
+    green, a smooth wave in blue."""
+    return np.column_stack([255 * x / WIDTH, 255 * y / HEIGHT, 127.5 + 100 * np.sin(0.5 * x) * np.cos(0.4 * y)])
+
+
+def height(x, y):
+    """The generated surface's height at (x, y)."""
+    return 0.5 * np.sin(0.3 * x) + 0.2 * y
+
+
+def coloured_surface(nx=41, ny=33):
+    """A Mesh of the height field on an nx x ny lattice, each vertex coloured by ``analytic_colour``."""
+    x, y = np.meshgrid(np.linspace(0, WIDTH, nx), np.linspace(0, HEIGHT, ny))
+    x, y = x.ravel(), y.ravel()
+    points = np.column_stack([x, y, height(x, y)])
+    triangles = grid_triangles(np.ones((ny, nx), dtype=bool))
+    return Mesh(points, triangles, colors=np.round(analytic_colour(x, y)).astype(np.uint8))
+
+
+def ascii_ply(mesh, colour_type="uchar"):
+    """ASCII PLY bytes of ``mesh`` with its colours as ``colour_type`` properties (uchar levels,
+    or float fractions)."""
+    values = mesh.colors if colour_type == "uchar" else mesh.colors / 255.0
+    header = ("ply\nformat ascii 1.0\n"
+              f"element vertex {len(mesh.points)}\nproperty double x\nproperty double y\nproperty double z\n"
+              + "".join(f"property {colour_type} {name}\n" for name in ("red", "green", "blue"))
+              + f"element face {len(mesh.triangles)}\nproperty list uchar int vertex_indices\nend_header\n")
+    vertices = "".join(f"{x!r} {y!r} {z!r} {r!r} {g!r} {b!r}\n" for (x, y, z), (r, g, b)
+                       in zip(mesh.points.tolist(), values.tolist()))
+    faces = "".join(f"3 {a} {b} {c}\n" for a, b, c in mesh.triangles.tolist())
+    return (header + vertices + faces).encode()
+
+
+def pcd_bytes(mesh, kind="F"):
+    """A binary PCD of ``mesh``'s points with PCL's packed ``rgb`` (a float32, ``kind`` F, or a
+    uint32, U: blue in the lowest byte)."""
+    n = len(mesh.points)
+    records = np.empty(n, dtype=[("x", "<f4"), ("y", "<f4"), ("z", "<f4"), ("rgb", "<u4")])
+    records["x"], records["y"], records["z"] = mesh.points.T
+    r, g, b = (mesh.colors[:, i].astype(np.uint32) for i in range(3))
+    records["rgb"] = (r << 16) | (g << 8) | b
+    header = (f"VERSION .7\nFIELDS x y z rgb\nSIZE 4 4 4 4\nTYPE F F F {kind}\nCOUNT 1 1 1 1\nWIDTH {n}\n"
+              f"HEIGHT 1\nPOINTS {n}\nDATA binary\n")
+    return header.encode() + records.tobytes()
+
+
+def test_colour_values_become_8_bits_as_their_files_mean_them():
+    assert to_8_bits(np.array([[0, 128, 255]]), 8).tolist() == [[0, 128, 255]]
+    assert to_8_bits(np.array([[0, 32896, 65535]]), 16).tolist() == [[0, 128, 255]]
+    assert to_8_bits(np.array([[0.0, 0.5, 1.0]])).tolist() == [[0, 128, 255]]      # fractions
+    assert to_8_bits(np.array([[0.0, 2.0, 255.0]])).tolist() == [[0, 2, 255]]       # levels: one exceeds 1
+    assert to_8_bits(np.array([[-3.0, np.nan, 1e9]]), 8).tolist() == [[0, 0, 255]]  # clipped
+    packed = np.array([0x00A0B0C0, 0xFF010203], dtype="<u4")
+    assert unpack_rgb(packed).tolist() == [[0xA0, 0xB0, 0xC0], [1, 2, 3]]
+    assert unpack_rgb(packed.view("<f4")).tolist() == [[0xA0, 0xB0, 0xC0], [1, 2, 3]]   # a NaN's bits too
+
+
+def test_mesh_colors_are_checked_like_its_other_fields():
+    from mzc.errors import MzcError
+
+    mesh = Mesh(np.zeros((2, 3)), colors=[[1, 2, 3], [4.0, 5.0, 255.0]])
+    assert mesh.colors.dtype == np.uint8 and mesh.colors.tolist() == [[1, 2, 3], [4, 5, 255]]
+    for bad, message in (([[1, 2, 3]], "shape"), ([[1, 2, 3], [4, 5, 256]], "256"), ([[1, 2, 3], [4, 5, 0.5]], "0.5"),
+                         ([["a", "b", "c"]] * 2, "integers")):
+        with pytest.raises(MzcError, match=message):
+            Mesh(np.zeros((2, 3)), colors=bad)
+
+
+@pytest.mark.parametrize("colour_type", ["uchar", "float", "ushort"])
+def test_ply_vertex_colours_are_read(colour_type):
+    mesh = coloured_surface(6, 5)
+    data = ascii_ply(mesh, "uchar" if colour_type == "ushort" else colour_type)
+    if colour_type == "ushort":   # 16-bit levels: 257 times the 8-bit ones
+        data = data.replace(b"property uchar", b"property ushort")
+        head, body = data.split(b"end_header\n")
+        lines = body.decode().splitlines()
+        for i in range(len(mesh.points)):
+            words = lines[i].split()
+            lines[i] = " ".join(words[:3] + [str(int(w) * 257) for w in words[3:]])
+        data = head + b"end_header\n" + "\n".join(lines).encode() + b"\n"
+    read = mesh_from_bytes(data, "c.ply")
+    np.testing.assert_array_equal(read.colors, mesh.colors)
+    assert read.dropped == ()
+
+
+def test_binary_ply_colours_with_alpha_are_read_and_alpha_named():
+    mesh = coloured_surface(5, 4)
+    n = len(mesh.points)
+    records = np.empty(n, dtype=[("x", "<f4"), ("y", "<f4"), ("z", "<f4"), ("red", "u1"), ("green", "u1"),
+                                 ("blue", "u1"), ("alpha", "u1")])
+    records["x"], records["y"], records["z"] = mesh.points.T
+    records["red"], records["green"], records["blue"] = mesh.colors.T
+    records["alpha"] = 200
+    header = (f"ply\nformat binary_little_endian 1.0\nelement vertex {n}\nproperty float x\nproperty float y\n"
+              "property float z\nproperty uchar red\nproperty uchar green\nproperty uchar blue\nproperty uchar alpha\n"
+              "end_header\n")
+    read = mesh_from_bytes(header.encode() + records.tobytes(), "c.ply")
+    np.testing.assert_array_equal(read.colors, mesh.colors)
+    assert read.dropped == ("vertex properties alpha",)
+
+
+def test_obj_vertex_colours_are_read_as_fractions_or_levels():
+    mesh = coloured_surface(5, 4)
+    for scale in (1 / 255, 1.0):
+        lines = [f"v {x!r} {y!r} {z!r} {r * scale!r} {g * scale!r} {b * scale!r}"
+                 for (x, y, z), (r, g, b) in zip(mesh.points.tolist(), mesh.colors.astype(float).tolist())]
+        faces = [f"f {a + 1} {b + 1} {c + 1}" for a, b, c in mesh.triangles.tolist()]
+        read = mesh_from_bytes("\n".join(lines + faces).encode(), "c.obj")
+        np.testing.assert_array_equal(read.colors, mesh.colors)
+        assert read.dropped == ()
+
+
+@pytest.mark.parametrize("kind", ["F", "U"])
+def test_pcd_packed_rgb_is_read(kind):
+    mesh = coloured_surface(6, 5)
+    read = mesh_from_bytes(pcd_bytes(mesh, kind), "c.pcd")
+    np.testing.assert_array_equal(read.colors, mesh.colors)
+    assert read.dropped == ()
+
+
+@pytest.mark.skipif(not importlib.util.find_spec("laspy"), reason="laspy (the las extra) is not installed")
+def test_las_rgb_is_read_from_16_bits():
+    import laspy
+
+    mesh = coloured_surface(6, 5)
+    las = laspy.create(point_format=3, file_version="1.2")
+    las.header.scales = [0.001] * 3
+    las.x, las.y, las.z = mesh.points.T
+    las.red, las.green, las.blue = (mesh.colors[:, i].astype(np.uint16) * 257 for i in range(3))
+    buffer = io.BytesIO()
+    las.write(buffer)
+    read = mesh_from_bytes(buffer.getvalue(), "c.las")
+    np.testing.assert_array_equal(read.colors, mesh.colors)
+    assert read.dropped == ()
+
+
+@settings(max_examples=60, deadline=None)
+@given(st.lists(st.tuples(st.integers(0, 255), st.integers(0, 255), st.integers(0, 255)), min_size=3, max_size=20))
+def test_obj_written_with_colours_reads_back_the_same_levels(colours):
+    """OBJ's ``v x y z r g b`` written as level / 255 reads back as the very levels, whatever they are
+    (an all-dark mesh too: every fraction is at most 1)."""
+    from mzc.meshes import mesh_to_bytes
+
+    n = len(colours)
+    mesh = Mesh(np.arange(3 * n, dtype=float).reshape(n, 3), colors=colours)
+    np.testing.assert_array_equal(mesh_from_bytes(mesh_to_bytes(mesh, "obj"), "c.obj").colors, mesh.colors)
