@@ -68,6 +68,20 @@ def pcd_bytes(mesh, kind="F"):
     return header.encode() + records.tobytes()
 
 
+def las_bytes(mesh):
+    """A LAS 1.2 cloud (point format 3) of ``mesh``'s points, millimetre steps, its colours as LAS's
+    16-bit levels (257 times the 8-bit ones), written by laspy."""
+    import laspy
+
+    las = laspy.create(point_format=3, file_version="1.2")
+    las.header.scales = [0.001] * 3
+    las.x, las.y, las.z = mesh.points.T
+    las.red, las.green, las.blue = (mesh.colors[:, i].astype(np.uint16) * 257 for i in range(3))
+    buffer = io.BytesIO()
+    las.write(buffer)
+    return buffer.getvalue()
+
+
 def test_colour_values_become_8_bits_as_their_files_mean_them():
     assert to_8_bits(np.array([[0, 128, 255]]), 8).tolist() == [[0, 128, 255]]
     assert to_8_bits(np.array([[0, 32896, 65535]]), 16).tolist() == [[0, 128, 255]]
@@ -144,16 +158,8 @@ def test_pcd_packed_rgb_is_read(kind):
 
 @pytest.mark.skipif(not importlib.util.find_spec("laspy"), reason="laspy (the las extra) is not installed")
 def test_las_rgb_is_read_from_16_bits():
-    import laspy
-
     mesh = coloured_surface(6, 5)
-    las = laspy.create(point_format=3, file_version="1.2")
-    las.header.scales = [0.001] * 3
-    las.x, las.y, las.z = mesh.points.T
-    las.red, las.green, las.blue = (mesh.colors[:, i].astype(np.uint16) * 257 for i in range(3))
-    buffer = io.BytesIO()
-    las.write(buffer)
-    read = mesh_from_bytes(buffer.getvalue(), "c.las")
+    read = mesh_from_bytes(las_bytes(mesh), "c.las")
     np.testing.assert_array_equal(read.colors, mesh.colors)
     assert read.dropped == ()
 
@@ -168,3 +174,140 @@ def test_obj_written_with_colours_reads_back_the_same_levels(colours):
     n = len(colours)
     mesh = Mesh(np.arange(3 * n, dtype=float).reshape(n, 3), colors=colours)
     np.testing.assert_array_equal(mesh_from_bytes(mesh_to_bytes(mesh, "obj"), "c.obj").colors, mesh.colors)
+
+
+def node_errors(grid, colour_of):
+    """Each valid node's colour minus ``colour_of`` its input-frame point, every chart's nodes."""
+    errors = []
+    for part in grid.chart_grids():
+        points = part.to_input_frame(part.node_points()[part.valid])
+        errors.append(part.colors[part.valid].astype(float) - colour_of(points))
+    return np.concatenate(errors)
+
+
+def ball():
+    """A ball of radius 20 about (1, 2, 3) (a subdivided icosahedron) whose colour is linear in the
+    position, (x, y, z) - centre scaled from -20..20 to 0..255 (its vertices' rounded to levels),
+    with that colour function: linear, so a triangle's interpolated colour is the function's at
+    every point of it, to the rounding of the corners' levels."""
+    from mzc.samples import icosphere
+
+    points, faces = icosphere(4)
+    centre = np.array([1.0, 2.0, 3.0])
+    points = 20 * points + centre
+
+    def colour_of(at):
+        return 127.5 + 127.5 * (at - centre) / 20
+
+    return Mesh(points, faces, colors=np.round(colour_of(points))), colour_of
+
+
+@pytest.mark.parametrize("options", [{}, {"projection": "cylindrical"}, {"charts": 6}])
+def test_slice_samples_a_linear_colour_within_a_level_on_every_projection_and_chart(options):
+    """At every node the colour is the barycentric mix of the hit triangle's corners: for a linear
+    colour that is the function's own value at the node, within half a level of the corners'
+    rounding and half of the node's (spherical: the ball's default grid; cylindrical; 6 charts)."""
+    from mzc.ops.slicing import slice_surface
+
+    mesh, colour_of = ball()
+    grid = slice_surface(mesh, **options)
+    assert (grid.charts is not None) == ("charts" in options)
+    assert grid.colors.shape == (*grid.shape, 3) and grid.colors.dtype == np.uint8
+    assert not grid.colors[~grid.valid].any()
+    errors = node_errors(grid, colour_of)
+    assert len(errors) > 50_000 and np.abs(errors).max() <= 1.0
+
+
+def test_slice_samples_a_height_fields_colour_within_its_interpolation_error():
+    """A grid finer than the mesh interpolates the corners' colours linearly: the blue wave's
+    second derivative bounds the error (50 levels a unit^2 over cells of 0.25: under 1.5 levels
+    with the roundings)."""
+    from mzc.ops.slicing import slice_surface
+
+    grid = slice_surface(coloured_surface(), d1=0.07, align="pca")
+    errors = node_errors(grid, lambda points: analytic_colour(points[:, 0], points[:, 1]))
+    assert grid.valid.sum() > 15_000 and np.abs(errors).max() <= 1.5 and np.sqrt((errors ** 2).mean()) < 0.5
+
+
+@pytest.mark.parametrize("fmt", ["pcd", "las"])
+def test_a_cloud_gives_each_node_its_nearest_points_colour(fmt):
+    """A cloud's node takes the colour of the point nearest it: on a 0.25 lattice sliced at 0.07,
+    at most the colour's change over half a lattice diagonal (the red and green ramps: 25.5 and
+    31.9 levels a unit, 0.18 of a unit) plus the roundings."""
+    from mzc.ops.slicing import slice_surface
+
+    if fmt == "las" and not importlib.util.find_spec("laspy"):
+        pytest.skip("laspy (the las extra) is not installed")
+    mesh = coloured_surface()
+    cloud = mesh_from_bytes(pcd_bytes(mesh) if fmt == "pcd" else las_bytes(mesh), f"c.{fmt}")
+    grid = slice_surface(cloud, d1=0.07, cloud="delaunay")
+    errors = node_errors(grid, lambda points: analytic_colour(points[:, 0], points[:, 1]))
+    assert np.abs(errors[:, :2]).max() <= 0.18 * 32 + 1 and np.sqrt((errors ** 2).mean()) < 3
+
+
+def test_a_grid_without_colours_stays_without():
+    from mzc.ops.slicing import slice_surface
+
+    mesh = coloured_surface()
+    assert slice_surface(Mesh(mesh.points, mesh.triangles)).colors is None
+
+
+@st.composite
+def coloured_grids(draw):
+    """Small grids with holes, any colours (those of invalid nodes any too: the grid makes them
+    0), raw bodies of either type."""
+    from hypothesis.extra.numpy import arrays
+
+    from mzc.grid import ZGrid
+
+    shape = draw(st.tuples(st.integers(1, 10), st.integers(1, 10)))
+    z = draw(arrays(float, shape, elements=st.floats(-1e6, 1e6, allow_nan=False, width=32)))
+    z[draw(arrays(bool, shape))] = np.nan
+    colours = draw(arrays(np.uint8, (*shape, 3)))
+    return ZGrid(z, draw(st.floats(1e-3, 1e3)), 0.5, origin=(draw(st.floats(-1e3, 1e3)), 0.0), units="mm",
+                 colors=colours), draw(st.sampled_from(["float64", "float32"]))
+
+
+@settings(max_examples=150, deadline=None)
+@given(coloured_grids())
+def test_a_coloured_grid_round_trips_exactly_through_the_zgrid(case):
+    from mzc.formats import zgrid
+
+    grid, raw = case
+    data = zgrid.write(grid, raw=raw)
+    assert data.startswith(b"mzc-zgrid 5.0\n")
+    back = zgrid.read(data, "t.zg")
+    np.testing.assert_array_equal(back.z, grid.z)   # float32-exact heights
+    assert back.colors.tobytes() == grid.colors.tobytes() and not back.colors[~back.valid].any()
+    assert zgrid.write(back, raw=raw) == data
+
+
+@settings(max_examples=200, deadline=None, derandomize=True)
+@given(coloured_grids(), st.data())
+def test_a_damaged_coloured_zgrid_is_refused_in_one_line(case, data):
+    """A 5.0 file cut short, added to, without its colours line or with another layout is an
+    MzcError naming the field, never other heights or colours (its crc32 fixed up, so the
+    reader's own checks are what refuse it)."""
+    from mzc.errors import MzcError
+    from mzc.formats import zgrid
+
+    from codec_contract import rechecksummed
+
+    grid, raw = case
+    good = zgrid.write(grid, raw=raw)
+    cut = data.draw(st.integers(1, 3 * grid.z.size + 4))
+    for bad in (good[:-cut], good + b"\0" * cut, good.replace(b"colours rgb8\n", b""),
+                good.replace(b"colours rgb8\n", b"colours rgb16\n")):
+        with pytest.raises(MzcError) as error:
+            zgrid.read(rechecksummed(bad), "bad.zg")
+        assert error.value.field in ("data", "colours")
+
+
+def test_a_coloured_grid_has_no_plain_body():
+    from mzc.errors import MzcError
+    from mzc.formats import zgrid
+    from mzc.grid import ZGrid
+
+    grid = ZGrid(np.ones((2, 2)), 1, 1, colors=np.zeros((2, 2, 3)))
+    with pytest.raises(MzcError, match="raw body .mzc-zgrid 5.0"):
+        zgrid.write(grid)
