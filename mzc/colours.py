@@ -56,3 +56,16 @@ def unpack_rgb(values):
     if packed.dtype.itemsize != 4:
         raise MzcError(f"a packed rgb field holds 4 bytes a point, not {packed.dtype.itemsize}", field="rgb")
     return packed.view("<u4").view(np.uint8).reshape(-1, 4)[:, 2::-1].copy()
+
+
+def warn_uncoded(grid, codec):
+    """One MzcWarning when ``grid`` has colours that the compressed format of ``codec`` (a name)
+    does not carry yet, so that they are not lost without a word (issue 32: the z-grid carries
+    them, the codecs' formats code the shape alone)."""
+    if grid.colors is not None:
+        import warnings
+
+        from mzc.errors import MzcWarning
+
+        warnings.warn(MzcWarning(f"not kept: the nodes' colours (mzc-{codec} codes the shape alone; the z-grid "
+                                 "keeps them)"), stacklevel=2)

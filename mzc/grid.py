@@ -312,5 +312,10 @@ class ZGrid:
                 for chart in self.charts]
 
     def with_z(self, z: np.ndarray, **changes) -> "ZGrid":
-        """A copy with new values (and any other fields changed)."""
-        return replace(self, z=np.asarray(z, dtype=float), **changes)
+        """A copy with new values (and any other fields changed); values of another shape leave
+        the copy without colours unless ``colors`` is among the changes (a strip of rows, a
+        densified grid: the caller that has them for the new nodes gives them)."""
+        z = np.asarray(z, dtype=float)
+        if self.colors is not None and "colors" not in changes and z.shape != self.z.shape:
+            changes["colors"] = None
+        return replace(self, z=z, **changes)

@@ -311,3 +311,96 @@ def test_a_coloured_grid_has_no_plain_body():
     grid = ZGrid(np.ones((2, 2)), 1, 1, colors=np.zeros((2, 2, 3)))
     with pytest.raises(MzcError, match="raw body .mzc-zgrid 5.0"):
         zgrid.write(grid)
+
+
+@pytest.mark.parametrize("fmt", ["ply", "obj"])
+@pytest.mark.parametrize("charts", [1, 6])
+def test_triangulate_gives_each_vertex_its_nodes_colour_and_the_file_keeps_it(fmt, charts):
+    """Every vertex of the grid's mesh (one grid, or six charts zipped) has its node's colour,
+    within a level of the ball's linear colour at the vertex, and a PLY or OBJ written of it reads
+    back the same colours; trimesh and meshio get them too."""
+    from mzc.meshes import mesh_to_bytes
+    from mzc.ops.slicing import slice_surface
+    from mzc.ops.triangulation import grid_to_mesh
+
+    mesh, colour_of = ball()
+    out = grid_to_mesh(slice_surface(mesh, charts=charts))
+    assert np.abs(out.colors - colour_of(out.points)).max() <= 1.0
+    back = mesh_from_bytes(mesh_to_bytes(out, fmt), f"out.{fmt}")
+    np.testing.assert_array_equal(back.colors, out.colors)
+    assert back.dropped == ()
+    if importlib.util.find_spec("trimesh"):
+        np.testing.assert_array_equal(out.to_trimesh().visual.vertex_colors[:, :3], out.colors)
+    point_data = out.to_meshio().point_data
+    np.testing.assert_array_equal(np.column_stack([point_data[c] for c in ("red", "green", "blue")]), out.colors)
+
+
+def test_densify_mixes_the_colours_of_the_rows_it_inserts_between():
+    """Inserted rows interpolate their rows' colours linearly: on the ball's linear colour the
+    densified mesh stays within 1.5 levels of it (the inserted heights leave the triangles by a
+    little), and the original rows keep their colours."""
+    from mzc.ops.densify import densify_grid
+    from mzc.ops.slicing import slice_surface
+    from mzc.ops.triangulation import grid_to_mesh
+
+    mesh, colour_of = ball()
+    for charts in (1, 6):
+        grid = slice_surface(mesh, charts=charts)
+        dense = densify_grid(grid, 2)
+        assert dense.colors.shape == (*dense.shape, 3) and not dense.colors[~dense.valid].any()
+        np.testing.assert_array_equal(dense.colors[::3], grid.colors)
+        out = grid_to_mesh(dense)
+        assert np.abs(out.colors - colour_of(out.points)).max() <= 1.5
+
+
+def test_densified_colours_mix_two_rows_by_their_distance():
+    from mzc.ops.colouring import densified_colours
+
+    colours = np.array([[[0, 0, 0], [9, 9, 9]], [[30, 60, 90], [200, 200, 200]]], dtype=np.uint8)
+    valid = np.ones((4, 2), dtype=bool)
+    valid[1:3, 1] = [True, False]
+    dense = densified_colours(colours, valid, 2)
+    assert dense[:, 0].tolist() == [[0, 0, 0], [10, 20, 30], [20, 40, 60], [30, 60, 90]]
+    assert dense[:, 1].tolist() == [[9, 9, 9], [73, 73, 73], [0, 0, 0], [200, 200, 200]]
+
+
+def test_the_cli_pipeline_keeps_colours_from_a_coloured_ply_to_the_rebuilt_one(tmp_path):
+    """mzc slice col.ply | mzc triangulate -o out.ply: the rebuilt mesh has each vertex's colour
+    within 1.5 levels of the surface's analytic colour there (the corners' linear mix of the
+    blue wave); densify in between keeps them too; an STL output names them in one warning."""
+    from mzc.meshes import read_mesh
+
+    from conftest import run_mzc
+
+    (tmp_path / "col.ply").write_bytes(ascii_ply(coloured_surface()))
+    grid = run_mzc("slice", tmp_path / "col.ply", "--d1", "0.1", "--align", "pca", check=True).stdout
+    assert grid.startswith(b"mzc-zgrid 5.0\n")
+    run_mzc("triangulate", "-o", tmp_path / "out.ply", input=grid, check=True)
+    dense = run_mzc("densify", "-n", "1", input=grid, check=True).stdout
+    run_mzc("triangulate", "-o", tmp_path / "dense.obj", input=dense, check=True)
+    for name in ("out.ply", "dense.obj"):
+        out = read_mesh(tmp_path / name)
+        errors = out.colors - analytic_colour(out.points[:, 0], out.points[:, 1])
+        assert len(out.points) > 5000 and np.abs(errors).max() <= 1.5, name
+    stl = run_mzc("triangulate", "-o", tmp_path / "out.stl", input=grid, check=True)
+    assert stl.stderr.decode().count("mzc: warning: not kept: the vertex colours (STL") == 1
+
+
+def test_encoding_a_coloured_grid_names_the_colours_it_does_not_code(tmp_path):
+    """The compressed formats code the shape alone for now: encode says so in one warning (the
+    CLI and the API), and the file decodes to the grid's heights without colours."""
+    import mzc
+    from mzc.errors import MzcWarning
+    from mzc.formats import zgrid
+    from mzc.ops.slicing import slice_surface
+
+    from conftest import run_mzc
+
+    grid = slice_surface(coloured_surface(), d1=0.2, align="pca")
+    (tmp_path / "c.zg").write_bytes(zgrid.write(grid, raw="float64"))
+    result = run_mzc("encode", "--dwt2d", "--max-error", "0.05", tmp_path / "c.zg", "-o", tmp_path / "c.mzw2",
+                     check=True)
+    assert result.stderr.decode().count("mzc: warning: not kept: the nodes' colours (mzc-dwt2d") == 1
+    with pytest.warns(MzcWarning, match="the nodes' colours"):
+        data = mzc.encode(grid, "dwt2d", max_error=0.05)
+    assert mzc.decode(data).colors is None

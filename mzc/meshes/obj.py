@@ -243,7 +243,7 @@ def write(mesh: Mesh) -> bytes:
     """OBJ bytes of ``mesh``: one string-format call over the whole arrays, shortest exact floats;
     colours as ``v x y z r g b``, each the 0..1 fraction of its 8-bit level (``level / 255``,
     shortest exact, which reads back as that level)."""
-    colors = getattr(mesh, "colors", None)
+    colors = mesh.colors
     if colors is not None:
         values = np.column_stack([mesh.points, colors / 255.0])
         vertices = ("v %r %r %r %r %r %r\n" * len(mesh.points)) % tuple(values.ravel().tolist())

@@ -39,12 +39,16 @@ def read(data: bytes, source: str) -> Mesh:
 def write(mesh: Mesh) -> Iterator:
     """Binary little-endian PLY of ``mesh`` as chunks of bytes (its ``parts``, which a grid's
     mesh makes a strip at a time; ``mzc.streams`` writes them as they come): double x y z per
-    vertex, then (unless it is a point cloud) a face element of uint8 counts and int32
-    indices, the layout meshio writes and every PLY reader knows, without meshio's import or
-    the time stamp it puts in a comment (the same mesh gives the same bytes)."""
+    vertex (and ``uchar red green blue`` when it has colours), then (unless it is a point cloud)
+    a face element of uint8 counts and int32 indices, the layout meshio writes and every PLY
+    reader knows, without meshio's import or the time stamp it puts in a comment (the same
+    mesh gives the same bytes)."""
     vertex_count, triangle_count, point_chunks, triangle_chunks = mesh.parts()
+    colors = mesh.colors
     header = ["ply", "format binary_little_endian 1.0", f"element vertex {vertex_count}",
               "property double x", "property double y", "property double z"]
+    if colors is not None:
+        header += [f"property uchar {name}" for name in COLOURS]
     if vertex_count > np.iinfo(np.int32).max:
         raise MzcError(f"PLY's int32 indices cannot number {vertex_count} vertices")
     if triangle_count:
@@ -52,8 +56,15 @@ def write(mesh: Mesh) -> Iterator:
 
     def chunks():
         yield "\n".join(header + ["end_header", ""]).encode("ascii")
+        done = 0
         for points in point_chunks:
-            yield np.ascontiguousarray(points, dtype="<f8").reshape(-1).view(np.uint8)
+            if colors is None:
+                yield np.ascontiguousarray(points, dtype="<f8").reshape(-1).view(np.uint8)
+                continue
+            records = np.empty(len(points), dtype=COLOURED_VERTEX)
+            records["xyz"], records["rgb"] = points, colors[done:done + len(points)]
+            done += len(points)
+            yield records.view(np.uint8)
         for triangles in triangle_chunks if triangle_count else ():
             faces = np.empty(len(triangles), dtype=FACE_RECORD)
             faces["count"], faces["indices"] = 3, triangles
@@ -63,6 +74,7 @@ def write(mesh: Mesh) -> Iterator:
 
 
 FACE_RECORD = np.dtype([("count", "u1"), ("indices", "<i4", (3,))])   # a triangle as PLY writes it: 13 bytes
+COLOURED_VERTEX = np.dtype([("xyz", "<f8", (3,)), ("rgb", "u1", (3,))])   # a vertex with its colour: 27 bytes
 PLY_TYPES = {
     "char": "i1", "int8": "i1", "uchar": "u1", "uint8": "u1", "short": "i2", "int16": "i2",
     "ushort": "u2", "uint16": "u2", "int": "i4", "int32": "i4", "uint": "u4", "uint32": "u4",
