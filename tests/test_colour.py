@@ -404,3 +404,68 @@ def test_encoding_a_coloured_grid_names_the_colours_it_does_not_code(tmp_path):
     with pytest.warns(MzcWarning, match="the nodes' colours"):
         data = mzc.encode(grid, "dwt2d", max_error=0.05)
     assert mzc.decode(data).colors is None
+
+
+def textured_obj(folder, image_name="skin.png", mtl_name="face.mtl", size=(64, 80)):
+    """The height field as an OBJ with ``f v/vt`` corners, its material file naming a PNG texture
+    (``size`` rows x cols) whose pixel (row, col) is the analytic colour at the surface point the
+    uv (x / WIDTH, y / HEIGHT) maps to it; written into ``folder``. Returns the OBJ's path."""
+    from PIL import Image
+
+    mesh = coloured_surface()
+    rows, cols = size
+    x, y = np.meshgrid((np.arange(cols) + 0.5) / cols * WIDTH, (1 - (np.arange(rows) + 0.5) / rows) * HEIGHT)
+    pixels = np.round(analytic_colour(x.ravel(), y.ravel())).reshape(rows, cols, 3).astype(np.uint8)
+    Image.fromarray(pixels).save(folder / image_name)
+    (folder / mtl_name).write_text(f"newmtl skin\nKd 1 1 1\nmap_Kd -s 1 1 1 {image_name}\n")
+    lines = [f"mtllib {mtl_name}", "usemtl skin"]
+    lines += [f"v {x!r} {y!r} {z!r}" for x, y, z in mesh.points.tolist()]
+    lines += [f"vt {x / WIDTH!r} {y / HEIGHT!r}" for x, y, _ in mesh.points.tolist()]
+    lines += [f"f {a + 1}/{a + 1} {b + 1}/{b + 1} {c + 1}/{c + 1}" for a, b, c in mesh.triangles.tolist()]
+    (folder / "face.obj").write_text("\n".join(lines) + "\n")
+    return folder / "face.obj"
+
+
+def test_an_obj_texture_is_sampled_at_its_vertices_and_sliced(tmp_path):
+    """OBJ + MTL map_Kd + PNG: each vertex gets the texture's colour at its vt (bilinear between
+    pixel centres: within 1.5 levels of the analytic colour, whose ramps change 3-4 levels a
+    pixel, and 4 on the image's outer half pixel, which takes its edge pixels' colour), the
+    texture coordinates and material are no longer named as dropped, and slicing carries the
+    colours to the nodes (within 4 levels, 1.5 RMS)."""
+    from mzc.meshes import read_mesh
+    from mzc.ops.slicing import slice_surface
+
+    mesh = read_mesh(textured_obj(tmp_path))
+    errors = mesh.colors - analytic_colour(mesh.points[:, 0], mesh.points[:, 1])
+    x, y = mesh.points[:, 0], mesh.points[:, 1]
+    inner = (x > 0.1) & (x < WIDTH - 0.1) & (y > 0.1) & (y < HEIGHT - 0.1)
+    assert np.abs(errors[inner]).max() <= 1.5 and np.abs(errors).max() <= 4 and mesh.dropped == ()
+    grid = slice_surface(mesh, d1=0.1, align="pca")
+    errors = node_errors(grid, lambda points: analytic_colour(points[:, 0], points[:, 1]))
+    assert np.abs(errors).max() <= 4 and np.sqrt((errors ** 2).mean()) < 1.5
+
+
+@pytest.mark.parametrize("case", ["missing image", "outside", "no material", "stdin"])
+def test_a_texture_that_cannot_be_read_is_one_warning_not_a_crash(tmp_path, case):
+    from mzc.errors import MzcWarning
+    from mzc.meshes import read_mesh
+
+    from conftest import run_mzc
+
+    path = textured_obj(tmp_path)
+    if case == "missing image":
+        (tmp_path / "skin.png").unlink()
+    elif case == "outside":
+        (tmp_path / "face.mtl").write_text("newmtl skin\nmap_Kd ../../etc/passwd\n")
+    elif case == "no material":
+        (tmp_path / "face.mtl").unlink()
+    if case == "stdin":
+        result = run_mzc("slice", "-", "-o", tmp_path / "a.zg", input=path.read_bytes(), check=True)
+        assert result.stderr.decode().count("mzc: warning: texture not read:") == 1
+        return
+    with pytest.warns(MzcWarning, match="texture not read") as caught:
+        mesh = read_mesh(path)
+    assert len([w for w in caught if "texture" in str(w.message)]) == 1
+    assert mesh.colors is None and "texture coordinates" in " ".join(mesh.dropped)
+    message = str(next(w.message for w in caught if "texture" in str(w.message)))
+    assert "\n" not in message and ("outside" in message) == (case == "outside")
