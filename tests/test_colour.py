@@ -469,3 +469,34 @@ def test_a_texture_that_cannot_be_read_is_one_warning_not_a_crash(tmp_path, case
     assert mesh.colors is None and "texture coordinates" in " ".join(mesh.dropped)
     message = str(next(w.message for w in caught if "texture" in str(w.message)))
     assert "\n" not in message and ("outside" in message) == (case == "outside")
+
+
+def test_triangulate_texture_writes_an_image_that_reads_back_as_the_nodes_colours(tmp_path):
+    """--texture: the OBJ, its material file and the PNG of the grid's colours; mzc's own OBJ
+    reader samples the PNG at each vertex's vt, a pixel centre, and so gets back every vertex's
+    node colour exactly. Bad requests are refused before anything is written."""
+    from mzc.formats import zgrid
+    from mzc.meshes import read_mesh
+    from mzc.ops.slicing import slice_surface
+    from mzc.ops.triangulation import grid_to_mesh
+
+    from conftest import run_mzc
+
+    grid = slice_surface(coloured_surface(), d1=0.1, align="pca")
+    (tmp_path / "c.zg").write_bytes(zgrid.write(grid, raw="float64"))
+    run_mzc("triangulate", tmp_path / "c.zg", "-o", tmp_path / "out.obj", "--texture", tmp_path / "skin.png",
+            check=True)
+    assert (tmp_path / "out.mtl").read_text() == "newmtl grid_colours\nKa 1 1 1\nKd 1 1 1\nmap_Kd skin.png\n"
+    back, expected = read_mesh(tmp_path / "out.obj"), grid_to_mesh(grid)
+    np.testing.assert_array_equal(back.points, expected.points)
+    np.testing.assert_array_equal(back.triangles, expected.triangles)
+    np.testing.assert_array_equal(back.colors, expected.colors)
+    assert back.dropped == ()
+    for arguments in (["-o", tmp_path / "x.ply"], ["-o", tmp_path / "x.obj", "--vertices", "100"]):
+        result = run_mzc("triangulate", tmp_path / "c.zg", *arguments, "--texture", tmp_path / "x.png")
+        assert result.returncode == 2 and b"--texture" in result.stderr and b"Traceback" not in result.stderr
+    charted = slice_surface(ball()[0], charts=6)
+    (tmp_path / "charts.zg").write_bytes(zgrid.write(charted, raw="float64"))
+    result = run_mzc("triangulate", tmp_path / "charts.zg", "-o", tmp_path / "x.obj", "--texture", tmp_path / "x.png")
+    assert result.returncode == 1 and len(result.stderr.splitlines()) == 1 and b"multi-chart" in result.stderr
+    assert not [path.name for path in tmp_path.iterdir() if path.name.startswith("x.")]
