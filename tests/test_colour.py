@@ -500,3 +500,27 @@ def test_triangulate_texture_writes_an_image_that_reads_back_as_the_nodes_colour
     result = run_mzc("triangulate", tmp_path / "charts.zg", "-o", tmp_path / "x.obj", "--texture", tmp_path / "x.png")
     assert result.returncode == 1 and len(result.stderr.splitlines()) == 1 and b"multi-chart" in result.stderr
     assert not [path.name for path in tmp_path.iterdir() if path.name.startswith("x.")]
+
+
+@pytest.mark.parametrize("layout", ["texcoord", "texture_uv"])
+def test_a_ply_texture_file_is_sampled_at_its_texture_coordinates(tmp_path, layout):
+    """PLY's ``comment TextureFile`` with a face's ``texcoord`` list (u v a corner) or the
+    vertices' ``texture_u texture_v``: the vertices get the image's colours, as an OBJ's do."""
+    from mzc.meshes import read_mesh
+
+    obj_mesh = read_mesh(textured_obj(tmp_path))   # writes skin.png
+    mesh = coloured_surface()
+    uv = mesh.points[:, :2] / [WIDTH, HEIGHT]
+    vertex_uv = layout == "texture_uv"
+    header = ("ply\nformat ascii 1.0\ncomment TextureFile skin.png\n"
+              f"element vertex {len(mesh.points)}\nproperty double x\nproperty double y\nproperty double z\n"
+              + ("property float texture_u\nproperty float texture_v\n" if vertex_uv else "")
+              + f"element face {len(mesh.triangles)}\nproperty list uchar int vertex_indices\n"
+              + ("" if vertex_uv else "property list uchar float texcoord\n") + "end_header\n")
+    vertices = [" ".join(repr(v) for v in point + (uv[i].tolist() if vertex_uv else []))
+                for i, point in enumerate(mesh.points.tolist())]
+    faces = [f"3 {a} {b} {c}" + ("" if vertex_uv else " 6 " + " ".join(repr(v) for v in uv[[a, b, c]].ravel().tolist()))
+             for a, b, c in mesh.triangles.tolist()]
+    (tmp_path / "face.ply").write_text(header + "\n".join(vertices + faces) + "\n")
+    read = read_mesh(tmp_path / "face.ply")
+    assert np.abs(read.colors.astype(int) - obj_mesh.colors).max() <= 1 and read.dropped == ()

@@ -33,7 +33,14 @@ def read(data: bytes, source: str) -> Mesh:
         tables = read_ply_ascii(elements, body, body_line, source)
     else:
         tables = read_ply_binary(elements, body, "<" if body_format == "binary_little_endian" else ">", source)
-    return ply_mesh(elements, tables, source)
+    return ply_mesh(elements, tables, source, texture_file(data[:len(data) - len(body)]))
+
+
+def texture_file(header):
+    """The image a PLY header names in a ``comment TextureFile NAME`` line (MeshLab's, Open3D's),
+    or None."""
+    found = re.search(rb"(?m)^comment[ \t]+TextureFile[ \t]+([^\r\n]+?)[ \t]*\r?$", header)
+    return found.group(1).decode("utf-8", "replace") if found else None
 
 
 def write(mesh: Mesh) -> Iterator:
@@ -313,14 +320,15 @@ def element_columns(element, runs, order):
     return columns
 
 
-def ply_mesh(elements, tables, source):
+def ply_mesh(elements, tables, source, texture=None):
     """Build the Mesh from the 'vertex', 'face' and 'tristrips' elements of a parsed PLY file.
 
     Other elements (``edge``, ``material``, ...) are skipped beside faces or strips; without
     them such an element holding records is refused by name: read as a bare cloud, a file
     whose surface lives in an element mzc does not know would be re-triangulated into noise.
     A cloud (no faces, or ``element face 0``) keeps the normals its vertices carry (nx, ny,
-    nz); colours and other properties are read past and named in the Mesh's ``dropped``."""
+    nz). Vertex colours are kept, or else the ``texture`` image sampled at the texture coordinates
+    (``ply_texture``); other properties are read past and named in the Mesh's ``dropped``."""
     unknown = [element for element in elements if element.name not in PLY_ELEMENTS and element.count]
     has_surface = any(element.name in ("face", "tristrips") and element.count for element in elements)
     if unknown and not has_surface:
@@ -335,6 +343,9 @@ def ply_mesh(elements, tables, source):
         ([strip_triangles(strips, source)] if strips is not None else [])
     colors = ply_colours(elements, vertex)
     colour_names = COLOURS if colors is not None else ()
+    if colors is None and texture is not None and faces is not None:
+        colors = ply_texture(texture, tables, faces, len(points), source)
+        colour_names = TEXTURE_COORDINATES if colors is not None else ()
     if sum(len(part) for part in triangles):   # an ``element face 0`` leaves a cloud
         return Mesh(points, np.concatenate(triangles), dropped=ply_dropped(elements, colour_names), colors=colors)
     normals = None
@@ -346,6 +357,26 @@ def ply_mesh(elements, tables, source):
 
 NORMALS = ("nx", "ny", "nz")
 COLOURS = ("red", "green", "blue")
+TEXTURE_COORDINATES = ("texture_u", "texture_v", "texcoord")   # per vertex, or a face's list of u v per corner
+
+
+def ply_texture(texture, tables, faces, count, source):
+    """(count, 3) uint8 colours of the vertices sampled from the ``comment TextureFile`` image at
+    their texture coordinates: the vertex properties ``texture_u texture_v``, or the face list
+    ``texcoord`` (u v of each corner, in the order of the face's vertices), or None (with one
+    warning when the image cannot be read: ``mzc.meshes.texture``)."""
+    from mzc.meshes.texture import image_beside, sampled_texels
+
+    vertex, face = tables.get("vertex", {}), tables.get("face", {})
+    if all(isinstance(vertex.get(name), np.ndarray) for name in TEXTURE_COORDINATES[:2]):
+        uv = np.column_stack([real_array(vertex[name], name) for name in TEXTURE_COORDINATES[:2]])
+    elif isinstance(face.get("texcoord"), Lists) and np.array_equal(face["texcoord"].counts, 2 * faces.counts):
+        uv = np.full((count, 2), np.nan)
+        uv[as_indices(faces.values, "face", source)] = real_array(face["texcoord"].values, "texcoord").reshape(-1, 2)
+    else:
+        return None
+    image = image_beside(source, texture, "comment TextureFile")
+    return None if image is None else sampled_texels(image, uv)
 
 
 def ply_colours(elements, vertex):
@@ -364,7 +395,7 @@ def ply_dropped(elements, kept_vertex):
     properties (a mesh's normals, alpha, texture coordinates, ...) and other elements that
     hold records, by name; ``kept_vertex`` are the vertex properties the Mesh keeps (a cloud's
     normals, colours)."""
-    kept = {"vertex": {"x", "y", "z", *kept_vertex}, "face": set(FACE_LIST_NAMES),
+    kept = {"vertex": {"x", "y", "z", *kept_vertex}, "face": {*FACE_LIST_NAMES, *kept_vertex},
             "tristrips": set(FACE_LIST_NAMES)}
     dropped = []
     for element in elements:

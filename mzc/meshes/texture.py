@@ -60,12 +60,22 @@ def material_image(source, libraries):
         if found is None:
             continue
         name = found.group(1).split()[-1]   # options (-s, -o, -clamp ...) come before the file name
-        image = inside_folder(folder, os.path.join(os.path.dirname(library), name))
-        if image is None:
-            texture_problem(f"{name} (map_Kd of {library}): outside the folder of {source}")
-            return None
-        return read_image(image, name)
+        return image_beside(source, os.path.join(os.path.dirname(library), name), f"map_Kd of {library}")
     return None
+
+
+def image_beside(source, name, named_by):
+    """The (rows, cols, 3) uint8 image ``name`` (as ``named_by`` names it) in the folder of the
+    mesh file ``source``, or None with a warning: ``source`` is a stream, the image lies outside
+    that folder or cannot be read."""
+    if not os.path.isfile(source):
+        texture_problem(f"the image {name} of {source} is looked for beside the file, which was read from a stream")
+        return None
+    path = inside_folder(os.path.dirname(os.path.abspath(source)), name)
+    if path is None:
+        texture_problem(f"{name} ({named_by}): outside the folder of {source}")
+        return None
+    return read_image(path, name)
 
 
 def read_image(path, name):
