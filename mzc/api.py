@@ -238,8 +238,12 @@ def encode(grid: ZGrid | np.ndarray, codec: str = DEFAULT_CODEC, **options: Unpa
     """Compress a z-grid (or a 2D array) with a registered codec (``mzc encode``); ``options`` are
     the codec's, e.g. ``max_error=0.01`` for dwt2d, ``quality=20`` for dct."""
     from mzc.codecs import get_codec
+    from mzc.colours import warn_uncoded
 
-    return get_codec(codec).encode(as_grid(grid), **options)
+    chosen, grid = get_codec(codec), as_grid(grid)
+    data = chosen.encode(grid, **options)
+    warn_uncoded(grid, chosen.kind)
+    return data
 
 
 def decode(data: bytes, legacy: str | None = None, *, window: Any = None) -> ZGrid:

@@ -20,6 +20,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from mzc import projections
+from mzc.colours import colour_array
 from mzc.errors import MzcError
 from mzc.limits import check_grid_size, length_problem
 from mzc.numbers import real_array
@@ -114,6 +115,17 @@ def check_charts(charts, shape):
     return covered.astype(bool)
 
 
+def node_colours(values, valid):
+    """A grid's ``colors``: ``values`` as (rows, cols, 3) uint8 (``mzc.colours.colour_array``) for
+    the ``valid`` mask's nodes, 0 at invalid ones (a copy where one was not), so that equal grids
+    are equal whatever colour a hole was given."""
+    colours = colour_array(values, (*valid.shape, 3))
+    if colours[~valid].any():
+        colours = colours.copy()
+        colours[~valid] = 0
+    return colours
+
+
 def check_shape(shape):
     """Refuse the shape of heights that make no z-grid: 2D, within mzc.limits' sizes (a file
     has at least one row and column), checked before they are converted."""
@@ -171,7 +183,9 @@ class ZGrid:
     centre and R's second column the axis); ``projection`` names the cutting surfaces and
     ``radius`` the reference radius R0 that scales their angles into lengths (None for
     planar grids); ``units`` names the length unit when known; ``nodata`` is the token
-    written for invalid nodes. A planar grid read from a raster (or to be written as one) has
+    written for invalid nodes. ``colors`` (rows, cols, 3) uint8 is each node's colour, sampled
+    from the surface where it has one (``mzc.ops.colouring``), 0 at invalid nodes; None when
+    the surface has none. A planar grid read from a raster (or to be written as one) has
     ``crs``, the coordinate reference system of the input frame as one line of WKT, and
     ``raster`` (a Raster): both None otherwise.
     """
@@ -188,9 +202,12 @@ class ZGrid:
     crs: str | None = None
     raster: Raster | None = None
     charts: tuple[Chart, ...] | None = None
+    colors: np.ndarray | None = None
 
     def __post_init__(self) -> None:
         self.z = real_array(self.z, "heights", check_shape)
+        if self.colors is not None:
+            self.colors = node_colours(self.colors, self.valid)
         self.transform = finite(self.transform, "transform", 12).reshape(3, 4)
         self.origin = tuple(finite(self.origin, "origin", 2).tolist())
         self.d1, self.d2 = (float(finite(getattr(self, name), name, 1)[0]) for name in ("d1", "d2"))
@@ -290,9 +307,15 @@ class ZGrid:
         rotation, shift = self.transform[:, :3], self.transform[:, 3:]
         return [ZGrid(z=self.z[chart.block()], d1=self.d1, d2=self.d2, origin=(chart.i0 * self.d2, chart.j0 * self.d1),
                       transform=np.hstack([matrix_product(rotation, projections.view_rotation(chart.view)), shift]),
-                      units=self.units, nodata=self.nodata)
+                      units=self.units, nodata=self.nodata,
+                      colors=None if self.colors is None else self.colors[chart.block()])
                 for chart in self.charts]
 
     def with_z(self, z: np.ndarray, **changes) -> "ZGrid":
-        """A copy with new values (and any other fields changed)."""
-        return replace(self, z=np.asarray(z, dtype=float), **changes)
+        """A copy with new values (and any other fields changed); values of another shape leave
+        the copy without colours unless ``colors`` is among the changes (a strip of rows, a
+        densified grid: the caller that has them for the new nodes gives them)."""
+        z = np.asarray(z, dtype=float)
+        if self.colors is not None and "colors" not in changes and z.shape != self.z.shape:
+            changes["colors"] = None
+        return replace(self, z=z, **changes)

@@ -171,6 +171,8 @@ def assert_same_grid(got, want):
     assert (got.units, got.nodata) == (want.units, want.nodata)
     assert (got.crs, got.raster) == (want.crs, want.raster)
     assert got.charts == want.charts
+    assert (got.colors is None) == (want.colors is None)
+    assert got.colors is None or got.colors.tobytes() == want.colors.tobytes()
 
 
 def check_fixtures(codec):

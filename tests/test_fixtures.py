@@ -56,9 +56,11 @@ def test_fixture_name_states_its_magic_line_and_extension(name):
 def written_versions(module):
     """The versions a format's writer writes: planar and projected grids, the z-grid's raw
     body (RAW_VERSION), a third version above both, the georeferenced planar grids of rasters
-    (GEOREF_SINCE: a minor version of a major) and multi-chart grids (CHARTED_VERSION)."""
+    (GEOREF_SINCE: a minor version of a major), multi-chart grids (CHARTED_VERSION) and grids with
+    colours (COLOURED_VERSION)."""
     return {module.VERSION, module.PROJECTED_VERSION, getattr(module, "RAW_VERSION", module.VERSION),
-            *module.GEOREF_SINCE.items(), getattr(module, "CHARTED_VERSION", module.VERSION)}
+            *module.GEOREF_SINCE.items(), getattr(module, "CHARTED_VERSION", module.VERSION),
+            getattr(module, "COLOURED_VERSION", module.VERSION)}
 
 
 def newest_major(kind):
@@ -256,9 +258,9 @@ def test_a_newer_major_is_refused_with_an_upgrade_hint(kind):
     assert "upgrade mzc" in error.message
 
 
-def test_zgrid_5_is_refused_as_newer():
-    error = refusal(zgrid_text(magic="mzc-zgrid 5.0"))
-    assert error.line == 1 and "newer than this mzc reads (4.x)" in error.message
+def test_zgrid_6_is_refused_as_newer():
+    error = refusal(zgrid_text(magic="mzc-zgrid 6.0"))
+    assert error.line == 1 and "newer than this mzc reads (5.x)" in error.message
 
 
 # --- the version rule for projections: what writers write ---------------------------------

@@ -301,32 +301,32 @@ def test_a_surface_on_stdin_is_read_as_a_file_is(monkeypatch):
 
 
 def test_what_a_file_holds_beside_its_shape_is_named_not_dropped_silently(tmp_path):
-    """Colours, texture coordinates, a mesh's normals and other properties are read past, named
-    in Mesh.dropped, and `mzc slice` says so in one warning; a cloud's normals are kept, not named."""
+    """Texture coordinates without their image, a mesh's normals and other properties are read
+    past, named in Mesh.dropped, and `mzc slice` says so in one warning; a cloud's normals and
+    every vertex colour mzc reads (tests/test_colour.py) are kept, not named; the colours of an
+    OBJ whose v lines do not all have them are named."""
     from conftest import run_mzc
 
     obj = (b"mtllib face.mtl\nv 0 0 0 1 0 0\nv 1 0 0 0 1 0\nv 0 1 0 0 0 1\nvt 0 0\nvt 1 0\nvt 0 1\n"
            b"vn 0 0 1\nf 1/1/1 2/2/1 3/3/1\n")
     assert mesh_from_bytes(obj, "a.obj").dropped == (
-        "3 vertex colours", "3 texture coordinates (vt)", "1 normals (vn; recomputed from the triangles)",
-        "1 materials (mtllib)")
+        "3 texture coordinates (vt)", "1 normals (vn; recomputed from the triangles)", "1 materials (mtllib)")
     ply = (b"ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
            b"property float nx\nproperty float ny\nproperty float nz\nproperty uchar red\nproperty uchar green\n"
            b"property uchar blue\nelement face 1\nproperty list uchar int vertex_indices\n"
            b"property list uchar float texcoord\nend_header\n0 0 0 0 0 1 255 0 0\n1 0 0 0 0 1 0 255 0\n"
            b"0 1 0 0 0 1 0 0 255\n3 0 1 2 6 0 0 1 0 0 1\n")
     assert mesh_from_bytes(ply, "a.ply").dropped == (
-        "vertex normals nx ny nz (recomputed from the triangles); vertex properties red green blue",
-        "face properties texcoord")
+        "vertex normals nx ny nz (recomputed from the triangles)", "face properties texcoord")
     cloud = ply.replace(b"element face 1\nproperty list uchar int vertex_indices\nproperty list uchar float "
                         b"texcoord\n", b"").replace(b"3 0 1 2 6 0 0 1 0 0 1\n", b"")
-    assert mesh_from_bytes(cloud, "c.ply").dropped == ("vertex properties red green blue",)   # normals kept
+    assert mesh_from_bytes(cloud, "c.ply").dropped == ()   # normals and colours kept
     plain = b"ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\nproperty float z\n"
     assert mesh_from_bytes(plain + b"end_header\n0 0 0\n", "p.ply").dropped == ()
-    assert read_mesh(REPO / "tests" / "data" / "public" / "colored_cloud.pcd").dropped == ("fields rgb curvature",)
+    assert read_mesh(REPO / "tests" / "data" / "public" / "colored_cloud.pcd").dropped == ("fields curvature",)
     if importlib.util.find_spec("laspy"):
-        assert read_mesh(REPO / "tests" / "data" / "public" / "simple.laz").dropped == ("RGB colours",)   # format 3
+        assert read_mesh(REPO / "tests" / "data" / "public" / "simple.laz").dropped == ()   # format 3: RGB kept
         assert read_mesh(REPO / "tests" / "data" / "public" / "autzen_geo_proj.las").dropped == ()       # format 1
     (tmp_path / "a.obj").write_bytes(obj + b"v 1 1 0.2\nf 2 4 3\n")
     stderr = run_mzc("slice", tmp_path / "a.obj", "-o", tmp_path / "a.zg", check=True).stderr.decode()
-    assert stderr.count("mzc: warning: not kept, mzc codes the shape alone: 3 vertex colours; ") == 1
+    assert stderr.count("mzc: warning: not kept, mzc codes the shape and colour alone: 3 vertex colours; ") == 1

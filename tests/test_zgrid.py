@@ -24,7 +24,7 @@ def spec_examples(_path):
     """(example bytes, expected array) pairs of the spec page's worked z-grid examples, plain
     and raw (codec_contract.spec_examples reads both kinds of block)."""
     examples = contract_examples("zgrid")
-    assert len(examples) == 9
+    assert len(examples) == 10
     return [(data, expected) for data, expected, _id in examples]
 
 
@@ -32,6 +32,21 @@ def spec_examples(_path):
 def test_spec_examples_decode_to_their_expected_values(example, expected):
     grid = read_any(example, "spec")
     np.testing.assert_array_equal(grid.z, expected)
+
+
+def test_spec_colour_example_decodes_to_its_expected_colours():
+    """The 5.0 example's colours are the bytes after its heights, three a node, row by row."""
+    import codec_contract
+
+    text = SPEC.read_text()
+    found = re.findall(r"```mzc-example-hex\n([^`]*)```\s*```expected\n[^`]*```\s*```expected-colours\n([^`]*)```",
+                       text)
+    assert len(found) == 1
+    example, colours = found[0]
+    grid = read_any(codec_contract.example_bytes(example, True), "spec")
+    expected = np.array([[int(v) for v in line.split()] for line in colours.strip().splitlines()])
+    assert grid.colors.tolist() == expected.reshape(*grid.shape, 3).tolist()
+    assert zgrid.write(grid, raw="float64") == codec_contract.example_bytes(example, True)   # byte for byte
 
 
 def spec_points(path):
@@ -109,7 +124,7 @@ GOOD = b"mzc-zgrid 1.0\nrows 2\ncols 2\nd1 1\nd2 1\ndata\n1 2\n3 4\n"
 @pytest.mark.parametrize("data, message, line", [
     (b"rows 2\n", "missing magic", 1),
     (b"", "missing magic", 1),
-    (GOOD.replace(b"mzc-zgrid 1.0", b"mzc-zgrid 5.0"), "newer than this mzc reads", 1),
+    (GOOD.replace(b"mzc-zgrid 1.0", b"mzc-zgrid 6.0"), "newer than this mzc reads", 1),
     (GOOD.replace(b"mzc-zgrid 1.0", b"mzc-zgrid one"), "bad version", 1),
     (GOOD.replace(b"mzc-zgrid", b"mzc-other"), "expected an mzc-zgrid file", 1),
     (GOOD.replace(b"d2 1\n", b""), "required header line missing", None),

@@ -152,6 +152,7 @@ def build_command():
     codecs = [get_codec(name) for name in codec_names()]
 
     def run(input, output, scheduler, **values):
+        from mzc.colours import warn_uncoded
         from mzc.errors import MzcError, about
         from mzc.streams import STDOUT_NAME, check_not_input, display_name, is_terminal, write_output
 
@@ -169,6 +170,7 @@ def build_command():
         grid = read_grid(input)
         with about(display_name(input), f"encoding it with {codec.name}"):
             data = codec.encode(grid, **options)
+        warn_uncoded(grid, codec.kind)
         write_output(output, data)
 
     scheduler = click.Option(["--scheduler"], metavar="ADDRESS",

@@ -23,18 +23,58 @@ placed back in the input surface's frame. The output format follows the -o exten
 @click.option("--vertices", type=click.IntRange(4, MAX_NODES), metavar="N",
               help="About N vertices (within 20%), fewer where the surface is flat (quadric edge collapse) "
                    "[default: one at every valid node].")
-def command(input, output, file_format, jump_angle, vertices):
+@click.option("--texture", metavar="FILE.png",
+              help="Write the grid's colours as this PNG, the OBJ's vertices with texture coordinates into it "
+                   "and its material file (-o NAME.obj and NAME.mtl) [default: vertex colours].")
+def command(input, output, file_format, jump_angle, vertices, texture):
     from mzc.errors import about
     from mzc.meshes import write_mesh
     from mzc.ops.triangulation import grid_to_mesh, mesh_of
     from mzc.streams import check_not_input, display_name
 
     check_not_input(output, input)
+    if texture is not None:
+        check_texture_request(input, output, file_format, vertices, texture)
     grid = read_grid(input)
     with about(display_name(input), "triangulating it"):
+        if texture is not None:
+            write_textured(grid, jump_angle, output, texture)
+            return
         if vertices is None:
             write_mesh(output, mesh_of(grid, jump_angle), file_format)   # a grid's mesh is made as it is written
             return
         from mzc.ops.simplify import simplified
 
         write_mesh(output, simplified(grid_to_mesh(grid, jump_angle), vertices), file_format)
+
+
+def check_texture_request(input, output, file_format, vertices, texture):
+    """Refuse --texture, before any work, without an OBJ file to write beside it or with
+    --vertices (a simplified mesh has no grid nodes to place in the image); refuse outputs that
+    are inputs or one file."""
+    import os
+
+    from mzc.streams import check_distinct, check_not_input, is_stdio
+
+    if output is None or is_stdio(output) or (file_format or os.path.splitext(output)[1].lstrip(".").lower()) != "obj":
+        raise click.UsageError("--texture writes an OBJ with its material and image: give -o NAME.obj")
+    if vertices is not None:
+        raise click.UsageError("--texture places each grid node in the image: it does not take --vertices")
+    material = os.path.splitext(output)[0] + ".mtl"
+    check_not_input(texture, input)
+    check_not_input(material, input)
+    check_distinct({"-o": output, "material": material, "--texture": texture})
+
+
+def write_textured(grid, jump_angle, output, texture):
+    """Write the grid's mesh as an OBJ with texture coordinates, its material file and the PNG of
+    its colours (``mzc.meshes.texture.textured_obj``), all or none of them."""
+    from mzc.errors import MzcError
+    from mzc.meshes.texture import textured_obj
+    from mzc.ops.triangulation import GridMesh
+    from mzc.streams import write_outputs
+
+    if grid.charts is not None:
+        raise MzcError("--texture writes one grid's colour image; a multi-chart grid's mesh carries vertex colours "
+                       "(leave out --texture)", field="texture")
+    write_outputs(*textured_obj(GridMesh(grid, jump_angle), output, texture))

@@ -11,7 +11,10 @@ line, then the heights, in one of two bodies (as netpbm's plain and raw variants
 
 A planar grid read from a raster adds the ``crs`` and ``raster`` lines, a minor version of
 each body (1.1, 3.1); other grids keep 1.0, 2.0 and 3.0 byte for byte. A multi-chart grid
-(``charts``) is ``mzc-zgrid 4.0``: 3.0 with the ``charts`` line, a raw body only.
+(``charts``) is ``mzc-zgrid 4.0``: 3.0 with the ``charts`` line, a raw body only. A grid with
+colours at its nodes is ``mzc-zgrid 5.0``: 4.0 (any projection, charts, crs and raster as they
+come) with the ``colours rgb8`` line, its raw body's heights followed by each node's red, green
+and blue bytes, row by row; 5.1 when it has the ``crs`` and ``raster`` lines.
 """
 
 import numpy as np
@@ -40,8 +43,11 @@ RAW_VERSION = (3, 0)         # 2.0's header with a raw binary body, planar or pr
 GEOREFERENCED_VERSION = (1, 1)       # 1.0 with the crs and raster lines of a grid read from a raster
 RAW_GEOREFERENCED_VERSION = (3, 1)   # 3.0 with them
 CHARTED_VERSION = (4, 0)     # 3.0 with the charts line of a multi-chart grid
-GEOREF_SINCE = dict([GEOREFERENCED_VERSION, RAW_GEOREFERENCED_VERSION])   # major -> first minor with crs, raster
-CHECKSUM_SINCE = {RAW_VERSION[0]: 0, CHARTED_VERSION[0]: 0}   # a raw body is never read without its crc32 line
+COLOURED_VERSION = (5, 0)    # 4.0 with the colours line and each node's colour after the heights
+COLOURED_GEOREFERENCED_VERSION = (5, 1)   # 5.0 with the crs and raster lines (a coloured LAS cloud's grid)
+GEOREF_SINCE = dict([GEOREFERENCED_VERSION, RAW_GEOREFERENCED_VERSION, COLOURED_GEOREFERENCED_VERSION])   # crs from
+CHECKSUM_SINCE = {RAW_VERSION[0]: 0, CHARTED_VERSION[0]: 0, COLOURED_VERSION[0]: 0}   # a raw body: never without crc32
+COLOUR_LAYOUTS = {"rgb8": 3}   # the colours line's value -> bytes a node (red, green, blue, 8 bits each)
 SAMPLES = {"float64": "<f8", "float32": "<f4"}   # the raw line's value -> numpy dtype of the body
 
 
@@ -72,14 +78,29 @@ def body_lines(body, first_line, source):
 def read(data, source="<bytes>"):
     """Parse z-grid bytes (a plain or a raw body) into a ZGrid; raise MzcError naming the line
     and field on bad input."""
-    raw = split_magic(data, source)[1] >= RAW_VERSION[0]
-    header, body, first_line = read_header(data, source, KIND, CHARTED_VERSION[0],
+    major = split_magic(data, source)[1]
+    raw = major >= RAW_VERSION[0]
+    header, body, first_line = read_header(data, source, KIND, COLOURED_VERSION[0],
                                            projected_major=PROJECTED_VERSION[0], checksum_since=CHECKSUM_SINCE,
                                            binary=raw, georef_since=GEOREF_SINCE, charted_major=CHARTED_VERSION[0])
     fields, rows, cols = read_grid_fields(header)
+    if major >= COLOURED_VERSION[0]:
+        body, fields["colors"] = read_colours(body, header, rows, cols)
     z = read_raw(body, header, rows, cols) if raw else read_plain(body, first_line, fields["nodata"], rows, cols,
                                                                   source)
     return ZGrid(z=z, **fields)
+
+
+def read_colours(body, header, rows, cols):
+    """(the heights' part of a 5.0 raw body, its (rows, cols, 3) uint8 colours): the ``colours``
+    line (required) names their layout, and the body's last rows x cols x 3 bytes hold them, the
+    length checked (with the heights', ``read_raw``) before anything is allocated."""
+    size = rows * cols * COLOUR_LAYOUTS[header.word("colours", tuple(COLOUR_LAYOUTS))]
+    if len(body) < size:
+        raise MzcError(f"the raw body has {len(body)} bytes, fewer than the {size} of the nodes' colours alone "
+                       "(cut short)", source=header.source, field="data")
+    colours = np.frombuffer(body, np.uint8, offset=len(body) - size).reshape(rows, cols, 3)
+    return memoryview(body)[:len(body) - size], colours
 
 
 def read_plain(body, first_line, nodata, rows, cols, source):
@@ -144,8 +165,9 @@ def write(grid, precision=None, raw=None):
     coordinates beyond mzc.limits' are refused: no reader would take them back."""
     check_grid_magnitudes(grid)
     if raw is None:
-        if grid.charts is not None:
-            raise MzcError("a multi-chart grid is written with a raw body (mzc-zgrid 4.0), not as text rows",
+        if grid.charts is not None or grid.colors is not None:
+            what, version = ("multi-chart", 4) if grid.colors is None else ("coloured", 5)
+            raise MzcError(f"a {what} grid is written with a raw body (mzc-zgrid {version}.0), not as text rows",
                            field="plain")
         lines = [magic_line(KIND, file_version(grid, VERSION, PROJECTED_VERSION, GEOREFERENCED_VERSION)),
                  *grid_header_lines(grid), "data",
@@ -154,6 +176,10 @@ def write(grid, precision=None, raw=None):
     if precision is not None:
         raise MzcError("precision rounds the text of a plain body; a raw body holds the values exactly",
                        field="precision")
+    if grid.colors is not None:
+        version = COLOURED_GEOREFERENCED_VERSION if grid.georeferenced else COLOURED_VERSION
+        lines = [magic_line(KIND, version), *grid_header_lines(grid), f"raw {raw}", "colours rgb8", "data"]
+        return file_bytes(lines, bytes(raw_body(grid.z, raw)) + grid.colors.tobytes())
     version = file_version(grid, RAW_VERSION, RAW_VERSION, RAW_GEOREFERENCED_VERSION, CHARTED_VERSION)
     lines = [magic_line(KIND, version), *grid_header_lines(grid), f"raw {raw}", "data"]
     return file_bytes(lines, raw_body(grid.z, raw))

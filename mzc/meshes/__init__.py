@@ -23,6 +23,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from mzc.colours import colour_array
 from mzc.errors import MzcError
 from mzc.meshes.common import as_indices
 from mzc.numbers import real_array
@@ -37,9 +38,11 @@ class Mesh:
     """Vertices ``points`` (n, 3) and ``triangles`` (m, 3) indexing them; (0, 3) for a point
     cloud, whose file may give ``normals`` (n, 3) (they tell a slice which side it was seen
     from) and ``classification`` (n,), the ASPRS class of each point of a LAS/LAZ cloud
-    (``with_classes``). ``crs`` is the coordinate reference system the file names (a WKT
+    (``with_classes``). ``colors`` (n, 3) uint8 is each vertex's red, green and blue, None when
+    the file has none (``mzc.colours``; a texture is sampled at the vertices). ``crs`` is the
+    coordinate reference system the file names (a WKT
     string, or ``EPSG:code``), None when it names none. ``dropped`` names what the file held
-    that mzc does not keep (colours, texture coordinates, a mesh's normals, other properties),
+    that mzc does not keep (a mesh's normals, alpha, other properties),
     so that slicing can say so in one warning rather than lose it without a word. ``grid`` is the z-grid the mesh was
     derived from, when it was (``grid_to_mesh``): ``mzc diff`` compares a grid at its own
     nodes and in its own frame."""
@@ -51,6 +54,7 @@ class Mesh:
     classification: np.ndarray | None = None
     crs: str | None = None
     dropped: tuple[str, ...] = ()
+    colors: np.ndarray | None = None
 
     def __post_init__(self):
         self.points = real_array(self.points, "points", in_threes("points")).reshape(-1, 3)
@@ -60,6 +64,8 @@ class Mesh:
             self.normals = self.normals.reshape(self.points.shape)
         if self.classification is not None:
             self.classification = np.asarray(self.classification).reshape(len(self.points))
+        if self.colors is not None:
+            self.colors = colour_array(self.colors, (len(self.points), 3))
 
     def with_classes(self, classes) -> Mesh:
         """The cloud of the points whose ``classification`` is one of ``classes`` (ASPRS codes:
@@ -73,7 +79,9 @@ class Mesh:
             raise MzcError(f"no point has class {', '.join(str(code) for code in classes)} "
                            f"(the cloud's classes: {present})", field="classes")
         normals = None if self.normals is None else self.normals[keep]
-        return Mesh(self.points[keep], normals=normals, classification=self.classification[keep], crs=self.crs)
+        colors = None if self.colors is None else self.colors[keep]
+        return Mesh(self.points[keep], normals=normals, classification=self.classification[keep], crs=self.crs,
+                    colors=colors)
 
     @property
     def is_point_cloud(self) -> bool:
@@ -82,20 +90,24 @@ class Mesh:
 
     def to_trimesh(self) -> Any:
         """This mesh as a ``trimesh.Trimesh`` (vertices and faces as they are, nothing merged or
-        dropped), or a ``trimesh.PointCloud`` for points alone; trimesh is not one of mzc's
-        dependencies: an MzcError says so when it is missing."""
+        dropped; its vertex colours, when it has them), or a ``trimesh.PointCloud`` for points alone;
+        trimesh is not one of mzc's dependencies: an MzcError says so when it is missing."""
         trimesh = optional_module("trimesh")
         if self.is_point_cloud:
-            return trimesh.PointCloud(self.points)
-        return trimesh.Trimesh(self.points, self.triangles, vertex_normals=self.normals, process=False)
+            return trimesh.PointCloud(self.points, colors=self.colors)
+        return trimesh.Trimesh(self.points, self.triangles, vertex_normals=self.normals, vertex_colors=self.colors,
+                               process=False)
 
     def to_meshio(self) -> Any:
         """This mesh as a ``meshio.Mesh``: its points, one triangle cell block (none for a cloud),
-        and its normals as the point data ``normals`` when it has them."""
+        its normals as the point data ``normals`` and its colours as ``red``, ``green`` and
+        ``blue`` (uint8, the names meshio's PLY writer writes as PLY's) when it has them."""
         import meshio
 
         cells = [("triangle", self.triangles)] if len(self.triangles) else []
         point_data = {"normals": self.normals} if self.normals is not None else {}
+        if self.colors is not None:
+            point_data.update(zip(("red", "green", "blue"), self.colors.T))
         return meshio.Mesh(self.points, cells, point_data=point_data)
 
     def parts(self) -> tuple:
@@ -106,15 +118,16 @@ class Mesh:
 
 
 def warn_dropped(mesh):
-    """One MzcWarning naming what the mesh's file held that a grid does not carry (its colours,
-    texture coordinates, normals, other properties: ``Mesh.dropped``), so that nothing is lost
-    without a word (a grid, which has none, passes)."""
+    """One MzcWarning naming what the mesh's file held that a grid does not carry (a mesh's
+    normals, alpha, other properties: ``Mesh.dropped``; its colours it carries), so that nothing
+    is lost without a word (a grid, which has none, passes)."""
     if getattr(mesh, "dropped", ()):
         import warnings
 
         from mzc.errors import MzcWarning
 
-        warnings.warn(MzcWarning(f"not kept, mzc codes the shape alone: {'; '.join(mesh.dropped)}"), stacklevel=2)
+        warnings.warn(MzcWarning(f"not kept, mzc codes the shape and colour alone: {'; '.join(mesh.dropped)}"),
+                      stacklevel=2)
 
 
 def optional_module(name):

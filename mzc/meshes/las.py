@@ -23,6 +23,7 @@ import sys
 
 import numpy as np
 
+from mzc.colours import to_8_bits
 from mzc.errors import MzcError, first_line
 from mzc.meshes import Mesh
 
@@ -42,8 +43,8 @@ VLR_HEADER, EVLR_HEADER, EVLR_HEADER_SIZE = 54, 60, 375   # bytes of a record's 
 
 
 def read(data: bytes, source: str) -> Mesh:
-    """The point cloud of LAS or LAZ ``data``, with its classes and CRS; its RGB colours, when its
-    point format has them, are named in ``dropped`` (the other dimensions are the survey's, not the
+    """The point cloud of LAS or LAZ ``data``, with its classes, CRS and, when its point format
+    has them, RGB colours (``las_colours``; the other dimensions are the survey's, not the
     surface's)."""
     try:
         import laspy
@@ -56,13 +57,15 @@ def read(data: bytes, source: str) -> Mesh:
         with panics_unprinted(), laspy.open(io.BytesIO(data)) as reader:
             declared = int(reader.header.point_count)
             check_room(reader.header, len(data), declared, source)
+            coloured = "red" in set(reader.header.point_format.dimension_names)
             for chunk in reader.chunk_iterator(min(CHUNK_POINTS, max(declared, 1))):
                 if not len(chunk):
                     break
                 chunks.append((np.column_stack([np.asarray(chunk.x), np.asarray(chunk.y), np.asarray(chunk.z)]),
-                               np.asarray(chunk.classification, dtype=np.uint8)))
+                               np.asarray(chunk.classification, dtype=np.uint8),
+                               np.column_stack([np.asarray(chunk[name]) for name in ("red", "green", "blue")])
+                               if coloured else np.empty((len(chunk), 3), dtype=np.uint16)))
             crs, geographic = header_crs(reader.header)
-            coloured = "red" in set(reader.header.point_format.dimension_names)
     except MzcError:
         raise
     except BaseException as error:   # a PanicException is one: lazrs's Rust panics on damaged points
@@ -81,7 +84,15 @@ def read(data: bytes, source: str) -> Mesh:
                        source=source, field="crs")
     points = np.concatenate([chunk[0] for chunk in chunks] or [np.empty((0, 3))])
     classes = np.concatenate([chunk[1] for chunk in chunks] or [np.empty(0, dtype=np.uint8)])
-    return Mesh(points, classification=classes, crs=crs, dropped=("RGB colours",) if coloured else ())
+    colors = las_colours(np.concatenate([chunk[2] for chunk in chunks])) if coloured and chunks else None
+    return Mesh(points, classification=classes, crs=crs, colors=colors)
+
+
+def las_colours(rgb):
+    """(n, 3) uint8 colours of a LAS cloud's 16-bit ``red green blue`` (the specification's range
+    0..65535, scaled: ``mzc.colours.to_8_bits``); a file whose values all lie within 0..255 was
+    written with 8-bit colours in the 16-bit fields, as some writers do, and keeps them."""
+    return to_8_bits(rgb, 8 if int(rgb.max(initial=0)) <= 255 else 16)
 
 
 @contextlib.contextmanager

@@ -149,11 +149,19 @@ def surface_triangles(cells) -> np.ndarray:
 
 
 def write_as(kind: str, mesh: Mesh) -> bytes:
-    """The bytes of ``mesh`` written by meshio as ``kind`` (stl, vtk or off); STL needs triangles."""
+    """The bytes of ``mesh`` written by meshio as ``kind`` (stl, vtk or off); STL needs triangles.
+    Its colours, which mzc writes to PLY and OBJ only, are named in one warning."""
     import meshio
 
     if kind == "stl" and not len(mesh.triangles):
         raise MzcError("STL cannot hold a point cloud (no triangles)")
+    if mesh.colors is not None:
+        import warnings
+
+        from mzc.errors import MzcWarning
+
+        warnings.warn(MzcWarning(f"not kept: the vertex colours ({kind.upper()} as mzc writes it has none; write "
+                                 "PLY or OBJ to keep them)"), stacklevel=2)
     cells = [("triangle", mesh.triangles.astype(np.int32))] if len(mesh.triangles) else []   # as mzc has always written
     with temporary_name(kind) as name:
         with quiet():

@@ -7,8 +7,10 @@ a line continues the statement on the next; a positive face index may name a ver
 defined further down, a negative one counts back from the vertices so far. Polygons
 (quads, n-gons) are split into a fan of triangles about their first corner: exact for
 the convex polygons scanners and exporters write (a concave one would need ear
-clipping). Exporters' other statements (``mtllib``, ``usemtl``, ``g``, ``o``, ``s``,
-``vn``, ``vt``, ``l``) and comments holding any bytes are read past.
+clipping). Vertex colours (``v x y z r g b``) are read, or else the texture of the
+material (``mtllib``'s ``map_Kd``, through the corners' ``vt``: ``mzc.meshes.texture``) is
+sampled at the vertices. Exporters' other statements (``usemtl``, ``g``, ``o``, ``s``,
+``vn``, ``l``) and comments holding any bytes are read past.
 """
 
 import re
@@ -16,6 +18,7 @@ import warnings
 
 import numpy as np
 
+from mzc.colours import to_8_bits
 from mzc.errors import MzcError
 from mzc.meshes import Mesh
 from mzc.meshes.common import fan_triangulate_ragged
@@ -46,19 +49,81 @@ def read(data: bytes, source: str) -> Mesh:
     if len(vertex_lines) == 0:
         raise MzcError("no 'v' lines: the OBJ file has no vertices", source=source)
     points = obj_vertices(tokens, vertex_lines, source)
-    triangles = obj_triangles(tokens, face_lines, vertex_lines, source)
-    return Mesh(points, triangles, dropped=obj_dropped(tokens, vertex_lines))
+    corners, flat, counts = face_corners(tokens, face_lines, vertex_lines, source)
+    triangles = fan_triangulate_ragged(flat, counts) if len(face_lines) else np.empty((0, 3), dtype=np.int64)
+    colors = obj_colours(tokens, vertex_lines, source)
+    textured = False
+    if colors is None and len(face_lines):
+        colors = texture_colours(tokens, corners, flat, len(points), source)
+        textured = colors is not None
+    return Mesh(points, triangles, colors=colors,
+                dropped=obj_dropped(tokens, vertex_lines, colors is not None and not textured, textured))
 
 
-def obj_dropped(tokens, vertex_lines):
+def texture_colours(tokens, corners, flat, count, source):
+    """(count, 3) uint8 colours of the vertices sampled from the texture of the file's material
+    (``mtllib``, its ``map_Kd``: ``mzc.meshes.texture``) at the ``vt`` of a face corner using
+    each (its ``v/vt`` index), or None when the file names no texture, its corners no ``vt``, or
+    the image cannot be read (one warning says why)."""
+    from mzc.meshes.texture import material_image, sampled_texels
+
+    libraries = tokens.statement_words(b"mtllib")
+    texture_lines = tokens.lines_of_word(b"vt")
+    if not libraries or not len(texture_lines):
+        return None
+    texture_index = tokens.numbers(corners, np.int64, between_slashes=True)
+    if texture_index is None or len(texture_index) != len(corners):
+        return None   # corners without a vt index (f 1 2 3, f 1//1) or a bad one: no texture mapping
+    image = material_image(source, libraries)
+    if image is None:
+        return None
+    arguments = tokens.arguments(texture_lines)
+    position = arguments - np.searchsorted(tokens.line, tokens.line[arguments])
+    uv = tokens.numbers(arguments[position <= 2], np.float64)
+    if uv is None or len(uv) != 2 * len(texture_lines):
+        raise MzcError("a texture coordinate (vt) needs u v numbers", source=source)
+    uv = uv.reshape(-1, 2)
+    defined_before = np.searchsorted(texture_lines, tokens.line[corners])
+    texture_index = np.where(texture_index < 0, texture_index + defined_before, texture_index - 1)
+    if ((texture_index < 0) | (texture_index >= len(uv))).any():
+        raise MzcError(f"a face refers to a texture coordinate that does not exist (there are {len(uv)})",
+                       source=source)
+    per_vertex = np.full((count, 2), np.nan)
+    per_vertex[flat] = uv[texture_index]
+    return sampled_texels(image, per_vertex)
+
+
+def vertex_arguments(tokens, vertex_lines):
+    """(token indices of the ``v`` lines' arguments, each one's position on its line from 1,
+    how many arguments each ``v`` line has)."""
+    arguments = tokens.arguments(vertex_lines)
+    line = tokens.line[arguments]
+    position = arguments - np.searchsorted(tokens.line, line)  # 1 = first argument
+    return arguments, position, np.bincount(np.searchsorted(vertex_lines, line), minlength=len(vertex_lines))
+
+
+def obj_colours(tokens, vertex_lines, source):
+    """(n, 3) uint8 colours of ``v x y z r g b`` lines, when every ``v`` line has them (floats in
+    0..1, or 0..255 when one exceeds 1: ``mzc.colours.to_8_bits``), else None."""
+    arguments, position, counts = vertex_arguments(tokens, vertex_lines)
+    if not (counts >= 6).all():
+        return None
+    rgb = arguments[(position >= 4) & (position <= 6)]
+    values = tokens.numbers(rgb, np.float64)
+    if values is None:
+        raise first_bad_token(tokens, rgb, is_number, "not a number", source)
+    return to_8_bits(values.reshape(-1, 3))
+
+
+def obj_dropped(tokens, vertex_lines, coloured_read, textured):
     """What an OBJ file holds beside its shape, which mzc does not keep: vertex colours (``v x y
-    z r g b``), texture coordinates (``vt``), normals (``vn``: recomputed from the triangles) and
-    materials (``mtllib``: a texture's image)."""
-    coloured = int((np.bincount(np.searchsorted(vertex_lines, tokens.line[tokens.arguments(vertex_lines)]),
-                                minlength=len(vertex_lines)) >= 6).sum())
-    counts = [(coloured, "vertex colours"), (tokens.statements(b"vt"), "texture coordinates (vt)"),
+    z r g b``) when not every vertex has them (``coloured_read``: they are read), texture
+    coordinates (``vt``) and materials (``mtllib``: a texture's image) unless the texture was
+    sampled (``textured``), normals (``vn``: recomputed from the triangles)."""
+    coloured = 0 if coloured_read else int((vertex_arguments(tokens, vertex_lines)[2] >= 6).sum())
+    counts = [(coloured, "vertex colours"), (0 if textured else tokens.statements(b"vt"), "texture coordinates (vt)"),
               (tokens.statements(b"vn"), "normals (vn; recomputed from the triangles)"),
-              (tokens.statements(b"mtllib"), "materials (mtllib)")]
+              (0 if textured else tokens.statements(b"mtllib"), "materials (mtllib)")]
     return tuple(f"{count:,} {what}" for count, what in counts if count)
 
 
@@ -104,12 +169,22 @@ class ObjTokens:
 
     def statements(self, keyword):
         """How many lines start with the token ``keyword`` (bytes: ``b"vt"``)."""
+        return len(self.lines_of_word(keyword))
+
+    def lines_of_word(self, keyword):
+        """Sorted line indices (0-based) whose first token is ``keyword`` (bytes: ``b"vt"``)."""
         length = len(keyword)
-        first = self.starts[self.first_on_line & (self.ends - self.starts == length)]
-        if not len(first):
-            return 0
-        words = np.stack([self.text[first + k] for k in range(length)], axis=1)
-        return int((words == np.frombuffer(keyword, dtype=np.uint8)).all(axis=1).sum())
+        chosen = np.flatnonzero(self.first_on_line & (self.ends - self.starts == length))
+        if not len(chosen):
+            return chosen
+        words = np.stack([self.text[self.starts[chosen] + k] for k in range(length)], axis=1)
+        return self.line[chosen[(words == np.frombuffer(keyword, dtype=np.uint8)).all(axis=1)]]
+
+    def statement_words(self, keyword):
+        """The rest of each line that starts with ``keyword`` (bytes), as text: the few ``mtllib``
+        lines' file names (a name may hold spaces)."""
+        return [" ".join(self.token_text(int(index)) for index in np.flatnonzero(self.line == line)[1:])
+                for line in self.lines_of_word(keyword)]
 
     def lines_of(self, keyword):
         """Sorted line indices (0-based) whose first token is the one-letter ``keyword``."""
@@ -122,16 +197,22 @@ class ObjTokens:
         on_lines = np.isin(self.line, lines) & ~self.first_on_line
         return np.flatnonzero(on_lines)
 
-    def numbers(self, token_indices, dtype, cut_at_slash=False):
+    def numbers(self, token_indices, dtype, cut_at_slash=False, between_slashes=False):
         """Parse the chosen tokens as numbers in one call; None when one does not parse.
 
-        ``cut_at_slash`` keeps only what precedes the first ``/`` of each token (v/vt/vn).
+        ``cut_at_slash`` keeps only what precedes the first ``/`` of each token (v/vt/vn), and
+        ``between_slashes`` only what lies between its first and second (the vt of v/vt/vn).
         """
         chosen = np.zeros(len(self.starts) + 1, dtype=bool)  # the extra last slot: no token
         chosen[token_indices] = True
         keep = chosen[self.token_of_byte]
         if cut_at_slash:
             keep &= last_index(self.text == ord("/")) < self.starts[self.token_of_byte]
+        if between_slashes:
+            slash = self.text == ord("/")
+            before = np.cumsum(slash) - slash   # slashes before each byte
+            at_start = np.r_[before, 0][self.starts[self.token_of_byte]]
+            keep &= (before - at_start == 1) & ~slash
         buffer = np.where(keep, self.text, ord(" ")).astype(np.uint8).tobytes()
         with warnings.catch_warnings():
             warnings.simplefilter("error")
@@ -166,11 +247,8 @@ def last_index(mask):
 
 
 def obj_vertices(tokens, vertex_lines, source):
-    """(n, 3) x y z of the ``v`` lines; w and colour columns are ignored."""
-    arguments = tokens.arguments(vertex_lines)
-    line = tokens.line[arguments]
-    position = arguments - np.searchsorted(tokens.line, line)  # 1 = first argument
-    counts = np.bincount(np.searchsorted(vertex_lines, line), minlength=len(vertex_lines))
+    """(n, 3) x y z of the ``v`` lines; w and colour columns are ignored (``obj_colours``)."""
+    arguments, position, counts = vertex_arguments(tokens, vertex_lines)
     if (counts < 3).any():
         raise MzcError("a vertex needs x y z", source=source,
                        line=tokens.number(int(vertex_lines[np.argmax(counts < 3)])))
@@ -181,10 +259,11 @@ def obj_vertices(tokens, vertex_lines, source):
     return values.reshape(-1, 3)
 
 
-def obj_triangles(tokens, face_lines, vertex_lines, source):
-    """The fan-triangulated ``f`` lines, with 1-based and negative (relative) indices resolved."""
+def face_corners(tokens, face_lines, vertex_lines, source):
+    """(token index of each corner of the ``f`` lines, its vertex index from 0, the corner count of
+    each face), 1-based and negative (relative) indices resolved."""
     if len(face_lines) == 0:
-        return np.empty((0, 3), dtype=np.int64)
+        return np.empty(0, dtype=np.int64), np.empty(0, dtype=np.int64), np.empty(0, dtype=np.int64)
     corners = tokens.arguments(face_lines)
     corner_line = tokens.line[corners]
     counts = np.bincount(np.searchsorted(face_lines, corner_line), minlength=len(face_lines))
@@ -201,7 +280,7 @@ def obj_triangles(tokens, face_lines, vertex_lines, source):
     if invalid.any():
         raise MzcError(f"face refers to a vertex that does not exist (there are {len(vertex_lines)})",
                        source=source, line=tokens.number(int(corner_line[np.argmax(invalid)])))
-    return fan_triangulate_ragged(flat, counts)
+    return corners, flat, counts
 
 
 def is_index(token):
@@ -219,7 +298,14 @@ def first_bad_token(tokens, indices, accept, message, source):
 
 
 def write(mesh: Mesh) -> bytes:
-    """OBJ bytes of ``mesh``: one string-format call over the whole arrays, shortest exact floats."""
-    vertices = ("v %r %r %r\n" * len(mesh.points)) % tuple(mesh.points.ravel().tolist())
+    """OBJ bytes of ``mesh``: one string-format call over the whole arrays, shortest exact floats;
+    colours as ``v x y z r g b``, each the 0..1 fraction of its 8-bit level (``level / 255``,
+    shortest exact, which reads back as that level)."""
+    colors = mesh.colors
+    if colors is not None:
+        values = np.column_stack([mesh.points, colors / 255.0])
+        vertices = ("v %r %r %r %r %r %r\n" * len(mesh.points)) % tuple(values.ravel().tolist())
+    else:
+        vertices = ("v %r %r %r\n" * len(mesh.points)) % tuple(mesh.points.ravel().tolist())
     faces = ("f %d %d %d\n" * len(mesh.triangles)) % tuple((mesh.triangles.ravel() + 1).tolist())
     return (vertices + faces).encode("ascii")

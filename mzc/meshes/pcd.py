@@ -34,6 +34,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from mzc.colours import unpack_rgb
 from mzc.errors import MzcError
 from mzc.limits import MAX_FIELD_VALUES, check_magnitude
 from mzc.meshes import Mesh
@@ -99,17 +100,28 @@ def read(data: bytes, source: str) -> Mesh:
     """The cloud (or, organised, the lattice mesh) of PCD ``data``; a broken file is an
     MzcError naming the line and keyword, or the body's problem."""
     header = parse_header(data, source)
-    names = ("x", "y", "z") + (NORMALS if all(name in field_names(header) for name in NORMALS) else ())
+    colour = colour_field(header)
+    names = ("x", "y", "z") + (NORMALS if all(name in field_names(header) for name in NORMALS) else ()) + \
+        ((colour.name,) if colour is not None else ())
     if header.body == "ascii":
         columns = ascii_columns(header, data, names, source)
     elif header.body == "binary":
         columns = binary_columns(header, data, names, source)
     else:
         columns = compressed_columns(header, data, names, source)
-    points = np.column_stack([columns[name] for name in ("x", "y", "z")])
-    normals = np.column_stack([columns[name] for name in NORMALS]) if NORMALS[0] in columns else None
-    others = [name for name in field_names(header) if name not in ("x", "y", "z", *NORMALS, "_")]   # "_": padding
-    return cloud_or_lattice(header, points, normals, source, others)
+    points = np.column_stack([real_array(columns[name], name) for name in ("x", "y", "z")])
+    normals = np.column_stack([real_array(columns[name], name) for name in NORMALS]) \
+        if NORMALS[0] in columns else None
+    colors = None if colour is None else unpack_rgb(np.asarray(columns[colour.name]).astype(colour.dtype))
+    others = [name for name in field_names(header) if name not in (*names, *NORMALS, "_")]   # "_": padding
+    return cloud_or_lattice(header, points, normals, source, others, colors)
+
+
+def colour_field(header):
+    """The field of PCL's packed colour, ``rgb`` or ``rgba``, one 4-byte value a point (a float32
+    or uint32 whose bytes are blue, green, red, alpha: ``mzc.colours.unpack_rgb``), or None."""
+    return next((field for field in header.fields if field.name in ("rgb", "rgba") and field.count == 1
+                 and np.dtype(field.dtype).itemsize == 4), None)
 
 
 def field_names(header):
@@ -200,7 +212,8 @@ def header_count(values, keyword, problem):
 
 
 def ascii_columns(header, data, names, source):
-    """{name: float64 values} of an ascii body: one point a line, each with every field's
+    """{name: float64 values} of an ascii body (exact for every 4-byte value, which a packed
+    colour is): one point a line, each with every field's
     values (blank lines skipped, as PCL does), and nothing after the last point."""
     tokens = decode_text(data[header.start:], source).split()
     width = sum(field.count for field in header.fields)
@@ -248,7 +261,7 @@ def ascii_line_of(data, header, point):
 
 
 def binary_columns(header, data, names, source):
-    """{name: float64 values} of a binary body: POINTS records of every field in turn."""
+    """{name: values, of the field's type} of a binary body: POINTS records of every field in turn."""
     dtype = np.dtype([(f"f{i}", field.dtype, (field.count,)) for i, field in enumerate(header.fields)])
     needed, held = header.points * dtype.itemsize, len(data) - header.start
     if held < needed:
@@ -256,11 +269,11 @@ def binary_columns(header, data, names, source):
                        f"binary data, the file holds {held}", source=source)
     records = np.frombuffer(data, dtype=dtype, count=header.points, offset=header.start)
     index = {field.name: i for i, field in enumerate(header.fields)}
-    return {name: real_array(records[f"f{index[name]}"][:, 0], name) for name in names}
+    return {name: records[f"f{index[name]}"][:, 0] for name in names}
 
 
 def compressed_columns(header, data, names, source):
-    """{name: float64 values} of a binary_compressed body (the sizes, then LZF of each field's
+    """{name: values, of the field's type} of a binary_compressed body (the sizes, then LZF of each field's
     values for every point in turn, ``_`` fields left out)."""
     from mzc.meshes import _lzf
 
@@ -288,28 +301,29 @@ def compressed_columns(header, data, names, source):
     sizes = {field.name: field.size for field, keep in zip(header.fields, kept) if keep}
     starts = dict(zip(sizes, np.cumsum([0] + list(sizes.values())[:-1]).tolist()))
     fields = {field.name: field for field in header.fields}
-    return {name: real_array(np.frombuffer(values, dtype=fields[name].dtype, count=header.points,
-                                           offset=starts[name] * header.points), name) for name in names}
+    return {name: np.frombuffer(values, dtype=fields[name].dtype, count=header.points,
+                                offset=starts[name] * header.points) for name in names}
 
 
-def cloud_or_lattice(header, points, normals, source, others=()):
+def cloud_or_lattice(header, points, normals, source, others=(), colors=None):
     """The Mesh of the points: an organised cloud (HEIGHT and WIDTH above 1) triangulated along
     its lattice (``lattice_triangles``, whose sight lines square and multiply the coordinates:
     they must be within mzc.limits'), any other a cloud; points with a NaN or infinite
     coordinate dropped either way. The ``others`` fields, and a lattice's normals (its triangles
-    say which way it faces), are named in the Mesh's ``dropped``."""
+    say which way it faces), are named in the Mesh's ``dropped``; ``colors`` (n, 3) are kept."""
     valid = np.isfinite(points).all(axis=1)
     new_index = np.cumsum(valid) - 1
+    colors = None if colors is None else colors[valid]
     if header.height > 1 and header.width > 1:
         check_magnitude(points[valid], "coordinates", source=source)
         triangles = lattice_triangles(points.reshape(header.height, header.width, 3),
                                       valid.reshape(header.height, header.width), header.origin)
         if len(triangles):
             unused = [*(NORMALS if normals is not None else ()), *others]
-            return Mesh(points[valid], new_index[triangles], dropped=fields_named(unused))
+            return Mesh(points[valid], new_index[triangles], dropped=fields_named(unused), colors=colors)
     if normals is not None:
         normals = np.where(np.isfinite(normals), normals, 0.0)[valid]
-    return Mesh(points[valid], normals=normals, dropped=fields_named(others))
+    return Mesh(points[valid], normals=normals, dropped=fields_named(others), colors=colors)
 
 
 def fields_named(names):

@@ -16,6 +16,7 @@ from typing import NamedTuple
 
 import numpy as np
 
+from mzc.colours import to_8_bits
 from mzc.errors import MzcError
 from mzc.meshes import Mesh
 from mzc.meshes.common import as_indices, decode_text, fan_triangulate_ragged, flat_numbers
@@ -32,18 +33,29 @@ def read(data: bytes, source: str) -> Mesh:
         tables = read_ply_ascii(elements, body, body_line, source)
     else:
         tables = read_ply_binary(elements, body, "<" if body_format == "binary_little_endian" else ">", source)
-    return ply_mesh(elements, tables, source)
+    return ply_mesh(elements, tables, source, texture_file(data[:len(data) - len(body)]))
+
+
+def texture_file(header):
+    """The image a PLY header names in a ``comment TextureFile NAME`` line (MeshLab's, Open3D's),
+    or None."""
+    found = re.search(rb"(?m)^comment[ \t]+TextureFile[ \t]+([^\r\n]+?)[ \t]*\r?$", header)
+    return found.group(1).decode("utf-8", "replace") if found else None
 
 
 def write(mesh: Mesh) -> Iterator:
     """Binary little-endian PLY of ``mesh`` as chunks of bytes (its ``parts``, which a grid's
     mesh makes a strip at a time; ``mzc.streams`` writes them as they come): double x y z per
-    vertex, then (unless it is a point cloud) a face element of uint8 counts and int32
-    indices, the layout meshio writes and every PLY reader knows, without meshio's import or
-    the time stamp it puts in a comment (the same mesh gives the same bytes)."""
+    vertex (and ``uchar red green blue`` when it has colours), then (unless it is a point cloud)
+    a face element of uint8 counts and int32 indices, the layout meshio writes and every PLY
+    reader knows, without meshio's import or the time stamp it puts in a comment (the same
+    mesh gives the same bytes)."""
     vertex_count, triangle_count, point_chunks, triangle_chunks = mesh.parts()
+    colors = mesh.colors
     header = ["ply", "format binary_little_endian 1.0", f"element vertex {vertex_count}",
               "property double x", "property double y", "property double z"]
+    if colors is not None:
+        header += [f"property uchar {name}" for name in COLOURS]
     if vertex_count > np.iinfo(np.int32).max:
         raise MzcError(f"PLY's int32 indices cannot number {vertex_count} vertices")
     if triangle_count:
@@ -51,8 +63,15 @@ def write(mesh: Mesh) -> Iterator:
 
     def chunks():
         yield "\n".join(header + ["end_header", ""]).encode("ascii")
+        done = 0
         for points in point_chunks:
-            yield np.ascontiguousarray(points, dtype="<f8").reshape(-1).view(np.uint8)
+            if colors is None:
+                yield np.ascontiguousarray(points, dtype="<f8").reshape(-1).view(np.uint8)
+                continue
+            records = np.empty(len(points), dtype=COLOURED_VERTEX)
+            records["xyz"], records["rgb"] = points, colors[done:done + len(points)]
+            done += len(points)
+            yield records.view(np.uint8)
         for triangles in triangle_chunks if triangle_count else ():
             faces = np.empty(len(triangles), dtype=FACE_RECORD)
             faces["count"], faces["indices"] = 3, triangles
@@ -62,6 +81,7 @@ def write(mesh: Mesh) -> Iterator:
 
 
 FACE_RECORD = np.dtype([("count", "u1"), ("indices", "<i4", (3,))])   # a triangle as PLY writes it: 13 bytes
+COLOURED_VERTEX = np.dtype([("xyz", "<f8", (3,)), ("rgb", "u1", (3,))])   # a vertex with its colour: 27 bytes
 PLY_TYPES = {
     "char": "i1", "int8": "i1", "uchar": "u1", "uint8": "u1", "short": "i2", "int16": "i2",
     "ushort": "u2", "uint16": "u2", "int": "i4", "int32": "i4", "uint": "u4", "uint32": "u4",
@@ -300,14 +320,15 @@ def element_columns(element, runs, order):
     return columns
 
 
-def ply_mesh(elements, tables, source):
+def ply_mesh(elements, tables, source, texture=None):
     """Build the Mesh from the 'vertex', 'face' and 'tristrips' elements of a parsed PLY file.
 
     Other elements (``edge``, ``material``, ...) are skipped beside faces or strips; without
     them such an element holding records is refused by name: read as a bare cloud, a file
     whose surface lives in an element mzc does not know would be re-triangulated into noise.
     A cloud (no faces, or ``element face 0``) keeps the normals its vertices carry (nx, ny,
-    nz); colours and other properties are read past and named in the Mesh's ``dropped``."""
+    nz). Vertex colours are kept, or else the ``texture`` image sampled at the texture coordinates
+    (``ply_texture``); other properties are read past and named in the Mesh's ``dropped``."""
     unknown = [element for element in elements if element.name not in PLY_ELEMENTS and element.count]
     has_surface = any(element.name in ("face", "tristrips") and element.count for element in elements)
     if unknown and not has_surface:
@@ -320,22 +341,62 @@ def ply_mesh(elements, tables, source):
     faces, strips = index_lists(tables, "face", source), index_lists(tables, "tristrips", source)
     triangles = ([ply_face_triangles(faces, source)] if faces is not None else []) + \
         ([strip_triangles(strips, source)] if strips is not None else [])
+    colors = ply_colours(elements, vertex)
+    colour_names = COLOURS if colors is not None else ()
+    if colors is None and texture is not None and faces is not None:
+        colors = ply_texture(texture, tables, faces, len(points), source)
+        colour_names = TEXTURE_COORDINATES if colors is not None else ()
     if sum(len(part) for part in triangles):   # an ``element face 0`` leaves a cloud
-        return Mesh(points, np.concatenate(triangles), dropped=ply_dropped(elements, ()))
+        return Mesh(points, np.concatenate(triangles), dropped=ply_dropped(elements, colour_names), colors=colors)
     normals = None
     if all(isinstance(vertex.get(axis), np.ndarray) for axis in NORMALS):
         normals = np.column_stack([real_array(vertex[axis], axis) for axis in NORMALS])
-    return Mesh(points, normals=normals, dropped=ply_dropped(elements, NORMALS if normals is not None else ()))
+    return Mesh(points, normals=normals, colors=colors,
+                dropped=ply_dropped(elements, (*(NORMALS if normals is not None else ()), *colour_names)))
 
 
 NORMALS = ("nx", "ny", "nz")
+COLOURS = ("red", "green", "blue")
+TEXTURE_COORDINATES = ("texture_u", "texture_v", "texcoord")   # per vertex, or a face's list of u v per corner
 
 
-def ply_dropped(elements, normals):
+def ply_texture(texture, tables, faces, count, source):
+    """(count, 3) uint8 colours of the vertices sampled from the ``comment TextureFile`` image at
+    their texture coordinates: the vertex properties ``texture_u texture_v``, or the face list
+    ``texcoord`` (u v of each corner, in the order of the face's vertices), or None (with one
+    warning when the image cannot be read: ``mzc.meshes.texture``)."""
+    from mzc.meshes.texture import image_beside, sampled_texels
+
+    vertex, face = tables.get("vertex", {}), tables.get("face", {})
+    if all(isinstance(vertex.get(name), np.ndarray) for name in TEXTURE_COORDINATES[:2]):
+        uv = np.column_stack([real_array(vertex[name], name) for name in TEXTURE_COORDINATES[:2]])
+    elif isinstance(face.get("texcoord"), Lists) and np.array_equal(face["texcoord"].counts, 2 * faces.counts):
+        uv = np.full((count, 2), np.nan)
+        uv[as_indices(faces.values, "face", source)] = real_array(face["texcoord"].values, "texcoord").reshape(-1, 2)
+    else:
+        return None
+    image = image_beside(source, texture, "comment TextureFile")
+    return None if image is None else sampled_texels(image, uv)
+
+
+def ply_colours(elements, vertex):
+    """(n, 3) uint8 colours of the vertex properties ``red green blue`` (``mzc.colours.to_8_bits``
+    by the type the header declares for red: uchar as they are, ushort scaled, float as 0..1), or
+    None."""
+    if not all(isinstance(vertex.get(name), np.ndarray) for name in COLOURS):
+        return None
+    declared = np.dtype(dict(next(element for element in elements if element.name == "vertex").properties)["red"])
+    values = np.column_stack([real_array(vertex[name], name) for name in COLOURS])
+    return to_8_bits(values, 8 * declared.itemsize if declared.kind in "iu" else None)
+
+
+def ply_dropped(elements, kept_vertex):
     """What a PLY file holds beside its shape, which mzc does not keep: each element's other
-    properties (colours, a mesh's normals, texture coordinates, ...) and other elements that
-    hold records, by name; ``normals`` are the vertex properties a cloud keeps."""
-    kept = {"vertex": {"x", "y", "z", *normals}, "face": set(FACE_LIST_NAMES), "tristrips": set(FACE_LIST_NAMES)}
+    properties (a mesh's normals, alpha, texture coordinates, ...) and other elements that
+    hold records, by name; ``kept_vertex`` are the vertex properties the Mesh keeps (a cloud's
+    normals, colours)."""
+    kept = {"vertex": {"x", "y", "z", *kept_vertex}, "face": {*FACE_LIST_NAMES, *kept_vertex},
+            "tristrips": set(FACE_LIST_NAMES)}
     dropped = []
     for element in elements:
         if not element.count:

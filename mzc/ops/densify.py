@@ -84,7 +84,16 @@ def densify_grid(grid, n, method=DEFAULT_METHOD, iterations=DEFAULT_ITERATIONS, 
     z = np.pad(grid.z, ((0, 0), (pad, pad)), mode="wrap") if pad else grid.z
     breaks = lambda low, high: strip_jumps(grid, low, high, jump_angle, pad)  # noqa: E731
     dense = densify(z, n, grid.d1, grid.d2, method=method, iterations=iterations, tol=tol, breaks=breaks, strip=strip)
-    return original.with_z(dense[:, pad:pad + cols], d1=original.d1 / (n + 1))
+    dense = dense[:, pad:pad + cols]
+    return original.with_z(dense, d1=original.d1 / (n + 1), colors=dense_colours(original, dense, n))
+
+
+def dense_colours(grid, dense, n):
+    """The colours of ``grid`` densified to the values ``dense`` (``colouring.densified_colours``),
+    or None for a grid without."""
+    from mzc.ops.colouring import densified_colours
+
+    return None if grid.colors is None else densified_colours(grid.colors, ~np.isnan(dense), n)
 
 
 def densify_charts(grid, n, method, iterations, tol, jump_angle, strip):
@@ -98,7 +107,7 @@ def densify_charts(grid, n, method, iterations, tol, jump_angle, strip):
     z = np.full(((grid.shape[0] - 1) * (n + 1) + 1, grid.shape[1]), np.nan)
     for chart, part in zip(charts, grid.chart_grids()):
         z[chart.block()] = densify_grid(part, n, method, iterations, tol, jump_angle, strip).z
-    return grid.with_z(z, d1=grid.d1 / (n + 1), charts=charts)
+    return grid.with_z(z, d1=grid.d1 / (n + 1), charts=charts, colors=dense_colours(grid, z, n))
 
 
 def strip_jumps(grid, low, high, jump_angle, pad):

@@ -24,7 +24,8 @@ SLACK = 1.2
 def simplified(mesh: Mesh, vertices: int) -> Mesh:
     """``mesh`` with about ``vertices`` vertices (quadric edge collapse); a mesh that has no more
     than that, or no triangles, as it is. The count of triangles asked for keeps the mesh's own
-    ratio of triangles to vertices, so an open grid's mesh and a closed one both land near it."""
+    ratio of triangles to vertices, so an open grid's mesh and a closed one both land near it.
+    Colours stay: each kept vertex takes the colour of the mesh's vertex nearest it."""
     if vertices < 4:
         raise MzcError(f"must be at least 4, not {vertices}", field="vertices")
     if len(mesh.points) <= vertices or not len(mesh.triangles):
@@ -46,4 +47,9 @@ def simplified(mesh: Mesh, vertices: int) -> Mesh:
         warnings.warn(MzcWarning(f"the mesh keeps {len(points)} vertices of the {vertices} asked for: the "
                                  "simplifier found no more edges to collapse without folding the surface"),
                       stacklevel=2)
-    return Mesh(points, np.asarray(triangles, dtype=np.int64))
+    colors = None
+    if mesh.colors is not None:   # a collapse moves a kept vertex: the colour of the source vertex nearest it
+        from mzc.ops.colouring import nearest_colours
+
+        colors = nearest_colours(points, mesh.points, mesh.colors)
+    return Mesh(points, np.asarray(triangles, dtype=np.int64), colors=colors)

@@ -233,7 +233,14 @@ def charted_mesh(grid, jump_angle=None):
     points = np.concatenate([mesh.points for mesh in meshes])
     triangles = np.concatenate([mesh.triangles + offset for mesh, offset in zip(meshes, offsets)])
     chart = np.repeat(np.arange(len(meshes)), [len(mesh.points) for mesh in meshes])
-    return Mesh(*zip_charts(points, triangles, chart, max(grid.d1, grid.d2)), grid=grid)
+    zipped, stitched = zip_charts(points, triangles, chart, max(grid.d1, grid.d2))
+    colors = None
+    if grid.colors is not None:   # the zipper's points are the charts', then any it adds
+        from mzc.ops.colouring import nearest_colours
+
+        colors = np.concatenate([mesh.colors for mesh in meshes])
+        colors = np.concatenate([colors, nearest_colours(zipped[len(points):], points, colors)])
+    return Mesh(zipped, stitched, grid=grid, colors=colors)
 
 
 class GridMesh:
@@ -322,13 +329,22 @@ class GridMesh:
         """(vertex count, triangle count, point chunks, triangle chunks), as ``Mesh.parts``."""
         return self.vertex_count, self.triangle_count, self.point_chunks(), self.triangle_chunks()
 
+    @property
+    def colors(self):
+        """(n, 3) uint8 colours of the used nodes, in node order (a pole's vertex its first
+        node's), or None for a grid without colours: 3 bytes a vertex, made when asked."""
+        if self.grid.colors is None:
+            return None
+        return self.grid.colors.reshape(-1, 3)[self.used]
+
     def mesh(self):
-        """The whole Mesh (its ``grid`` set), made on first use."""
+        """The whole Mesh (its ``grid`` set, its colours the nodes'), made on first use."""
         from mzc.meshes import Mesh  # here: densify and encode find jumps without the mesh modules
 
         if self.whole is None:
             self.whole = Mesh(filled(self.point_chunks(), self.vertex_count, np.float64),
-                              filled(self.triangle_chunks(), self.triangle_count, np.int64), grid=self.grid)
+                              filled(self.triangle_chunks(), self.triangle_count, np.int64), grid=self.grid,
+                              colors=self.colors)
         return self.whole
 
     @property

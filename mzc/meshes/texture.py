@@ -1,0 +1,163 @@
+"""Textures: the image a mesh's material names (OBJ's ``mtllib`` and its ``map_Kd``), read and
+sampled at the vertices' texture coordinates, so that a textured scan's vertices get colours.
+
+A texture is a file beside the mesh: it is looked for in the mesh file's own folder (and the
+material file's), never outside it (a name such as ``../../secret.png`` is refused), and one
+that is missing, outside or not an image is named in one warning, never a crash: the mesh is
+read without its colours. PNG and JPEG (and whatever else Pillow reads) are decoded by Pillow.
+
+``textured_obj`` writes the other way: a grid's colours as a PNG, an OBJ whose vertices carry
+texture coordinates into it, and the material file that names it (``triangulate --texture``).
+
+The image is sampled once per vertex (bilinearly, at the uv of a face corner that uses the
+vertex; u to the right, v up from the image's bottom row, repeating outside 0..1), so detail
+finer than the mesh's edges is not kept: the grid's nodes mix their triangle's corners.
+"""
+
+import os
+import re
+import warnings
+
+import numpy as np
+
+from mzc.errors import MzcError, MzcWarning
+
+
+def texture_problem(message):
+    """Warn, in one line, that a texture was not read and why (the mesh keeps its shape)."""
+    warnings.warn(MzcWarning(f"texture not read: {message}"), stacklevel=3)
+
+
+def inside_folder(folder, name):
+    """The path of ``name`` (as a material file writes it: relative, / or \\ separated) within
+    ``folder``, or None when it would lie outside it."""
+    path = os.path.realpath(os.path.join(folder, name.replace("\\", "/")))
+    root = os.path.realpath(folder)
+    return path if os.path.commonpath([path, root]) == root else None
+
+
+def material_image(source, libraries):
+    """The (rows, cols, 3) uint8 image of the first ``map_Kd`` of the material files
+    ``libraries`` (names from ``mtllib`` lines) beside the mesh file ``source``, or None with a
+    warning saying why not."""
+    if not os.path.isfile(source):
+        texture_problem(f"the material {libraries[0]} of {source} is looked for beside the file, "
+                        "which was read from a stream")
+        return None
+    folder = os.path.dirname(os.path.abspath(source))
+    for library in libraries:
+        path = inside_folder(folder, library)
+        if path is None:
+            texture_problem(f"{library}: outside the folder of {source}")
+            continue
+        try:
+            with open(path, "rb") as file:
+                text = file.read(1 << 20).decode("utf-8", "replace")
+        except OSError as error:
+            texture_problem(f"{library}: {error.strerror or error}")
+            continue
+        found = re.search(r"(?m)^\s*map_Kd\s+(.+?)\s*$", text)
+        if found is None:
+            continue
+        name = found.group(1).split()[-1]   # options (-s, -o, -clamp ...) come before the file name
+        return image_beside(source, os.path.join(os.path.dirname(library), name), f"map_Kd of {library}")
+    return None
+
+
+def image_beside(source, name, named_by):
+    """The (rows, cols, 3) uint8 image ``name`` (as ``named_by`` names it) in the folder of the
+    mesh file ``source``, or None with a warning: ``source`` is a stream, the image lies outside
+    that folder or cannot be read."""
+    if not os.path.isfile(source):
+        texture_problem(f"the image {name} of {source} is looked for beside the file, which was read from a stream")
+        return None
+    path = inside_folder(os.path.dirname(os.path.abspath(source)), name)
+    if path is None:
+        texture_problem(f"{name} ({named_by}): outside the folder of {source}")
+        return None
+    return read_image(path, name)
+
+
+def read_image(path, name):
+    """The (rows, cols, 3) uint8 RGB pixels of the image file at ``path``, or None with a warning."""
+    try:
+        from PIL import Image
+    except ImportError:
+        texture_problem(f"{name}: reading images needs the package Pillow (pip install Pillow)")
+        return None
+    try:
+        with Image.open(path) as image:
+            return np.asarray(image.convert("RGB"), dtype=np.uint8)
+    except (OSError, ValueError, Image.DecompressionBombError) as error:
+        texture_problem(f"{name}: {error}")
+        return None
+
+
+def repeated(values):
+    """Texture coordinates within 0..1 as they are (1 is the image's far edge), others wrapped
+    into it (a texture repeats)."""
+    inside = (values >= 0) & (values <= 1)
+    return np.where(inside | np.isnan(values), values, values - np.floor(values))
+
+
+def sampled_texels(image, uv):
+    """(n, 3) uint8 colours of ``image`` at the (n, 2) texture coordinates ``uv`` (u to the right,
+    v up from the bottom row, each repeating outside 0..1, as OBJ's ``vt``), bilinear between the
+    four nearest pixel centres (the outer half pixel takes its edge pixels'); NaN coordinates (no
+    uv) give 0."""
+    if image.ndim != 3 or image.shape[2] != 3:
+        raise MzcError("a texture is an RGB image", field="texture")
+    rows, cols = image.shape[:2]
+    missing = np.isnan(uv).any(axis=1)
+    u, v = (np.where(missing, 0.0, repeated(uv[:, i])) for i in (0, 1))
+    x, y = u * cols - 0.5, (1.0 - v) * rows - 0.5
+    x0, y0 = np.floor(x), np.floor(y)
+    fx, fy = (x - x0)[:, None], (y - y0)[:, None]
+    x0, y0 = x0.astype(np.int64), y0.astype(np.int64)
+    x1, y1 = np.clip(x0 + 1, 0, cols - 1), np.clip(y0 + 1, 0, rows - 1)
+    x0, y0 = np.clip(x0, 0, cols - 1), np.clip(y0, 0, rows - 1)
+    pixels = image.astype(np.float64)
+    top = pixels[y0, x0] + fx * (pixels[y0, x1] - pixels[y0, x0])
+    bottom = pixels[y1, x0] + fx * (pixels[y1, x1] - pixels[y1, x0])
+    colours = np.clip(np.round(top + fy * (bottom - top)), 0, 255).astype(np.uint8)
+    colours[missing] = 0
+    return colours
+
+
+def png_bytes(pixels):
+    """The bytes of a PNG of (rows, cols, 3) uint8 ``pixels`` (Pillow's encoder, no metadata)."""
+    import io
+
+    from PIL import Image
+
+    buffer = io.BytesIO()
+    Image.fromarray(np.ascontiguousarray(pixels), "RGB").save(buffer, format="PNG")
+    return buffer.getvalue()
+
+
+def textured_obj(grid_mesh, obj_path, png_path):
+    """[(path, bytes)] of a grid's mesh (a ``triangulation.GridMesh`` of a grid with colours) as
+    an OBJ at ``obj_path`` whose vertex k has the texture coordinate of its node (r, c), the
+    centre of pixel (rows - 1 - r, c) of the grid's colours written as the PNG at ``png_path``
+    (its first row the grid's last: v runs up), and the material file beside the OBJ (its name
+    with .mtl) that names the PNG by its path from the OBJ's folder."""
+    from mzc.meshes import Mesh
+    from mzc.meshes.obj import write as write_obj
+
+    grid = grid_mesh.grid
+    if grid.colors is None:
+        raise MzcError("the grid has no colours to write as a texture", field="texture")
+    rows, cols = grid.shape
+    row, col = np.divmod(np.flatnonzero(grid_mesh.used), cols)
+    uv = np.column_stack([(col + 0.5) / cols, (row + 0.5) / rows])
+    folder = os.path.dirname(os.path.abspath(obj_path))
+    material = os.path.splitext(os.path.basename(obj_path))[0] + ".mtl"
+    image = os.path.relpath(os.path.abspath(png_path), folder).replace(os.sep, "/")
+    vertices = write_obj(Mesh(grid_mesh.points)).decode("ascii")   # the v lines alone
+    texture = ("vt %r %r\n" * len(uv)) % tuple(uv.ravel().tolist())
+    faces = np.concatenate(list(grid_mesh.triangle_chunks()) or [np.empty((0, 3), dtype=np.int64)]) + 1
+    corners = ("f %d/%d %d/%d %d/%d\n" * len(faces)) % tuple(np.repeat(faces.ravel(), 2).tolist())
+    obj = f"mtllib {material}\nusemtl grid_colours\n{vertices}{texture}{corners}"
+    mtl = f"newmtl grid_colours\nKa 1 1 1\nKd 1 1 1\nmap_Kd {image}\n"
+    return [(obj_path, obj.encode("ascii")), (os.path.join(os.path.dirname(obj_path), material), mtl.encode("utf-8")),
+            (png_path, png_bytes(grid.colors[::-1]))]

@@ -1,0 +1,98 @@
+"""Colour at the grid's nodes: each valid node's colour sampled from the surface it was cut from.
+
+A node's value puts it on the surface (the hit of its line with a triangle, or the point(s) of a
+cloud that made it), so the surface's colour there is the node's: for a mesh, the colour of the
+triangle nearest the node's point (the one its line hit, at distance 0 but for rounding; on an
+edge or vertex the triangles that share it agree), interpolated from its corners' colours with
+the point's barycentric weights; for a cloud, the colour of the point nearest the node's point.
+Densified rows mix their rows' colours (``densified_colours``).
+The nearest triangle is found by mzc's exact search (``mzc.measure.metrics.nearest_triangles``,
+the one ``mzc diff`` uses), a point of a cloud as the triangle of one corner repeated thrice,
+so projections, charts, binned and Delaunay clouds all are sampled one way. Vectorised, with
+IEEE arithmetic only (no BLAS, no SIMD-dependent loops): the same bytes on every CPU.
+"""
+
+import numpy as np
+
+
+def coloured(mesh, grid):
+    """``grid`` with its nodes' colours sampled from ``mesh`` (``sampled_colours``), or as it is
+    when the mesh has none."""
+    colours = sampled_colours(grid, mesh)
+    return grid if colours is None else grid.with_z(grid.z, colors=colours)
+
+
+def sampled_colours(grid, mesh):
+    """(rows, cols, 3) uint8 colours of ``grid``'s valid nodes (0 at invalid ones) sampled from
+    ``mesh``, the surface it was cut from (in the mesh's frame), or None when it has no colours;
+    a multi-chart grid's charts each place their own nodes."""
+    if mesh.colors is None:
+        return None
+    from mzc.measure.metrics import nearest_triangles
+
+    colours = np.zeros((*grid.shape, 3), dtype=np.uint8)
+    blocks = [chart.block() for chart in grid.charts] if grid.charts is not None else [(slice(None), slice(None))]
+    triangles = mesh.triangles if len(mesh.triangles) else point_triangles(len(mesh.points))
+    for block, part in zip(blocks, grid.chart_grids()):
+        valid = part.valid
+        if not valid.any():
+            continue
+        points = part.to_input_frame(part.node_points()[valid])
+        nearest = nearest_triangles(points, mesh.points, triangles)[1]
+        corners = triangles[nearest]
+        weights = barycentric(points, *(mesh.points[corners[:, i]] for i in range(3)))
+        mixed = sum(weights[:, i:i + 1] * mesh.colors[corners[:, i]] for i in range(3))
+        colours[block][valid] = np.clip(np.round(mixed), 0, 255).astype(np.uint8)
+    return colours
+
+
+def barycentric(points, a, b, c):
+    """(n, 3) weights of the corners a, b, c (each (n, 3)) at the foot of each point on its
+    triangle's plane, clamped into the triangle (none negative, summing to 1); a triangle of no
+    area gives its first corner all the weight."""
+    def dot(u, v):
+        return u[:, 0] * v[:, 0] + u[:, 1] * v[:, 1] + u[:, 2] * v[:, 2]
+
+    e1, e2, p = b - a, c - a, points - a
+    d11, d12, d22, p1, p2 = dot(e1, e1), dot(e1, e2), dot(e2, e2), dot(p, e1), dot(p, e2)
+    area = d11 * d22 - d12 * d12
+    flat = ~(area > 1e-12 * (d11 * d22))
+    area = np.where(flat, 1.0, area)
+    v = np.where(flat, 0.0, (d22 * p1 - d12 * p2) / area)
+    w = np.where(flat, 0.0, (d11 * p2 - d12 * p1) / area)
+    weights = np.clip(np.column_stack([1.0 - v - w, v, w]), 0.0, None)
+    return weights / (weights[:, :1] + weights[:, 1:2] + weights[:, 2:])
+
+
+def point_triangles(count):
+    """(count, 3): each of ``count`` points as a triangle of one corner thrice, which the nearest
+    triangle search measures as the point."""
+    return np.repeat(np.arange(count), 3).reshape(-1, 3)
+
+
+def nearest_colours(points, sources, colours):
+    """(n, 3) uint8: for each of ``points``, the colour of the nearest of ``sources`` (``colours``
+    theirs): the colour of a vertex a step adds, such as the zipper's (``mzc.ops.zipper``)."""
+    from mzc.measure.metrics import nearest_triangles
+
+    if not len(points):
+        return np.empty((0, 3), dtype=np.uint8)
+    return colours[nearest_triangles(points, sources, point_triangles(len(sources)))[1]]
+
+
+def densified_colours(colours, dense_valid, n):
+    """(rows', cols, 3) uint8 colours of a grid whose ``colours`` (rows, cols, 3) had ``n`` rows
+    inserted between each pair of rows (``mzc.ops.densify``), ``dense_valid`` its new nodes'
+    mask: node k of n between rows r and r + 1 mixes their colours linearly, (n + 1 - k) c_r +
+    k c_r+1 over n + 1, rounded (the bilinear interpolation of the colour image to the finer
+    grid, whose columns stay); where one of the two is invalid, the other's. 0 where invalid."""
+    rows, cols, _ = colours.shape
+    valid = dense_valid[::n + 1]
+    step = np.arange(n + 1, dtype=np.float64)[None, :, None, None] / (n + 1)
+    low, high = colours[:-1, None].astype(np.float64), colours[1:, None].astype(np.float64)
+    low_valid, high_valid = valid[:-1, None, :, None], valid[1:, None, :, None]
+    weight = np.where(low_valid & high_valid, step, np.where(high_valid, 1.0, 0.0))
+    mixed = np.round(low + weight * (high - low)).reshape(-1, cols, 3)
+    dense = np.concatenate([mixed, colours[-1:].astype(np.float64)]).astype(np.uint8)
+    dense[~dense_valid] = 0
+    return dense
