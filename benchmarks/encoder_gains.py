@@ -65,6 +65,7 @@ VARIANTS = {
 }
 PER_FILE = ("baseline", "bior2.2", "levels 4", "levels 6")   # the per-file choice's candidates
 COMBINED = "combined"
+BAR_RATIO, BAR_ENCODE = 0.99, 1.5   # a technique is kept when it saves 1% at every target, encoding within 1.5x
 
 
 # --------------------------------------------------------------------------- variants
@@ -171,6 +172,12 @@ def summary(faces, names):
 # --------------------------------------------------------------------------- report
 
 
+def paying_row(row):
+    """Whether a summary row pays: BAR_RATIO or fewer bytes at every target, within BAR_ENCODE of the encode time."""
+    return row["encode"] <= BAR_ENCODE and all(c["ratio"] is not None and c["ratio"] <= BAR_RATIO
+                                               for c in row["targets"])
+
+
 def markdown(document):
     """The report: settings, the gains table, what each variant is."""
     settings, table = document["settings"], document["summary"]
@@ -188,6 +195,9 @@ def markdown(document):
         cells = [f"{c['ratio']:.4f} [{c['low']:.3f}-{c['high']:.3f}] {c['smaller']}/{c['count']}"
                  if c["ratio"] is not None else "n/a" for c in row["targets"]]
         lines.append(f"| {name} | {' | '.join(cells)} | {row['encode']:.2f}x |")
+    paying = [name for name, row in table.items() if paying_row(row)]
+    lines += ["", f"Meets the bar (at least {1 - BAR_RATIO:.0%} fewer bytes at every target, encode at most "
+                  f"{BAR_ENCODE}x the baseline's): {', '.join(paying) or 'none'}."]
     lines += ["", "## Variants", ""]
     lines += [f"- **{name}**: {what}" for name, (what, *_rest) in document["variants"].items()]
     lines += ["- **per-file best**: per face and target the smallest of " + ", ".join(PER_FILE)

@@ -74,7 +74,7 @@ TARGETS = ("max_error", "rmse", "size")   # at most one of them says what the en
 DEFAULT_RMSE_SPACING = 0.1   # ...and without one, rmse is a tenth of the grid's node spacing (default_rmse)
 DEADZONE = 0.5             # encoder-only rounding offset (floor(|c|/step + 1 - DEADZONE)): to the nearest, and
 RDO_LAMBDA = 0.05          # lowered_toward_zero's lambda in squared steps per bit then moves some toward zero
-                           # (0.6 and no RDO before: 1.2-2.6% larger files; 0.55 or lambda 0.03-0.1 in between)
+                           # (1.2-2.7% smaller files than 0.6 without it; 0.55 or lambda 0.03-0.1 in between)
 RMS_GUESS = 20.0           # rmse: the search's first step, times the target (the faces' steps are 5-116 times
                            # their targets of 0.01-0.64 mm, the DEMs' 33-34 times)...
 RMS_SLOPE = 0.6            # ...and their RMS error grows about as step**0.5-0.6 near them (the DEMs' as step)
@@ -348,7 +348,7 @@ def lowered_toward_zero(qflat, magnitudes, steps, relevant, written):
     from their counts in each context over the bands as quantised (``written``: the steps
     line's per band, as the contexts see them); a greedy pass on those contexts, vectorised,
     as a trellis would need a row loop. The decoder reconstructs q * step as ever: measured on
-    the 13 faces (benchmarks/encoder_gains.py), with rounding to the nearest, 1.2-2.6% fewer
+    the 13 faces (benchmarks/encoder_gains.py), with rounding to the nearest, 1.2-2.7% fewer
     bytes at equal whole-surface RMS."""
     from mzc.codecs.dwt2d.entropy import MAX_CLASSES, classes
 
