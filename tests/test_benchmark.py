@@ -17,6 +17,7 @@ BENCHMARK = REPO / "benchmarks" / "rd.py"
 sys.path.insert(0, str(BENCHMARK.parent))
 
 import contenders  # noqa: E402
+import encoder_gains  # noqa: E402
 import rd  # noqa: E402
 import report  # noqa: E402
 
@@ -35,6 +36,31 @@ def wall_mesh():
 def parts_of(mesh_a, mesh_b, samples=4000):
     return surface_distance_parts(mesh_a, mesh_b, {"whole": (None, None), "heightfield": heightfield_filters(*mesh_a)},
                                   samples=samples, seed=0)
+
+
+@pytest.mark.parametrize("name", list(encoder_gains.VARIANTS))
+def test_every_encoder_gains_variant_writes_a_file_the_unchanged_decoder_reads(name):
+    """benchmarks/encoder_gains.py's variants change the encoder alone: each file of a rough
+    generated surface decodes (constants as they are) within its RMS target, and a band-ratio
+    variant's steps line holds one step per band, each coarser level's about ``ratio`` times
+    the next finer one's, as today's decoder expands it."""
+    import mzc
+    from mzc.codecs import dwt2d
+
+    rng = np.random.default_rng(5)
+    z = rng.normal(scale=0.3, size=(70, 90)).cumsum(axis=0).cumsum(axis=1) / 20
+    grid = ZGrid(z, 1.0, 1.0)
+    _what, constants, options, ratio = encoder_gains.VARIANTS[name]
+    with encoder_gains.encoder_of(constants, ratio):
+        data = mzc.encode(grid, "dwt2d", rmse=0.05, **options)
+    decoded = mzc.decode(data)
+    assert np.sqrt(np.mean(np.square(decoded.z - z))) <= 0.05 * 1.5   # the target is a surface RMS
+    steps = [float(v) for v in next(line for line in data.split(b"\n") if line.startswith(b"steps ")).split()[1:]]
+    levels = options.get("level", dwt2d.w2.default_levels(grid.shape, dwt2d.w2.TRANSFORMS[dwt2d.VERSION[0]].coarsest))
+    assert len(steps) == (2 if ratio is None else 1 + 3 * levels)
+    expanded = dwt2d.expand_steps(steps, 1 + 3 * levels)
+    if ratio is not None:
+        np.testing.assert_allclose(np.array(expanded[1:-3]) / np.array(expanded[4:]), ratio, rtol=1e-3)
 
 
 def test_a_face_against_itself_is_zero():
