@@ -148,21 +148,33 @@ def test_a_rounding_line_means_nothing_before_6_0_and_is_one_word_in_it():
     assert error.value.field == "rounding"
 
 
-def test_the_spec_example_of_6_0_is_its_input_rounded_back_within_its_bound():
-    """spec/dwt2d.md's 6.0 example: the integer DEM it states, coded by the reference encoder, is the
-    example's file byte for byte, and decodes to integers within 1 of it."""
-    from codec_contract import SPEC, spec_examples
+def example_of(version):
+    """(file bytes, expected values) of spec/dwt2d.md's worked example of ``version`` (b"6.0")."""
+    from codec_contract import spec_examples
 
-    data, expected, _id = [e for e in spec_examples("dwt2d") if e[0].startswith(b"mzc-dwt2d 6.0")][0]
+    return [e[:2] for e in spec_examples("dwt2d") if e[0].startswith(b"mzc-dwt2d " + version + b"\n")][0]
+
+
+def integer_dem_of_the_spec():
+    """The int16 DEM the 6.0 worked example states (30 m cells, one no-data cell), as a ZGrid."""
+    from codec_contract import SPEC
+
     page = (SPEC / "dwt2d.md").read_text()
     stated = page.split("## Worked example of version 6.0 (rounding)")[1].split("```\n")[1]
     z = np.array([[float(v) for v in line.split()] for line in stated.strip().splitlines()])
-    grid = ZGrid(z, d1=30.0, d2=30.0, origin=(440735.0, 3750015.0), units="m", nodata="-32768",
+    return ZGrid(z, d1=30.0, d2=30.0, origin=(440735.0, 3750015.0), units="m", nodata="-32768",
                  raster=Raster("area", "down", "int16"))
+
+
+def test_the_spec_example_of_6_0_is_its_input_rounded_back_within_its_bound():
+    """spec/dwt2d.md's 6.0 example: the integer DEM it states, coded by the reference encoder, is the
+    example's file byte for byte, and decodes to integers within 1 of it."""
+    data, expected = example_of(b"6.0")
+    grid = integer_dem_of_the_spec()
     assert dwt2d.write(grid, max_error=1, level=1) == data
     back = api.decode(data).z
     assert np.array_equal(back, expected, equal_nan=True)
-    assert np.nanmax(np.abs(back - z)) == 1
+    assert np.nanmax(np.abs(back - grid.z)) == 1
 
 
 # --- GeoTIFF creation options and Cloud Optimized GeoTIFFs --------------------------------
@@ -411,15 +423,9 @@ def test_a_rounded_tiled_file_whose_tiles_lie_is_refused():
 def test_the_spec_example_of_5_1_is_the_6_0_input_in_rounded_tiles():
     """spec/dwt2d.md's 5.1 example: the 6.0 example's integer DEM in tiles of 4, coded by the
     reference encoder, is the example's file byte for byte; it decodes to integers within 1 of it."""
-    from codec_contract import SPEC, spec_examples
-
-    data, expected, _id = [e for e in spec_examples("dwt2d") if e[0].startswith(b"mzc-dwt2d 5.1")][0]
-    page = (SPEC / "dwt2d.md").read_text()
-    stated = page.split("## Worked example of version 6.0 (rounding)")[1].split("```\n")[1]
-    z = np.array([[float(v) for v in line.split()] for line in stated.strip().splitlines()])
-    grid = ZGrid(z, d1=30.0, d2=30.0, origin=(440735.0, 3750015.0), units="m", nodata="-32768",
-                 raster=Raster("area", "down", "int16"))
+    data, expected = example_of(b"5.1")
+    grid = integer_dem_of_the_spec()
     assert dwt2d.write(grid, max_error=1, tile=4) == data
     back = api.decode(data)
     assert np.array_equal(back.z, expected, equal_nan=True) and back.raster == grid.raster
-    assert np.nanmax(np.abs(back.z - z)) == 1
+    assert np.nanmax(np.abs(back.z - grid.z)) == 1
