@@ -325,7 +325,8 @@ def compare(a: Any, b: Any, *, surface: bool = True, heightfield: bool = False, 
             seed: int = 0, d1: float | None = None, d2: float | None = None) -> dict[str, Any]:
     """How far surface ``b`` is from ``a`` (``mzc diff``): the symmetric point-to-surface distance
     (``surface_*``; ``surface=False`` leaves it out on planar grids), then the statistics of B - A
-    along A's node lines (``grid_*``); a dict of name -> value."""
+    along A's node lines (``grid_*``); a dict of name -> value. ``d1``, ``d2``: the spacing of the
+    common grid, in A's units, in metres for two geographic grids (compared in metres, never degrees)."""
     from mzc.limits import MAX_SAMPLES
     from mzc.measure import compare_surfaces
 

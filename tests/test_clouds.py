@@ -339,8 +339,15 @@ GEOGRAPHIC_WKT = ('GEOGCS["WGS 84",DATUM["WGS_1984",SPHEROID["WGS 84",6378137,29
                   'PRIMEM["Greenwich",0],UNIT["degree",0.0174532925199433]]')
 
 
-@pytest.mark.parametrize("record", ["wkt", "geokeys"])
-def test_a_las_cloud_in_longitude_and_latitude_is_refused_in_one_line(mzc, tmp_path, record):
+def hills(lon, lat):
+    """Terrain heights in metres at longitude and latitude near 105 W, 40 N: hills a few hundred
+    metres across (0.003 degrees of longitude is 256 m there)."""
+    return 1600 + 30 * np.sin((lon + 105) / 0.003) * np.cos((lat - 40) / 0.004) + 2000 * (lat - 40)
+
+
+def lonlat_las(path, record, count=6000):
+    """A LAS 1.4 cloud of ``count`` points scattered over 0.01 x 0.01 degrees at 105 W, 40 N on
+    ``hills``, its CRS EPSG:4326 in a WKT record or in GeoTIFF keys (``record``)."""
     import laspy
     from laspy.vlrs.geotiff import GeoKeyEntryStruct
     from laspy.vlrs.known import GeoKeyDirectoryVlr, WktCoordinateSystemVlr
@@ -356,10 +363,43 @@ def test_a_las_cloud_in_longitude_and_latitude_is_refused_in_one_line(mzc, tmp_p
         header.vlrs.append(keys)
     data = laspy.LasData(header)
     rng = np.random.default_rng(0)
-    data.x, data.y, data.z = -105 + 0.01 * rng.random(200), 40 + 0.01 * rng.random(200), 1600 + rng.random(200)
-    path = tmp_path / "degrees.las"
+    lon, lat = -105 + 0.01 * rng.random(count), 40 + 0.01 * rng.random(count)
+    data.x, data.y, data.z = lon, lat, hills(lon, lat)
+    data.classification = np.full(count, 2)
     data.write(path)
-    assert_one_line_error(mzc("slice", path), "degrees.las: crs: the cloud's x and y are longitude and latitude")
+    return path
+
+
+@pytest.mark.parametrize("record", ["wkt", "geokeys"])
+def test_a_las_cloud_in_longitude_and_latitude_is_gridded_as_terrain_in_degrees(mzc, tmp_path, record):
+    """Its CRS says x and y are degrees: the grid looks down z at the cloud's own point spacing in
+    degrees (not its Delaunay edges over degrees and metres of height), keeps the geographic CRS,
+    and holds the terrain's heights; the codec then takes a vertical RMSE in metres."""
+    import mzc as api
+    from mzc.georef import crs_kind, metres_per_unit
+
+    if record == "geokeys":
+        pytest.importorskip("rasterio")   # EPSG:4326 spelled out as WKT from GDAL's database
+    path = lonlat_las(tmp_path / "degrees.las", record)
+    assert crs_kind(read_mesh(path).crs) == "geographic"
+    grid = api.slice(path)
+    assert crs_kind(grid.crs) == "geographic" and grid.projection == "planar"
+    east, north = metres_per_unit(grid.crs, 40.005)
+    assert grid.d1 == grid.d2 and 0.00005 <= grid.d1 <= 0.0002   # 4-17 m: 6000 points over about 0.9 km^2
+    assert min(grid.shape) >= 50 and grid.shape[0] * grid.shape[1] < 10 * 6000
+    lon, lat = np.meshgrid(grid.xs(), grid.ys())
+    valid = grid.valid
+    assert valid.mean() > 0.9 and np.abs(grid.z - hills(lon, lat))[valid].max() < 0.5   # metres (0.13 measured)
+    sliced, coded = tmp_path / "g.zg", tmp_path / "g.mzw2"
+    mzc("slice", path, "-o", sliced, check=True)
+    assert api.read(sliced).z.tobytes() == grid.z.tobytes()
+    mzc("encode", "--dwt2d", "--rmse", "0.5", sliced, "-o", coded, check=True)
+    back = api.read(coded)
+    assert np.sqrt(np.mean((back.z - grid.z)[valid] ** 2)) < 0.5 * 1.05 and back.crs == grid.crs
+    with pytest.raises(MzcError, match="longitude and latitude") as error:
+        api.slice(path, projection="spherical")
+    assert error.value.field == "projection"
+    assert east * grid.d2 < 20 and north * grid.d1 < 20
 
 
 @pytest.mark.parametrize("compressed", [False, True])

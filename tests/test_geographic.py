@@ -364,3 +364,24 @@ def test_the_default_target_of_a_geographic_grid_is_a_tenth_of_its_spacing_in_me
     east, north = metres_per_unit(grid.crs, centre_of(grid)[1])
     assert 2.0 < default_rmse(grid) == 0.1 * min(grid.d2 * east, grid.d1 * north) < 3.2
     assert mzc.encode(grid) == mzc.encode(grid, rmse=default_rmse(grid))
+
+
+def test_diff_spacings_of_geographic_grids_are_metres_as_its_help_says(tmp_path):
+    """--d1/--d2 set the common grid in the metres both grids are compared in (about A's centre):
+    60 m gives a 60 m error grid over the DEM's extent in metres, and --help says so."""
+    from mzc.georef import metric_frame
+
+    grid = mzc.read(BIJOU)
+    metric = metric_frame(grid)
+    errors = tmp_path / "errors.zg"
+    report = dict(line.split() for line in run_mzc("diff", BIJOU, BIJOU, "--count", "--max", "--d1", 60, "--d2", 60,
+                                                  "--error-grid", errors, check=True).stdout.decode().splitlines())
+    written = mzc.read(errors)
+    assert (written.d1, written.d2, written.crs) == (60.0, 60.0, None)
+    rows, cols = metric.shape
+    assert abs(written.shape[0] - (rows - 1) * metric.d1 / 60) <= 2
+    assert abs(written.shape[1] - (cols - 1) * metric.d2 / 60) <= 2
+    assert int(report["grid_count"]) > 0.8 * written.shape[0] * written.shape[1] and float(report["grid_max"]) < 1e-6
+    assert mzc.compare(BIJOU, BIJOU, d1=60, d2=60)["grid_count"] == int(report["grid_count"])
+    help_text = " ".join(run_mzc("diff", "--help", check=True).stdout.decode().split())
+    assert "in metres for a geographic grid" in help_text

@@ -148,21 +148,33 @@ def test_a_rounding_line_means_nothing_before_6_0_and_is_one_word_in_it():
     assert error.value.field == "rounding"
 
 
-def test_the_spec_example_of_6_0_is_its_input_rounded_back_within_its_bound():
-    """spec/dwt2d.md's 6.0 example: the integer DEM it states, coded by the reference encoder, is the
-    example's file byte for byte, and decodes to integers within 1 of it."""
-    from codec_contract import SPEC, spec_examples
+def example_of(version):
+    """(file bytes, expected values) of spec/dwt2d.md's worked example of ``version`` (b"6.0")."""
+    from codec_contract import spec_examples
 
-    data, expected, _id = [e for e in spec_examples("dwt2d") if e[0].startswith(b"mzc-dwt2d 6.0")][0]
+    return [e[:2] for e in spec_examples("dwt2d") if e[0].startswith(b"mzc-dwt2d " + version + b"\n")][0]
+
+
+def integer_dem_of_the_spec():
+    """The int16 DEM the 6.0 worked example states (30 m cells, one no-data cell), as a ZGrid."""
+    from codec_contract import SPEC
+
     page = (SPEC / "dwt2d.md").read_text()
     stated = page.split("## Worked example of version 6.0 (rounding)")[1].split("```\n")[1]
     z = np.array([[float(v) for v in line.split()] for line in stated.strip().splitlines()])
-    grid = ZGrid(z, d1=30.0, d2=30.0, origin=(440735.0, 3750015.0), units="m", nodata="-32768",
+    return ZGrid(z, d1=30.0, d2=30.0, origin=(440735.0, 3750015.0), units="m", nodata="-32768",
                  raster=Raster("area", "down", "int16"))
+
+
+def test_the_spec_example_of_6_0_is_its_input_rounded_back_within_its_bound():
+    """spec/dwt2d.md's 6.0 example: the integer DEM it states, coded by the reference encoder, is the
+    example's file byte for byte, and decodes to integers within 1 of it."""
+    data, expected = example_of(b"6.0")
+    grid = integer_dem_of_the_spec()
     assert dwt2d.write(grid, max_error=1, level=1) == data
     back = api.decode(data).z
     assert np.array_equal(back, expected, equal_nan=True)
-    assert np.nanmax(np.abs(back - z)) == 1
+    assert np.nanmax(np.abs(back - grid.z)) == 1
 
 
 # --- GeoTIFF creation options and Cloud Optimized GeoTIFFs --------------------------------
@@ -301,3 +313,119 @@ def test_slice_and_densify_take_the_geotiff_options_too(mzc, tmp_path, command):
     mzc(*command, source, "-o", out, "--co", "COMPRESS=LZW", "--cog", check=True)
     tiled, _, _, tags, _ = structure(out)
     assert tiled and tags["LAYOUT"] == "COG" and tags["COMPRESSION"] == "LZW"
+
+
+# --- tiled integer rasters (mzc-dwt2d 5.1) -------------------------------------------------------
+
+
+def tiled_int16_dem(path):
+    """A 1100 x 1030 int16 DEM with no-data cells, larger than one default tile (1024): 2 x 2 tiles."""
+    rng = np.random.default_rng(11)
+    r, c = np.mgrid[0:1100, 0:1030]
+    z = np.round(700 + 250 * np.sin(r / 80) * np.cos(c / 95) + rng.normal(0, 2, r.shape))
+    z[1000:1060, 40:90] = -32768   # across the boundary between the two rows of tiles (row 1024 of the grid)
+    return written_int16_dem(path, z)
+
+
+@pytest.fixture(scope="module")
+def tiled_dem(tmp_path_factory):
+    """(the tiled DEM, its --dwt2d --max-error 1 file coded window by window by the CLI)."""
+    from conftest import run_mzc
+
+    folder = tmp_path_factory.mktemp("tiled")
+    source, coded = tiled_int16_dem(folder / "dem.tif"), folder / "dem.mzw2"
+    run_mzc("encode", "--dwt2d", "--max-error", "1", source, "-o", coded, check=True)
+    return source, coded
+
+
+def test_a_tiled_int16_dem_decodes_tile_by_tile_to_int16_with_its_no_data(mzc, tiled_dem, tmp_path):
+    source, coded = tiled_dem
+    data = coded.read_bytes()
+    assert data.startswith(b"mzc-dwt2d 5.1\n") and b"\nrounding integer\nmax_error 1\n" in data
+    assert data == api.encode(api.read(source), "dwt2d", max_error=1)   # the windows give the API's bytes
+    back = tmp_path / "back.tif"
+    mzc("decode", coded, "-o", back, check=True)
+    values, valid, dtype, nodata = read_tif(back)
+    original, original_valid, _, _ = read_tif(source)
+    assert (dtype, nodata) == ("int16", -32768)
+    assert np.array_equal(valid, original_valid) and (values[~valid] == -32768).all()
+    assert np.abs(values[valid].astype(int) - original[valid]).max() == 1
+    whole = api.decode(data)
+    assert whole.z.tobytes() == api.read(back).z.tobytes() and whole.raster.sample == "int16"
+
+
+def test_a_window_of_a_tiled_int16_dem_is_int16_through_cli_and_api(mzc, tiled_dem, tmp_path):
+    source, coded = tiled_dem
+    window = (1000, 1000, 60, 30)   # across all four tiles
+    cut = tmp_path / "cut.tif"
+    mzc("decode", coded, "--window", *window, "-o", cut, check=True)
+    values, valid, dtype, nodata = read_tif(cut)
+    assert (dtype, nodata, values.shape) == ("int16", -32768, (60, 30))
+    by_api = api.read(coded, window=window)
+    assert by_api.z.tobytes() == api.read(cut).z.tobytes()
+    assert np.array_equal(by_api.z, api.decode(coded.read_bytes()).z[1000:1060, 1000:1030], equal_nan=True)
+    assert np.array_equal(api.decode(coded.read_bytes(), window=window).z, by_api.z, equal_nan=True)
+
+
+def test_a_tiled_int16_dem_in_rounded_tiles_is_smaller_than_in_float_ones(tiled_dem):
+    """At E = 1 the rounded tiles code at 1.5 - 16 ulp, as a whole 6.0 file does (Guarantees)."""
+    from dataclasses import replace
+
+    grid = api.read(tiled_dem[0])
+    rounded = tiled_dem[1].read_bytes()
+    floats = api.encode(replace(grid, raster=None), "dwt2d", max_error=1)   # the same values, no type
+    assert floats.startswith(b"mzc-dwt2d 5.0\n") and len(rounded) < 0.8 * len(floats)   # 238,910 and 339,520 B
+
+
+@settings(max_examples=15, deadline=None)
+@given(rows=st.integers(1, 30), cols=st.integers(1, 30), tile=st.integers(4, 12), max_error=st.sampled_from(
+    [0.5, 1, 2.7]), sample=st.sampled_from(["int16", "uint8", "int32"]), seed=st.integers(0, 99))
+def test_tiled_integer_grids_round_trip_to_integers_within_floor_of_the_bound(rows, cols, tile, max_error, sample,
+                                                                              seed):
+    rng = np.random.default_rng(seed)
+    z = np.round(rng.uniform(0, 200, (rows, cols)))
+    z[rng.random((rows, cols)) < 0.1] = np.nan
+    grid = ZGrid(z, d1=1.0, d2=1.0, nodata="250" if sample == "uint8" else "-9999",
+                 raster=Raster("area", "down", sample))
+    data = api.encode(grid, "dwt2d", max_error=max_error, tile=tile)
+    assert split_magic(data, "t")[1:] == (5, 1)
+    back = api.decode(data)
+    valid = ~np.isnan(z)
+    assert np.array_equal(np.isnan(back.z), ~valid) and back.raster == grid.raster
+    assert np.array_equal(back.z[valid], np.rint(back.z[valid]))
+    assert np.abs(back.z - z)[valid].max(initial=0) <= np.floor(max_error)
+
+
+def test_a_tiled_grid_of_fractions_or_an_rmse_target_keeps_float_tiles():
+    z = np.round(np.random.default_rng(2).uniform(0, 50, (12, 10)))
+    grid = ZGrid(z, d1=1.0, d2=1.0, raster=Raster("area", "down", "int16"))
+    assert api.encode(grid.with_z(z + 0.5), "dwt2d", max_error=1, tile=4).startswith(b"mzc-dwt2d 5.0\n")
+    assert api.encode(grid, "dwt2d", rmse=0.5, tile=4).startswith(b"mzc-dwt2d 5.0\n")
+
+
+def test_a_rounded_tiled_file_whose_tiles_lie_is_refused():
+    """A 5.1 header's rounding needs 6.0 tiles of its raster; a 5.0 header takes 3.x tiles only."""
+    from test_tiles import with_header
+
+    z = np.round(np.random.default_rng(4).uniform(0, 50, (6, 9)))
+    grid = ZGrid(z, d1=1.0, d2=1.0, raster=Raster("area", "down", "int16"))
+    data = api.encode(grid, "dwt2d", max_error=1, tile=4)
+    with pytest.raises(MzcError, match=r"a tile of this file is a dwt2d 3.x stream"):
+        api.decode(with_header(data, (b"rounding integer\n", b"")))
+    with pytest.raises(MzcError, match=r"a tile of this file is a dwt2d 3.x stream"):
+        api.decode(with_header(data, (b"mzc-dwt2d 5.1", b"mzc-dwt2d 5.0")))
+    with pytest.raises(MzcError, match="the block the header places there"):
+        api.decode(with_header(data, (b"raster area down int16", b"raster area down int32")))
+    with pytest.raises(MzcError, match="rounding: rounds a raster of integer samples"):
+        api.decode(with_header(data, (b"raster area down int16", b"raster area down float32")))
+
+
+def test_the_spec_example_of_5_1_is_the_6_0_input_in_rounded_tiles():
+    """spec/dwt2d.md's 5.1 example: the 6.0 example's integer DEM in tiles of 4, coded by the
+    reference encoder, is the example's file byte for byte; it decodes to integers within 1 of it."""
+    data, expected = example_of(b"5.1")
+    grid = integer_dem_of_the_spec()
+    assert dwt2d.write(grid, max_error=1, tile=4) == data
+    back = api.decode(data)
+    assert np.array_equal(back.z, expected, equal_nan=True) and back.raster == grid.raster
+    assert np.nanmax(np.abs(back.z - grid.z)) == 1

@@ -1,4 +1,4 @@
-// The 2D wavelet codec `mzc-dwt2d` 2.0, 3.0, 3.1, 3.2, 4.0, 5.0 (tiles) and 6.0 (rounding)
+// The 2D wavelet codec `mzc-dwt2d` 2.0, 3.0, 3.1, 3.2, 4.0, 5.0 (tiles), 5.1 (rounded tiles) and 6.0 (rounding)
 // (spec/dwt2d.md): header, payload (tables, rANS, raw bits), mask, relevance, bands, slope
 // factors, inverse transform, correction layer, chart records, rounding and tiles.
 
@@ -11,7 +11,7 @@ const WAVELETS_2 = ["bior4.4", "bior2.2", "bior3.3", "db2", "db4", "sym4", "coif
 
 /** Decodes a dwt2d file (bytes; its header lines; the payload's offset; its magic). */
 export function decodeDwt2d(bytes, lines, body, magic) {
-  if (magic.major === 5) return decodeTiled(bytes, lines, body);
+  if (magic.major === 5) return decodeTiled(bytes, lines, body, magic);
   const fields = headerFields(lines, false);
   const h = fieldReader(fields);
   checkChecksum(bytes, lines, fields, magic.major >= 4 || (magic.major === 3 && magic.minor >= 1));
@@ -43,14 +43,19 @@ function roundToSamples(z, grid) {
 
 // ---------------------------------------------------------------------------------------
 // Tiled files (5.0): a header, an index of the tiles' lengths, and tiles that are 3.x files
+// (5.1 with `rounding integer`: 6.0 files rounded to the header's raster type)
 
-/** Decodes a 5.0 file: checks its header's checksum and lines, the index and its CRC-32, then
- * decodes every tile as a 3.x file and puts its values in their place. */
-function decodeTiled(bytes, lines, body) {
+/** Decodes a 5.x file: checks its header's checksum and lines, the index and its CRC-32, then
+ * decodes every tile as a 3.x file (6.0 in a rounded 5.1 file) and puts its values in their place. */
+function decodeTiled(bytes, lines, body, magic) {
   const fields = headerFields(lines, false);
   const h = fieldReader(fields);
   checkChecksum(bytes, lines, fields, true, body);
   const grid = gridFields(h, { projected: true, georef: true });
+  const rounded = magic.minor >= 1 && h.word("rounding", ["integer"], false) === "integer";
+  if (rounded && !(grid.raster && SAMPLE_RANGES[grid.raster[2]])) {
+    fail("rounding", "rounding integer needs a raster line of an integer sample type");
+  }
   const T = h.integer("tile", 4, 4096);
   const [NR, NC] = h.words("tiles", 2).map((w) => (/^\d+$/.test(w) ? Number(w) : fail("tiles", `not an integer: ${w}`)));
   if (NR !== Math.ceil(grid.rows / T) || NC !== Math.ceil(grid.cols / T) || NR * NC > 4194304) {
@@ -61,7 +66,7 @@ function decodeTiled(bytes, lines, body) {
   let at = body + 8 * NR * NC + 4;
   for (let i = 0; i < NR; i++) {
     for (let j = 0; j < NC; j++) {
-      const tile = decodeTile(bytes.subarray(at, at + lengths[i * NC + j]), grid, T, i, j);
+      const tile = decodeTile(bytes.subarray(at, at + lengths[i * NC + j]), grid, T, i, j, rounded);
       for (let r = 0; r < tile.rows; r++) z.set(tile.z.subarray(r * tile.cols, (r + 1) * tile.cols), (i * T + r) * grid.cols + j * T);
       at += lengths[i * NC + j];
     }
@@ -82,18 +87,21 @@ function tileIndex(bytes, body, n) {
   return lengths;
 }
 
-/** Tile (i, j): a whole mzc-dwt2d 3.x file of its block, its lines those the header implies. */
-function decodeTile(bytes, grid, T, i, j) {
+/** Tile (i, j): a whole mzc-dwt2d 3.x file of its block (``rounded``: 6.0, with the header's raster
+ * line, its values integers), its lines those the header implies. */
+function decodeTile(bytes, grid, T, i, j, rounded) {
   const { lines, body } = splitHeader(bytes);
   const magic = parseMagic(lines[0]);
-  if (magic.kind !== "dwt2d" || magic.major !== 3) fail("data", `tile ${i + 1}, ${j + 1} is not an mzc-dwt2d 3.x file`);
+  const major = rounded ? 6 : 3;
+  if (magic.kind !== "dwt2d" || magic.major !== major) fail("data", `tile ${i + 1}, ${j + 1} is not an mzc-dwt2d ${major}.x file`);
   const tile = decodeDwt2d(bytes, lines, body, magic);
   const fields = headerFields(lines, false);
   const origin = [grid.origin[0] + j * T * grid.d2, grid.origin[1] + i * T * grid.d1];
   const ok = tile.rows === Math.min((i + 1) * T, grid.rows) - i * T && tile.cols === Math.min((j + 1) * T, grid.cols) - j * T
     && tile.d1 === grid.d1 && tile.d2 === grid.d2 && tile.projection === grid.projection && tile.radius === grid.radius
     && tile.origin[0] === origin[0] && tile.origin[1] === origin[1]
-    && !["transform", "units", "nodata", "crs", "raster"].some((key) => fields.has(key));
+    && !["transform", "units", "nodata", "crs", ...(rounded ? [] : ["raster"])].some((key) => fields.has(key))
+    && (!rounded || (String(tile.raster) === String(grid.raster) && tile.z.every((v) => Number.isNaN(v) || Number.isInteger(v))));
   if (!ok) fail("data", `tile ${i + 1}, ${j + 1}: its lines do not say the block the header gives it`);
   return tile;
 }

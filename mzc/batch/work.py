@@ -6,7 +6,9 @@ error; the chunk goes on. The work is that of the filters, called in-process: ``
 reads a mesh, cloud or raster, slices it (the options of ``mzc slice``) and encodes it
 (those of ``mzc encode``), so its output is byte for byte that of ``mzc slice | mzc
 encode``; ``decode`` decodes, optionally densifies and triangulates (``mzc decode | mzc
-densify | mzc triangulate``).
+densify | mzc triangulate``). A GeoTIFF larger than one tile, encoded with no slice option,
+goes as ``mzc encode`` takes it: window by window into its tiles (``Codec.window_writer``),
+never read whole, the tiles as Dask tasks of the cluster the item runs on.
 """
 
 from __future__ import annotations
@@ -15,6 +17,7 @@ import hashlib
 import json
 import os
 import stat
+import sys
 import time
 import warnings
 from contextlib import contextmanager
@@ -102,15 +105,13 @@ def run_item(job, item, previous=None):
         warnings.simplefilter("ignore")
         warnings.simplefilter("always", MzcWarning)
         try:
-            with timings.stage("read"):
-                data = read_input(item.source)
-            row.update(input_bytes=len(data), input_sha256=hashlib.sha256(data).hexdigest())
-            if still_done(job, row, previous):
-                return {**previous, "skipped": True}
-            files = (encode_item if job.action == "encode" else decode_item)(job, item, data, row, timings)
-            with timings.stage("write"):
-                write_files(job, files, owned=wrote(previous))
-            row.update(output_bytes=len(files[0][1]), status="ok")
+            with raster_windows(job, item.source) as windows:
+                with timings.stage("read"):
+                    data = read_input(item.source) if windows is None else None
+                    row.update(input_digest(item.source, data))
+                if still_done(job, row, previous):
+                    return {**previous, "skipped": True}
+                row.update(output_bytes=made(job, item, data, windows, row, timings, wrote(previous)), status="ok")
         except MzcError as error:
             row.update(failed_row(job, item, str(error), previous))
         except MemoryError:
@@ -121,6 +122,110 @@ def run_item(job, item, previous=None):
     warned = "; ".join(dict.fromkeys(str(w.message) for w in caught if issubclass(w.category, MzcWarning)))
     row.update(warning=warned, seconds=time.perf_counter() - started, timings=timings.text())
     return row
+
+
+def made(job, item, data, windows, row, timings, owned):
+    """Do the item's work and write its files (over files this batch wrote, when ``owned``): by
+    windows (``encode_by_windows``) or from its ``data``; the size of its output."""
+    if windows is not None:
+        return encode_by_windows(job, item, windows, row, timings, owned)
+    files = (encode_item if job.action == "encode" else decode_item)(job, item, data, row, timings)
+    with timings.stage("write"):
+        write_files(job, files, owned)
+    return len(files[0][1])
+
+
+def input_digest(path, data=None):
+    """{input_bytes, input_sha256} of an item's input: of its ``data``, or of the file at ``path``
+    read a block at a time (a raster coded by windows is never read whole)."""
+    if data is not None:
+        return {"input_bytes": len(data), "input_sha256": hashlib.sha256(data).hexdigest()}
+    from mzc.streams import failure
+
+    try:
+        with open(path, "rb") as file:
+            digest = hashlib.file_digest(file, "sha256")
+            size = os.fstat(file.fileno()).st_size
+    except OSError as error:
+        raise failure(error, path) from None
+    return {"input_bytes": size, "input_sha256": digest.hexdigest()}
+
+
+@contextmanager
+def raster_windows(job, path):
+    """The (GeoTiffSource, codec) of an encode item coded window by window, open inside: a GeoTIFF
+    file, given no slice option and no ``verify`` (both need the whole grid), that its codec codes
+    in tiles (``Codec.window_writer``: larger than one tile); else None, and it is read whole."""
+    from mzc.codecs import get_codec
+    from mzc.formats import starts_as
+
+    codec = get_codec(job.settings["codec"]) if job.action == "encode" else None
+    if codec is None or codec.window_writer is None or job.settings["slice_options"] or job.verify \
+            or not starts_as(path, "tif"):
+        yield None
+        return
+    from mzc.codecs.dwt2d.tiles import tile_side
+    from mzc.rasters.windows import GeoTiffSource
+
+    source = GeoTiffSource(path, path)
+    try:
+        tiled = tile_side(source.frame.shape, job.settings["codec_options"].get("tile")) is not None
+        yield (source, codec) if tiled else None
+    finally:
+        source.close()
+
+
+def encode_by_windows(job, item, windows, row, timings, owned):
+    """Encode a raster window by window (``raster_windows``) into the item's output, written as its
+    tiles are coded (here, or as Dask tasks of the worker's cluster, ``tile_client``): its size.
+    The grid's shape goes in ``row``; its node errors are the tiles', never held at once."""
+    source, codec = windows
+    row.update(rows=source.frame.rows, cols=source.frame.cols)
+    path = os.path.join(job.dest, item.output)
+    with timings.stage("encode"), about(item.source, f"encoding it with {codec.name}"), tile_client() as client:
+        chunks = codec.window_writer(source, job.settings["codec_options"], client)
+        write_chunks(path, chunks, owned)
+    return os.path.getsize(path)
+
+
+@contextmanager
+def tile_client():
+    """The Dask client of the worker running this item, its thread seceded meanwhile, so that the
+    item's tiles run as tasks on its cluster (as ``mzc encode --scheduler`` sends them) and a
+    worker waiting for them does not hold a thread they need; None outside a Dask worker (where
+    distributed may not even be imported, and is not imported for it)."""
+    if "distributed" not in sys.modules:
+        yield None
+        return
+    try:
+        from distributed import get_worker, worker_client
+
+        get_worker()
+    except (ImportError, ValueError):
+        yield None
+        return
+    with worker_client() as client:
+        yield client
+
+
+def write_chunks(path, chunks, owned):
+    """Write an output made in ``chunks`` (a raster's tiles) to ``path`` as they come, folders made
+    as needed; a file there that this batch did not write (``owned``) is refused unless it holds
+    these very bytes (``already_there``), compared chunk by chunk, never held whole."""
+    make_folder(os.path.dirname(path))
+    if not os.path.lexists(path) or (owned and stat.S_ISREG(os.lstat(path).st_mode)):
+        write_outputs((path, chunks))
+    elif not holds_chunks(path, chunks):
+        raise not_ours(path)
+
+
+def holds_chunks(path, chunks):
+    """True when the file at ``path`` has exactly the bytes of ``chunks``, in order."""
+    try:
+        with open(path, "rb") as file:
+            return all(file.read(len(chunk)) == chunk for chunk in chunks) and not file.read(1)
+    except OSError:
+        return False
 
 
 def still_done(job, row, previous):
@@ -218,11 +323,16 @@ def write_files(job, files, owned):
     outputs = [(os.path.join(job.dest, name), data) for name, data in files]
     outputs = [(path, data) for path, data in outputs if not already_there(path, data, owned)]
     for folder in dict.fromkeys(os.path.dirname(path) for path, _data in outputs):
-        try:
-            os.makedirs(folder, exist_ok=True)
-        except OSError as error:
-            raise MzcError(f"cannot make the folder: {error.strerror or error}", source=folder) from None
+        make_folder(folder)
     write_outputs(*outputs)
+
+
+def make_folder(folder):
+    """Make ``folder`` and its parents, as needed, or say in one line why not."""
+    try:
+        os.makedirs(folder, exist_ok=True)
+    except OSError as error:
+        raise MzcError(f"cannot make the folder: {error.strerror or error}", source=folder) from None
 
 
 def already_there(path, data, owned):
@@ -238,8 +348,13 @@ def already_there(path, data, owned):
         return False
     if holds(path, data):
         return True
-    raise MzcError("is there already and was not written by this batch (no row of its manifest says so): move "
-                   "it away or give another -o", source=path)
+    raise not_ours(path)
+
+
+def not_ours(path):
+    """The error of a file in the way that this batch did not write: a batch never writes over one."""
+    return MzcError("is there already and was not written by this batch (no row of its manifest says so): move "
+                    "it away or give another -o", source=path)
 
 
 def holds(path, data):

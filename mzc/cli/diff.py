@@ -14,7 +14,8 @@ First the whole-surface distance: the symmetric point-to-surface distance (RMS, 
 Hausdorff, then each direction) on area-weighted samples of every triangle, in the
 grid's units when a side knows them. Then the grid statistics (grid_*): both surfaces
 sampled on one common grid over A's extent (A's own nodes when A is a z-grid, else
-1/1000 of A's longest side; --d1/--d2 override) and compared along its node lines (in
+1/1000 of A's longest side; --d1/--d2 override, in metres when A is a geographic grid,
+which is compared in metres about its centre, never in degrees) and compared along its node lines (in
 z, or along the rays of a central grid) over the nodes valid in both: RMSE, max and mean
 absolute error, R^2 = 1 - SSE/SST, the 50/95/99th percentiles of |B - A| and the node
 count; they grow on steep walls, where a small move of the surface is a long way along
@@ -42,8 +43,10 @@ direction on the first line.""")
               help="Samples per surface for --surface.")
 @click.option("--seed", default=0, show_default=True, type=click.IntRange(0, 2**63 - 1),
               help="Random seed of the --surface samples.")
-@click.option("--d1", type=click.FloatRange(min=0, min_open=True), help="Row spacing of the common grid.")
-@click.option("--d2", type=click.FloatRange(min=0, min_open=True), help="Column spacing of the common grid.")
+@click.option("--d1", type=click.FloatRange(min=0, min_open=True),
+              help="Row spacing of the common grid, in A's units; in metres for a geographic grid (lon/lat).")
+@click.option("--d2", type=click.FloatRange(min=0, min_open=True),
+              help="Column spacing of the common grid, in A's units; in metres for a geographic grid (lon/lat).")
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON object instead of text lines.")
 @click.option("--error-grid", metavar="FILE", help="Write the error surface B - A as a z-grid.")
 @plain_option

@@ -5,7 +5,8 @@ x, y and z are the stored integers with the header's scale and offset applied. E
 point's ASPRS classification (2 = ground, 6 = building, 9 = water, ...) goes with the
 cloud, so ``mzc slice --classes 2`` keeps the ground alone (as PDAL's filters.range on
 Classification does); the coordinate reference system the header names, if any, is kept
-as ``Mesh.crs`` (a WKT string, or ``EPSG:code`` from GeoTIFF keys). Points are read in
+as ``Mesh.crs`` (a WKT string, or ``EPSG:code`` from GeoTIFF keys; a geographic CRS as WKT,
+so that a cloud in longitude and latitude is gridded as terrain in degrees). Points are read in
 chunks, so memory grows with the points the file really holds, whatever its header
 declares: a file with fewer points than it declares is refused as truncated, and one with
 fewer bytes than its declared variable-length records take is refused before laspy reads
@@ -77,11 +78,7 @@ def read(data: bytes, source: str) -> Mesh:
     if held < declared:
         raise MzcError(f"truncated: the header declares {declared} points, the file holds {held}", source=source)
     if geographic:
-        named = f", {crs[:60]}," if crs else ""
-        raise MzcError(f"the cloud's x and y are longitude and latitude in degrees (its CRS{named} is geographic) "
-                       f"and its heights are lengths, which mzc cannot measure in one unit: reproject it to a "
-                       f"projected CRS first (PDAL's filters.reprojection, las2las -target_epsg)",
-                       source=source, field="crs")
+        crs = geographic_wkt(crs)
     points = np.concatenate([chunk[0] for chunk in chunks] or [np.empty((0, 3))])
     classes = np.concatenate([chunk[1] for chunk in chunks] or [np.empty(0, dtype=np.uint8)])
     colors = las_colours(np.concatenate([chunk[2] for chunk in chunks])) if coloured and chunks else None
@@ -93,6 +90,17 @@ def las_colours(rgb):
     0..65535, scaled: ``mzc.colours.to_8_bits``); a file whose values all lie within 0..255 was
     written with 8-bit colours in the 16-bit fields, as some writers do, and keeps them."""
     return to_8_bits(rgb, 8 if int(rgb.max(initial=0)) <= 255 else 16)
+
+
+def geographic_wkt(crs):
+    """The WKT of the geographic CRS a LAS header names (``header_crs``): its WKT record, or its
+    EPSG code spelled out (``georef.grid_crs``), else WGS 84's, as a lon/lat export's (the keys
+    say longitude and latitude, but name no datum mzc can spell). So the cloud is known to be in
+    degrees and is sliced as terrain in them (``mzc.ops.slicing.lonlat_grid``)."""
+    from mzc.georef import WGS84_WKT, crs_kind, grid_crs
+
+    wkt = None if crs is None else grid_crs(crs)
+    return wkt if wkt is not None and crs_kind(wkt) == "geographic" else WGS84_WKT
 
 
 @contextlib.contextmanager

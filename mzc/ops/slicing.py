@@ -91,7 +91,8 @@ def slice_surface(surface, d1=None, d2=None, rows=None, cols=None, align="none",
     those classes of a LAS/LAZ cloud (``Mesh.with_classes``); ``cloud`` says how a cloud
     becomes a surface (``slice_in_frame``). A planar grid keeps the cloud's CRS (``grid_crs``);
     a cloud without one that is terrain in longitude and latitude (``lonlat_lattice``) is
-    gridded at its own steps in WGS 84 (``lonlat_grid``). A cloud gridded to fewer than
+    gridded at its own steps in WGS 84, and a cloud whose CRS is geographic (a LAS cloud in
+    EPSG:4326) in its CRS, both as terrain in degrees (``lonlat_grid``). A cloud gridded to fewer than
     MIN_NODES nodes along an axis is refused (``check_cloud_grid``).
 
     ``charts``: 1 for one grid, N for a multi-chart grid of at most N charts (``mzc.ops.charts``),
@@ -124,7 +125,7 @@ def slice_surface(surface, d1=None, d2=None, rows=None, cols=None, align="none",
                   center=center is not None, axis=axis is not None, charts=charts not in ("auto", 1))
         projection, view = "planar", "+z"
     lonlat = lonlat_lattice(mesh)
-    if lonlat is not None:
+    if lonlat is not None or geographic_cloud(mesh):
         return coloured(mesh, lonlat_grid(mesh, lonlat, units, d1=d1, d2=d2, rows=rows, cols=cols, tap=tap,
                                           thesis_grid=thesis_grid, align=align, projection=projection, view=view,
                                           center=center, axis=axis, charts=charts, cloud=cloud))
@@ -177,6 +178,14 @@ def lonlat_lattice(mesh):
     if steps is None or relief < max(np.ptp(x), np.ptp(y)) or relief < LONLAT_RELIEF * max(steps):
         return None
     return tuple(round_angle(np.unique(values), step) for values, step in zip((x, y), steps))
+
+
+def geographic_cloud(mesh):
+    """True for a point cloud whose CRS is geographic: x and y in degrees of longitude and
+    latitude, heights in metres (a LAS cloud in EPSG:4326, its CRS spelled out as WKT)."""
+    from mzc.georef import crs_kind
+
+    return mesh.is_point_cloud and mesh.crs is not None and crs_kind(mesh.crs) == "geographic"
 
 
 def round_angle(values, step):
@@ -238,13 +247,15 @@ def shortest(value):
 
 
 def lonlat_grid(mesh, steps, units, d1=None, d2=None, rows=None, cols=None, tap=False, **cutting):
-    """The planar grid of a lon/lat cloud (``lonlat_lattice``'s ``steps``), looking down z, in
-    WGS 84 (``georef.WGS84_WKT``; the export names no datum, and the ellipsoids of the others
-    move its metres by under 0.1%): its points moved onto the nodes they were printed from
-    (``onto_lattice``), node for node at its own steps unless spacings or counts
-    are given (``tap`` aligns its cells, ``slice_surface``; a dense one is then binned with its
-    depth jumps measured in metres at its middle latitude). An option that would cut it
-    otherwise (``cutting``, not at its default) is refused: it is terrain."""
+    """The planar grid of a lon/lat cloud, looking down z: of an export on a lattice of
+    ``steps`` (``lonlat_lattice``), in WGS 84 (``georef.WGS84_WKT``; the export names no datum,
+    and the ellipsoids of the others move its metres by under 0.1%), its points moved onto the
+    nodes they were printed from (``onto_lattice``), node for node at its own steps unless
+    spacings or counts are given; of a cloud with a geographic CRS (``steps`` None: a LiDAR
+    cloud, on no lattice), in that CRS, at its median point spacing in degrees made round
+    (``lonlat_spacing``) unless given. ``tap`` aligns the cells (``slice_surface``); a dense
+    cloud is binned with its depth jumps measured in metres at its middle latitude. An option
+    that would cut it otherwise (``cutting``, not at its default) is refused: it is terrain."""
     from mzc.georef import WGS84_WKT, metres_per_unit
 
     defaults = {"thesis_grid": False, "align": "none", "projection": ("auto", "planar"), "view": ("auto", "+z"),
@@ -254,16 +265,26 @@ def lonlat_grid(mesh, steps, units, d1=None, d2=None, rows=None, cols=None, tap=
                    None)
     if refused:
         raise MzcError("the cloud is terrain in longitude and latitude (a lattice in degrees, heights spanning "
-                       "thousands of its steps), gridded looking down z at its own steps or --d1/--d2 in degrees: "
-                       "this option does not apply", field=refused)
+                       "thousands of its steps, or a geographic CRS), gridded looking down z at its own steps or "
+                       "--d1/--d2 in degrees: this option does not apply", field=refused)
     from mzc.meshes import Mesh
 
-    on_nodes = Mesh(onto_lattice(mesh.points, steps))
+    crs = WGS84_WKT if steps is not None else mesh.crs
+    on_nodes = Mesh(onto_lattice(mesh.points, steps) if steps is not None else mesh.points)
+    if steps is None and d1 is None and d2 is None and rows is None and cols is None:
+        d1 = d2 = lonlat_spacing(on_nodes.points[:, :2])
     latitude = float(on_nodes.points[:, 1].min() + np.ptp(on_nodes.points[:, 1]) / 2)   # binning's jumps in metres
     grid = slice_in_frame(on_nodes, np.eye(3), np.zeros(3), d1=d1, d2=d2, rows=rows, cols=cols, units=units,
-                          lattice=steps, tap=tap, cell_metres=metres_per_unit(WGS84_WKT, latitude))
+                          lattice=steps, tap=tap, cell_metres=metres_per_unit(crs, latitude))
     check_cloud_grid(on_nodes, grid)
-    return grid.with_z(grid.z, crs=WGS84_WKT)
+    return grid.with_z(grid.z, crs=crs)
+
+
+def lonlat_spacing(lonlat):
+    """The default spacing in degrees of a cloud in longitude and latitude on no lattice: its
+    median point spacing (``cloud_data_spacing``, measured across x and y alone: a Delaunay edge
+    over x, y and z would add metres of height to degrees) made round (``round_spacing``)."""
+    return round_spacing(cloud_data_spacing(lonlat, lonlat))
 
 
 def check_cloud_grid(mesh, grid):

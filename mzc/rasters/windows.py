@@ -57,6 +57,11 @@ class GeoTiffSource:
         self.frame = Frame(self.dataset.height, self.dataset.width, fields)
         self.opener = functools.partial(GeoTiffSource, os.path.abspath(path), source)   # opened on a Dask worker
 
+    def integer_samples(self):
+        """True: the values are the raster's own samples, read as they are (an integer GeoTIFF's
+        are integers of its type)."""
+        return True
+
     def block(self, rows, cols):
         """The heights of grid rows ``rows`` and columns ``cols`` (each a (start, stop)): one window
         of the raster, its no-data cells and masked cells NaN."""
@@ -89,9 +94,8 @@ class GeoTiffSource:
 def write_tiles(path, tiled, float32=False):
     """Write the grid of ``tiled`` (a TiledFile) to ``path`` as a tiled GeoTIFF, tile by tile: GDAL
     writes a hidden file beside the output, which is then copied to it as every output is written
-    (mzc.streams: whole or not at all), a few MB at a time. Its samples are float64 (float32 with
-    ``float32``): a lossy file's values fit no smaller type, and the tiles are written before all
-    of them are known."""
+    (mzc.streams: whole or not at all), a few MB at a time. Its samples are those of
+    ``tiled_sample``."""
     from mzc.rasters import check_writable
     from mzc.streams import forget, is_stdio, output_name, remember, write_output
 
@@ -107,13 +111,29 @@ def write_tiles(path, tiled, float32=False):
 
     try:
         with settings():
-            write_blocks(temp, described, tiled, "float32" if float32 else "float64")
+            write_blocks(temp, described, tiled, tiled_sample(tiled, described, float32))
         write_output(path, file_chunks(temp))
     except RasterioError as error:   # GDAL's own failure to write (a full disk)
         raise MzcError(f"cannot write the GeoTIFF: {one_line(error)}", source=output_name(path)) from None
     finally:
         os.unlink(temp)
         forget(temp)
+
+
+def tiled_sample(tiled, described, float32=False):
+    """The sample type a tiled file's raster is written in, chosen before any tile is decoded:
+    float32 when asked; the raster's own integer type for a file whose tiles are rounded to it
+    (mzc-dwt2d 5.1) and whose no-data value it holds (an int16 DEM coded at --max-error >= 0.5
+    comes back int16 with its no-data value; without a no-data value, the invalid nodes a
+    tile may have need float's NaN); else float64, which holds every value of a lossy file."""
+    from mzc.rasters import holds
+
+    if float32:
+        return "float32"
+    if tiled.rounded and described.nodata != "nan" and holds(described.raster.sample,
+                                                              np.array([float(described.nodata)])):
+        return described.raster.sample
+    return "float64"
 
 
 def check_writable_frame(described, check_writable):
@@ -136,8 +156,8 @@ def write_blocks(path, described, tiled, sample):
     height, width = described.shape
     profile = {"driver": "GTiff", "width": width, "height": height, "count": 1, "dtype": sample,
                "transform": Affine(described.d2, 0.0, place.x, 0.0, step_y, place.y), "nodata": marker,
-               "compress": "deflate", "predictor": PREDICTORS["f"], "tiled": True, "blockxsize": BLOCK,
-               "blockysize": BLOCK, "bigtiff": "IF_SAFER"}
+               "compress": "deflate", "predictor": PREDICTORS[np.dtype(sample).kind], "tiled": True,
+               "blockxsize": BLOCK, "blockysize": BLOCK, "bigtiff": "IF_SAFER"}
     if described.crs is not None:
         profile["crs"] = module.crs.CRS.from_wkt(described.crs)
     from rasterio.windows import Window

@@ -40,6 +40,7 @@ PROJECTED_VERSION = (3, 1)
 GEOREFERENCED_VERSION = (3, 2)   # 3.1 with the crs and raster lines of a grid read from a raster
 CHARTED_VERSION = (4, 0)     # 3.1 with the charts line of a multi-chart grid (its charts side by side)
 TILED_VERSION = (5, 0)       # a grid in independent tiles, each a 3.1 file (mzc.codecs.dwt2d.tiles)
+ROUNDED_TILED_VERSION = (5, 1)   # 5.0 with ``rounding integer``: its tiles are 6.0 files of a raster's integers
 ROUNDED_VERSION = (6, 0)     # 4.0 with the crs and raster lines and ``rounding integer``: a raster of integers
                              # coded with max_error, whose decoded values are rounded to integers (a new major:
                              # a 4.0 reader, ignoring the line, would decode other values)
@@ -638,6 +639,18 @@ def rounding_bounds(grid, max_error):
     return kept + 0.5 - ROUNDING_ULPS * float(np.spacing(largest)), kept
 
 
+def read_rounding(header, fields, since):
+    """True when a header of version ``since`` or later has the ``rounding`` line (checked: its one
+    value, and a ``raster`` line of an integer type among the grid ``fields``); before, the line is
+    ignored (spec/dwt2d.md, Rounding; Tiled files)."""
+    if header.major != since[0] or header.minor < since[1] or not header.has("rounding"):
+        return False
+    header.word("rounding", (ROUNDING,))
+    if fields.get("raster") is None or np.dtype(fields["raster"].sample).kind not in "iu":
+        raise header.error("rounding", "rounds a raster of integer samples: the raster line names none")
+    return True
+
+
 def rounded_values(values, sample):
     """``values`` rounded to the nearest integer (ties to even) and held to the range of the
     integer type ``sample``, as a 6.0 decoder gives them (spec/dwt2d.md, Rounding): the input's
@@ -735,11 +748,7 @@ def read(data, source="<bytes>"):
     fields, rows, cols = read_grid_fields(header)
     transform = w2.TRANSFORMS[header.major]
     wavelet, levels, steps, slope_limit, correction = read_codec_fields(header, (rows, cols), transform)
-    rounding = (header.major, header.minor) >= ROUNDED_VERSION and header.has("rounding")
-    if rounding:
-        header.word("rounding", (ROUNDING,))
-        if "raster" not in fields or np.dtype(fields["raster"].sample).kind not in "iu":
-            raise header.error("rounding", "rounds a raster of integer samples: the raster line names none")
+    rounding = read_rounding(header, fields, ROUNDED_VERSION)
     geometry = w2.Geometry.of(fields["d1"], fields["d2"], fields["origin"], (rows, cols),
                               fields.get("projection", "planar"), fields.get("radius"))
     from mzc.codecs.dwt2d.entropy import Decoder

@@ -25,10 +25,10 @@ from types import SimpleNamespace
 
 import numpy as np
 
+from mzc.codecs.dwt2d import ROUNDED_TILED_VERSION, TILED_VERSION
 from mzc.errors import MzcError
 from mzc.limits import check_grid_size
 
-TILED_VERSION = (5, 0)
 DEFAULT_TILE = 1024        # a 1024 x 1024 tile encodes in about 0.25 GB (1.6 M nodes whole: 0.3 GB)
 MIN_TILE, MAX_TILE = 4, 4096
 MAX_TILES = 1 << 22        # an index of at most 32 MB (a 10^6 x 10^6 grid in 1024-node tiles has 10^6)
@@ -81,15 +81,18 @@ class Frame:
                     "projection": "planar", "radius": None, "crs": None, "raster": None, "charts": None}
         return SimpleNamespace(shape=self.shape, **{**defaults, **self.fields})
 
-    def block_fields(self, row, col):
+    def block_fields(self, row, col, rounded=False):
         """The fields of the grid of the block whose node (0, 0) is node (``row``, ``col``): the
         spacings and projection, its own origin, and nothing the values do not need (a tile's
-        stream holds no transform, units, CRS or raster: the tiled file's header does)."""
+        stream holds no transform, units or CRS: the tiled file's header does), but, in a
+        ``rounded`` file, the raster line whose integer type the tile's values are rounded to."""
         fields = self.fields
         x0, y0 = fields.get("origin", (0.0, 0.0))
         block = {"d1": fields["d1"], "d2": fields["d2"], "origin": (x0 + col * fields["d2"], y0 + row * fields["d1"])}
         if fields.get("projection", "planar") != "planar":
             block.update(projection=fields["projection"], radius=fields["radius"])
+        if rounded:
+            block["raster"] = fields["raster"]
         return block
 
 
@@ -108,6 +111,14 @@ class GridSource:
             raise MzcError("a multi-chart grid is coded whole: its charts are blocks of their own (--tile 0)",
                            field="tile")
         self.frame, self.z = frame_of(grid), grid.z
+
+    def integer_samples(self):
+        """True when every valid value is one of the grid's raster's samples (an integer raster
+        read as it is, not values computed since)."""
+        from mzc.rasters import holds
+
+        raster = self.frame.fields["raster"]
+        return raster is not None and holds(raster.sample, self.z[~np.isnan(self.z)])
 
     def block(self, rows, cols):
         """The values of rows ``rows`` and columns ``cols`` (each a (start, stop)), NaN at invalid nodes."""
@@ -129,57 +140,74 @@ def check_targets(frame, options):
         check_shared_unit(frame.described(), "rmse")
 
 
-def coded_tiles(source, tile, options, client=None):
+def rounds(source, options):
+    """True when the tiles of ``source`` are coded as rounded 6.0 files (``ROUNDED_TILED_VERSION``):
+    a raster of integer samples read as it is (``source.integer_samples()``), coded with a max
+    error, decodes to its own integers, as a grid coded whole does (spec/dwt2d.md, Rounding)."""
+    raster = source.frame.fields.get("raster")
+    return (options.get("max_error") is not None and raster is not None
+            and np.dtype(raster.sample).kind in "iu" and source.integer_samples())
+
+
+def coded_tiles(source, tile, options, rounded, client=None):
     """The bytes of every tile of ``source`` (row by row of tiles, from the grid's first row), each
-    a whole dwt2d file of its block coded with the dwt2d ``options`` (checked, without tile): here,
-    or as Dask tasks of ``client`` (a distributed.Client), each worker reading its block itself
-    through ``source.opener`` (a source on disk that every worker sees), TASKS_AHEAD at a time."""
+    a whole dwt2d file of its block coded with the dwt2d ``options`` (checked, without tile), a
+    ``rounded`` one (``rounds``) when told: here, or as Dask tasks of ``client`` (a
+    distributed.Client), each worker reading its block itself through ``source.opener`` (a source
+    on disk that every worker sees), TASKS_AHEAD at a time."""
     frame = source.frame
     unit_checked = frame.fields.get("crs") is not None
     places = [(rows, cols) for rows in spans(frame.rows, tile) for cols in spans(frame.cols, tile)]
     if client is None:
         for rows, cols in places:
-            yield coded_block(source.block(rows, cols), frame, rows, cols, options, unit_checked)
+            yield coded_block(source.block(rows, cols), frame, rows, cols, options, unit_checked, rounded)
         return
     for start in range(0, len(places), TASKS_AHEAD):
-        futures = [client.submit(coded_remotely, source.opener, rows, cols, options, unit_checked, pure=False)
-                   for rows, cols in places[start:start + TASKS_AHEAD]]
+        futures = [client.submit(coded_remotely, source.opener, rows, cols, options, unit_checked, rounded,
+                                 pure=False) for rows, cols in places[start:start + TASKS_AHEAD]]
         for future in futures:
             yield future.result()
 
 
-def coded_block(values, frame, rows, cols, options, unit_checked):
+def coded_block(values, frame, rows, cols, options, unit_checked, rounded=False):
     """The dwt2d file of the block of ``frame`` at ``rows`` and ``cols`` (each a (start, stop)) holding
     ``values``, its heights and decoded heights held to mzc.limits as ``Codec.encode`` holds a
-    whole grid's."""
+    whole grid's; ``rounded``: a 6.0 file whose values decode to the raster's integers (its
+    raster line lets encode_whole round them)."""
     from mzc.codecs.dwt2d import encode_whole
     from mzc.grid import ZGrid
     from mzc.limits import check_grid_magnitudes, check_magnitude
 
-    grid = ZGrid(z=values, **frame.block_fields(rows[0], cols[0]))
+    grid = ZGrid(z=values, **frame.block_fields(rows[0], cols[0], rounded))
     check_grid_magnitudes(grid)
     data, decoded = encode_whole(grid, **options, unit_checked=unit_checked)
     check_magnitude(decoded, "decoded heights", field="z")
     return data
 
 
-def coded_remotely(opener, rows, cols, options, unit_checked):
+def coded_remotely(opener, rows, cols, options, unit_checked, rounded):
     """A Dask task: the file of one tile of the source ``opener()`` opens, read and coded here."""
     source = opener()
     try:
-        return coded_block(source.block(rows, cols), source.frame, rows, cols, options, unit_checked)
+        return coded_block(source.block(rows, cols), source.frame, rows, cols, options, unit_checked, rounded)
     finally:
         source.close()
 
 
-def header_bytes(frame, tile, lengths, options):
-    """The text header (through its ``data`` line, with its crc32) and the index of ``lengths``."""
+def header_bytes(frame, tile, lengths, options, rounded=False):
+    """The text header (through its ``data`` line, with its crc32) and the index of ``lengths``;
+    ``rounded``: the 5.1 header of tiles rounded to integers, whose bound is floor(max_error)."""
+    from mzc.codecs.dwt2d import ROUNDING
     from mzc.formats.header import file_bytes, format_number, grid_header_lines, magic_line
 
-    lines = [magic_line("dwt2d", TILED_VERSION), *grid_header_lines(frame.described(), write_defaults=False),
+    lines = [magic_line("dwt2d", ROUNDED_TILED_VERSION if rounded else TILED_VERSION),
+             *grid_header_lines(frame.described(), write_defaults=False),
              f"tile {tile}", f"tiles {len(spans(frame.rows, tile))} {len(spans(frame.cols, tile))}"]
+    if rounded:
+        lines.append(f"rounding {ROUNDING}")
     if options.get("max_error") is not None:
-        lines.append(f"max_error {format_number(options['max_error'])}")
+        bound = float(math.floor(options["max_error"])) if rounded else options["max_error"]
+        lines.append(f"max_error {format_number(bound)}")
     index = b"".join(LENGTH.pack(length) for length in lengths)
     return file_bytes([*lines, "data"]) + index + INDEX_CHECK.pack(zlib.crc32(index))
 
@@ -187,8 +215,9 @@ def header_bytes(frame, tile, lengths, options):
 def encode(source, tile, options):
     """The bytes of a tiled file of ``source`` (a grid in memory: its bytes are too)."""
     check_targets(source.frame, options)
-    tiles = list(coded_tiles(source, tile, options))
-    return header_bytes(source.frame, tile, [len(t) for t in tiles], options) + b"".join(tiles)
+    rounded = rounds(source, options)
+    tiles = list(coded_tiles(source, tile, options, rounded))
+    return header_bytes(source.frame, tile, [len(t) for t in tiles], options, rounded) + b"".join(tiles)
 
 
 def file_chunks(source, tile, options, spill_dir=None, scheduler=None) -> Iterator[bytes]:
@@ -200,15 +229,16 @@ def file_chunks(source, tile, options, spill_dir=None, scheduler=None) -> Iterat
     from contextlib import nullcontext
 
     check_targets(source.frame, options)
+    rounded = rounds(source, options)
     if scheduler is not None:
         from mzc.batch.engine import dask_client
     with tempfile.TemporaryFile(dir=spill_dir) as spill, \
             (nullcontext() if scheduler is None else dask_client(scheduler)) as client:
         lengths = []
-        for data in coded_tiles(source, tile, options, client):
+        for data in coded_tiles(source, tile, options, rounded, client):
             spill.write(data)
             lengths.append(len(data))
-        yield header_bytes(source.frame, tile, lengths, options)
+        yield header_bytes(source.frame, tile, lengths, options, rounded)
         spill.seek(0)
         while chunk := spill.read(COPY_CHUNK):
             yield chunk
@@ -267,10 +297,13 @@ class TiledFile:
     checked, its tiles decoded on demand."""
 
     def __init__(self, reader, source):
+        from mzc.codecs.dwt2d import read_rounding
+
         self.reader, self.source = reader, source
         head = reader.read(0, min(reader.size, HEADER_LIMIT))
         end = head.find(b"\ndata\n")
         self.header, self.frame, self.tile, counts = self.read_header(head[:end + 6] if end >= 0 else head)
+        self.rounded = read_rounding(self.header, self.frame.fields, ROUNDED_TILED_VERSION)
         index_start = end + 6
         count = counts[0] * counts[1]
         if index_start + LENGTH.size * count + INDEX_CHECK.size > reader.size:
@@ -322,22 +355,30 @@ class TiledFile:
     def tile_values(self, i, j):
         """The decoded values of tile (``i``, ``j``) (NaN at invalid nodes), its stream checked to be
         the block the header places there."""
+        from mzc.codecs.dwt2d import ROUNDED_VERSION
         from mzc.codecs.dwt2d import read as read_stream
         from mzc.formats.header import split_magic
 
         name = f"{self.source} (tile {i}, {j})"
         data = self.tile_bytes(i, j)
-        if split_magic(data, name)[1] not in (3,):
-            raise MzcError("a tile is a dwt2d 3.x stream", source=name, line=1)
+        major = ROUNDED_VERSION[0] if self.rounded else 3
+        if split_magic(data, name)[1] != major:
+            raise MzcError(f"a tile of this file is a dwt2d {major}.x stream", source=name, line=1)
         grid = read_stream(data, name)
         rows, cols = self.row_spans[i], self.col_spans[j]
-        expected = self.frame.block_fields(rows[0], cols[0])
+        expected = self.frame.block_fields(rows[0], cols[0], self.rounded)
         found = {"d1": grid.d1, "d2": grid.d2, "origin": grid.origin}
         if grid.projection != "planar":
             found.update(projection=grid.projection, radius=grid.radius)
+        if self.rounded:
+            found["raster"] = grid.raster
         if grid.shape != (rows[1] - rows[0], cols[1] - cols[0]) or found != expected:
             raise MzcError(f"the tile's grid ({grid.shape[0]} x {grid.shape[1]} nodes at {grid.origin}) is not "
                            f"the block the header places there", source=name, field="rows")
+        valid = grid.valid
+        if self.rounded and not np.array_equal(grid.z[valid], np.rint(grid.z[valid])):
+            raise MzcError("the tile's values are not rounded to integers, as the file's rounding line says",
+                           source=name, field="rounding")
         return grid.z
 
     def window(self, row=0, col=0, rows=None, cols=None):
