@@ -40,10 +40,10 @@ surface) leaves it open.
 7. The creases are put back (``creased``). Charts part where the surface turns (each element
    goes with the direction its normal faces), so a seam lies on a bend, and a stitch that
    runs straight from one chart's last node to the other's, up to a cell or two away, cuts
-   the bend's corner: on the seams of a coarse or machined surface, by up to about a third
-   of a cell. Each edge between two stitches whose ends' tangent planes (their charts'
-   normals) bend by 20 to 160 degrees (SHARP) is split at the point of the planes' crease nearest
-   its middle (within CREASE_REACH of its length), and its triangles with it.
+   the bend's corner: on the edges of a box, by up to half a cell or more. Each edge between
+   two stitches whose ends' tangent planes (their charts' normals) bend by 20 to 160 degrees
+   (SHARP) is split at the point of the planes' crease nearest its middle (within
+   CREASE_REACH of its length and a spacing), and its triangles with it.
 
 Everything is elementwise numpy, a KD-tree and the C kernel, with IEEE operations in a fixed
 order: the same triangles on every machine (spec/arithmetic.md).
@@ -87,29 +87,33 @@ def zip_charts(points, triangles, chart, spacing):
         if not len(boundary):
             return points, triangles
         near = Neighbours(points, boundary, spacing)
-    added, stitches = Gap(points, triangles, chart, boundary, near, spacing).filled()
-    return creased(np.concatenate([points, added]), np.concatenate([triangles, stitches]), len(triangles), boundary)
+    gap = Gap(points, triangles, chart, boundary, near, spacing)
+    added, stitches = gap.filled()
+    return creased(np.concatenate([points, added]), triangles, stitches, boundary, (gap.vertex, gap.normal), spacing)
 
 
-def creased(points, triangles, first, boundary):
-    """(points, triangles) with the bends of the seams put back: each edge of the stitches (the
-    ``triangles`` from ``first`` on) that is not a chart's (``boundary``, the charts' boundary
-    edges), where its two ends' tangent planes (``tangent_planes``) bend by 20 to 160 degrees
+def creased(points, charted, stitches, boundary, normals, spacing):
+    """(points, triangles): the ``charted`` triangles, then the ``stitches`` with the bends of the
+    seams put back: each edge of the stitches that is not a chart's (``boundary``, the charts'
+    boundary edges), where the tangent planes at its two ends (``normals``: the boundary
+    vertices and the sums of their charts' normals, Gap's) bend by 20 to 160 degrees
     (SHARP; the two sides of a fin thinner than a cell face apart, with no crease between), is
     split at the point of their crease nearest its middle when that lies within CREASE_REACH
-    of its length of it (a bend between the ends, not planes that meet far off), its
-    triangles split with it (``split``), but for the edges of a stitch that a split would turn
-    over (a crease past a third plane where three charts meet), round by round until none
-    does. The new points come after the given ones; the charts' triangles stay first."""
-    size, stitches = len(points), triangles[first:]
+    of its length of it and within a ``spacing`` (a bend between the ends, as far from their
+    stitch as a seam's gap is wide, not planes that meet far off), its
+    triangles split with it (``split``). The edges of a stitch that this would turn over (a
+    crease past a third plane where three charts meet) are split at their middles instead,
+    round by round until none is (a stitch split at its edges' middles stays as it was). The
+    new points come after the given ones; the charts' triangles stay first."""
+    size = len(points)
     key = edge_keys(stitches, stitches[:, [1, 2, 0]], size).ravel()   # edge k of a stitch: corners k, k + 1
     edges, which = np.unique(key, return_inverse=True)
     which = which.reshape(-1, 3)
     a, b = np.divmod(edges, size)
-    ends = np.zeros(size, dtype=bool)
-    ends[boundary[:, :2]] = True
-    charts = triangles[:first]
-    unit = tangent_planes(points, charts[ends[charts].any(axis=1)], size)   # the charts' triangles at their rims
+    vertex, normal = normals
+    length = lengths(normal)
+    unit = np.zeros((size, 3))   # zero at a point the filling added, or where the charts' normals cancel: no bend
+    unit[vertex] = normal / np.where(length > 0, length, np.inf)[:, None]
     na, nb = unit[a], unit[b]
     middle = (points[a] + points[b]) / 2
     cosine = dotted(na, nb)
@@ -119,25 +123,31 @@ def creased(points, triangles, first, boundary):
     divisor = np.where(bent, across, 1.0)
     alpha, beta = (along_a - cosine * along_b) / divisor, (along_b - cosine * along_a) / divisor
     crease = middle + alpha[:, None] * na + beta[:, None] * nb
-    bent &= (lengths(crease - middle) <= CREASE_REACH * lengths(points[b] - points[a])) & \
+    bent &= (lengths(crease - middle) <= np.minimum(CREASE_REACH * lengths(points[b] - points[a]), spacing)) & \
         ~np.isin(edges, edge_keys(boundary[:, 0], boundary[:, 1], size))
+    new = np.full(len(edges), -1, dtype=np.int64)
+    new[bent] = size + np.arange(np.count_nonzero(bent))
+    middles = new[which]
+    pieces, parent = split(stitches, middles)
+    cut = np.flatnonzero((middles >= 0).any(axis=1))
+    place = np.full(len(stitches), -1)
+    place[cut] = np.arange(len(cut))
+    tested = place[parent] >= 0
+    kept, owner = pieces[tested], place[parent[tested]]
+    used, local = np.unique(np.concatenate([stitches[cut], kept]), return_inverse=True)
+    local = local.ravel()
+    parents, kept = local[:3 * len(cut)].reshape(-1, 3), local[3 * len(cut):].reshape(-1, 3)
+    at = points[np.minimum(used, size - 1)]
+    added = used >= size
     while True:
-        new = np.full(len(edges), -1, dtype=np.int64)
-        new[bent] = size + np.arange(np.count_nonzero(bent))
-        moved = np.concatenate([points, crease[bent]])
-        pieces, parent = split(stitches, new[which])
-        turned = dotted(triangle_normals(moved, pieces), triangle_normals(moved, stitches)[parent]) <= 0
-        if not turned.any():
-            return moved, np.concatenate([triangles[:first], pieces])
-        bent[which[parent[turned]].ravel()] = False
-
-
-def tangent_planes(points, triangles, size):
-    """The unit normal at each of ``size`` vertices from the ``triangles`` at it (area-weighted);
-    zero at a vertex in none (a point the filling added), where no bend is measured."""
-    normal = vertex_normals(triangle_normals(points, triangles), triangles, size)
-    length = lengths(normal)
-    return normal / np.where(length > 0, length, np.inf)[:, None]
+        at[added] = crease[bent][used[added] - size]
+        facing = triangle_normals(at, parents)
+        turned = (dotted(facing, facing)[owner] > 0) & (dotted(triangle_normals(at, kept), facing[owner]) <= 0)
+        back = which[cut[owner[turned]]].ravel()
+        back = back[(crease[back] != middle[back]).any(axis=1)]   # at its middles, a sliver may still turn
+        if not len(back):
+            return np.concatenate([points, crease[bent]]), np.concatenate([charted, pieces])
+        crease[back] = middle[back]
 
 
 def split(triangles, middle):
@@ -243,8 +253,8 @@ class Gap:
         rank = np.full(len(points), -1, dtype=np.int64)
         rank[self.vertex] = np.arange(len(self.vertex))
         at = (rank[triangles] >= 0).any(axis=1)   # the triangles with a boundary vertex
-        self.frame = tangent_frames(vertex_normals(triangle_normals(points, triangles[at]), rank[triangles[at]],
-                                                   len(self.vertex)))
+        self.normal = vertex_normals(triangle_normals(points, triangles[at]), rank[triangles[at]], len(self.vertex))
+        self.frame = tangent_frames(self.normal)
         self.edges = existing_edges(rank[triangles[at]])
         self.chart = chart[self.vertex]
         self.source, self.target = rank[boundary[:, 1]], rank[boundary[:, 0]]
