@@ -312,3 +312,65 @@ def test_any_triangles_zip_without_crashing_or_adding_an_edge_beyond_two_uses(co
     before = edge_uses(triangles) if size else {}
     assert all(uses <= max(2, before.get(edge, 0)) for edge, uses in edge_uses(zipped_triangles).items())
     assert np.isfinite(zipped_points).all() and np.all(zipped_triangles < len(zipped_points))
+
+
+# --------------------------------------------------------------------------- creases
+
+
+def box_and_its_edges(turn):
+    """A 2 x 1.3 x 0.7 box off the lattice, turned by ``turn`` (degrees about x, y, z), as a Mesh,
+    and points along its twelve edges (short of the corners)."""
+    from scipy.spatial.transform import Rotation
+
+    from mzc.meshes import Mesh
+
+    box = trimesh.creation.box(extents=(2.0, 1.3, 0.7))
+    rotation = Rotation.from_euler("xyz", turn, degrees=True).as_matrix()
+    corners = box.vertices + (0.013, 0.027, 0.031)
+    one, two = np.nonzero(np.triu(np.count_nonzero(np.abs(corners[:, None] - corners[None]) > 1e-9, axis=2) == 1))
+    corners = corners @ rotation.T
+    along = np.linspace(0.05, 0.95, 100)[:, None, None]
+    return Mesh(corners, box.faces), (corners[one] * (1 - along) + corners[two] * along).reshape(-1, 3)
+
+
+@pytest.mark.parametrize("turn", [(0, 0, 0), (12, -9, 17)])
+def test_the_seams_on_a_boxs_edges_keep_its_edges(turn):
+    """Charts part where the surface turns, so the seams of a box lie on its edges, where the
+    stitches cut the corner by up to half a cell (0.48-0.52 spacings at the 95th percentile
+    before the creases were put back): the rebuild runs along its edges, but near the corners,
+    where three charts meet, and is still closed, each edge run once each way, no stitch
+    turned over."""
+    from mzc.measure.metrics import distance_to_mesh
+    from mzc.ops.slicing import slice_surface
+    from mzc.ops.triangulation import grid_to_mesh
+
+    mesh, along = box_and_its_edges(turn)
+    spacing = 0.05
+    grid = slice_surface(mesh, d1=spacing, charts=6)
+    rebuilt = grid_to_mesh(grid)
+    distance = distance_to_mesh(along, rebuilt.points, rebuilt.triangles) / spacing
+    assert len(along) == 1200 and np.percentile(distance, 95) < 0.01 and distance.max() < 0.3
+    assert edge_counts(rebuilt.triangles) == (0, 0) and runs_each_edge_once(rebuilt.triangles)
+    charted = sum(len(grid_to_mesh(chart, 30.0).triangles) for chart in grid.chart_grids())
+    assert folded(rebuilt.points, rebuilt.triangles, charted) == 0
+
+
+def test_the_dragons_seams_keep_its_creases():
+    """The dragon, a coarse closed mesh of 1,634 vertices: its charts part at the creases between
+    its facets. With the creases put back, its lossless floor at the default grid holds 98.3%
+    of its area within 0.1% of D and a whole-surface RMS under 0.026% D (97.9% and 0.0269% D
+    with straight stitches; 20,000 samples each way)."""
+    from mzc.measure.metrics import distance_to_mesh, sample_surface, surface_distance
+    from mzc.ops.slicing import slice_surface
+    from mzc.ops.triangulation import grid_to_mesh
+
+    path = OBJECTS / "dragon.ply"
+    if not path.is_file():
+        pytest.skip(f"shared object data not available ({path})")
+    mesh = read_mesh(path)
+    diagonal = float(np.linalg.norm(np.ptp(mesh.points, axis=0)))
+    rebuilt = grid_to_mesh(slice_surface(mesh))
+    samples = sample_surface(mesh.points, mesh.triangles, 20_000, np.random.default_rng(0))[0]
+    near = np.mean(distance_to_mesh(samples, rebuilt.points, rebuilt.triangles) <= 0.001 * diagonal)
+    rms = surface_distance((mesh.points, mesh.triangles), (rebuilt.points, rebuilt.triangles), samples=20_000)["rms"]
+    assert near >= 0.983 and rms <= 0.00026 * diagonal

@@ -37,6 +37,13 @@ surface) leaves it open.
    an open scan, a hole of the surface): if its filling would need a cut longer than
    LONGEST spacings it stays open. Other faces are gaps between charts, however wide
    (where many small charts meet), and are closed.
+7. The creases are put back (``creased``). Charts part where the surface turns (each element
+   goes with the direction its normal faces), so a seam lies on a bend, and a stitch that
+   runs straight from one chart's last node to the other's, up to a cell or two away, cuts
+   the bend's corner: on the edges of a box, by up to half a cell or more. Each edge between
+   two stitches whose ends' tangent planes (their charts' normals) bend by 20 to 160 degrees
+   (SHARP) is split at the point of the planes' crease nearest its middle (within
+   CREASE_REACH of its length and a spacing), and its triangles with it.
 
 Everything is elementwise numpy, a KD-tree and the C kernel, with IEEE operations in a fixed
 order: the same triangles on every machine (spec/arithmetic.md).
@@ -56,6 +63,8 @@ AHEAD = 0.5        # cosine within which a point lies ahead of a surface, not be
 WELD = 1e-9        # spacings: boundary vertices of two charts this close are one
 LONGEST = 6.0      # spacings: the longest edge a filling may add to a face on a rim (one that needs more is a rim)
 RIM_SHARE = 0.25   # a face more of whose vertices have no other chart near lies on a rim
+SHARP = 0.94       # cosine of 20 degrees: tangent planes of two ends that bend by 20-160 degrees meet in a crease
+CREASE_REACH = 0.5   # the crease point lies at most this share of its edge's length from the edge's middle
 
 
 def zip_charts(points, triangles, chart, spacing):
@@ -63,7 +72,8 @@ def zip_charts(points, triangles, chart, spacing):
     (n,) the chart of each vertex, charts sampled at ``spacing``) with their seams closed.
 
     The points are the given ones, then any added (a face that only a fan about a new point
-    can close, rare); the triangles the given ones (over welded vertices), then the stitches."""
+    can close, rare), then the creases' (``creased``); the triangles the given ones (over
+    welded vertices), then the stitches."""
     points = np.asarray(points, dtype=np.float64).reshape(-1, 3)
     triangles = np.asarray(triangles, dtype=np.int64).reshape(-1, 3)
     chart = np.asarray(chart).reshape(len(points))
@@ -77,8 +87,94 @@ def zip_charts(points, triangles, chart, spacing):
         if not len(boundary):
             return points, triangles
         near = Neighbours(points, boundary, spacing)
-    added, stitches = Gap(points, triangles, chart, boundary, near, spacing).filled()
-    return np.concatenate([points, added]), np.concatenate([triangles, stitches])
+    gap = Gap(points, triangles, chart, boundary, near, spacing)
+    added, stitches = gap.filled()
+    return creased(np.concatenate([points, added]), triangles, stitches, boundary, (gap.vertex, gap.normal), spacing)
+
+
+def creased(points, charted, stitches, boundary, normals, spacing):
+    """(points, triangles): the ``charted`` triangles, then the ``stitches`` with the bends of the
+    seams put back: each edge of the stitches that is not a chart's (``boundary``, the charts'
+    boundary edges), where the tangent planes at its two ends (``normals``: the boundary
+    vertices and the sums of their charts' normals, Gap's) bend by 20 to 160 degrees
+    (SHARP; the two sides of a fin thinner than a cell face apart, with no crease between), is
+    split at the point of their crease nearest its middle when that lies within CREASE_REACH
+    of its length of it and within a ``spacing`` (a bend between the ends, as far from their
+    stitch as a seam's gap is wide, not planes that meet far off), its
+    triangles split with it (``split``). The edges of a stitch that this would turn over (a
+    crease past a third plane where three charts meet) are split at their middles instead,
+    round by round until none is (a stitch split at its edges' middles stays as it was). The
+    new points come after the given ones; the charts' triangles stay first."""
+    size = len(points)
+    key = edge_keys(stitches, stitches[:, [1, 2, 0]], size).ravel()   # edge k of a stitch: corners k, k + 1
+    edges, which = np.unique(key, return_inverse=True)
+    which = which.reshape(-1, 3)
+    a, b = np.divmod(edges, size)
+    vertex, normal = normals
+    length = lengths(normal)
+    unit = np.zeros((size, 3))   # zero at a point the filling added, or where the charts' normals cancel: no bend
+    unit[vertex] = normal / np.where(length > 0, length, np.inf)[:, None]
+    na, nb = unit[a], unit[b]
+    middle = (points[a] + points[b]) / 2
+    cosine = dotted(na, nb)
+    across = 1.0 - cosine * cosine
+    along_a, along_b = dotted(na, points[a] - middle), dotted(nb, points[b] - middle)
+    bent = (across > 1.0 - SHARP * SHARP) & (dotted(na, na) > 0) & (dotted(nb, nb) > 0)   # neither flat nor folded flat
+    divisor = np.where(bent, across, 1.0)
+    alpha, beta = (along_a - cosine * along_b) / divisor, (along_b - cosine * along_a) / divisor
+    crease = middle + alpha[:, None] * na + beta[:, None] * nb
+    bent &= (lengths(crease - middle) <= np.minimum(CREASE_REACH * lengths(points[b] - points[a]), spacing)) & \
+        ~np.isin(edges, edge_keys(boundary[:, 0], boundary[:, 1], size))
+    new = np.full(len(edges), -1, dtype=np.int64)
+    new[bent] = size + np.arange(np.count_nonzero(bent))
+    middles = new[which]
+    pieces, parent = split(stitches, middles)
+    cut = np.flatnonzero((middles >= 0).any(axis=1))
+    place = np.full(len(stitches), -1)
+    place[cut] = np.arange(len(cut))
+    tested = place[parent] >= 0
+    kept, owner = pieces[tested], place[parent[tested]]
+    used, local = np.unique(np.concatenate([stitches[cut], kept]), return_inverse=True)
+    local = local.ravel()
+    parents, kept = local[:3 * len(cut)].reshape(-1, 3), local[3 * len(cut):].reshape(-1, 3)
+    at = points[np.minimum(used, size - 1)]
+    added = used >= size
+    while True:
+        at[added] = crease[bent][used[added] - size]
+        facing = triangle_normals(at, parents)
+        turned = (dotted(facing, facing)[owner] > 0) & (dotted(triangle_normals(at, kept), facing[owner]) <= 0)
+        back = which[cut[owner[turned]]].ravel()
+        back = back[(crease[back] != middle[back]).any(axis=1)]   # at its middles, a sliver may still turn
+        if not len(back):
+            return np.concatenate([points, crease[bent]]), np.concatenate([charted, pieces])
+        crease[back] = middle[back]
+
+
+def split(triangles, middle):
+    """(triangles, parent): ``triangles`` with each edge k (corners k, k + 1) whose ``middle`` (per
+    triangle and edge) is not -1 split there, a triangle with one split edge into two, with
+    two into three (the quad left cut from the corner between the whole edge and a split
+    one), with three into four, those with none first as they were; and the index of the
+    triangle each comes from."""
+    cut = middle >= 0
+    count = cut.sum(axis=1)
+    parts = [np.flatnonzero(count == 0)]
+    pieces = [triangles[parts[0]]]
+    for k in range(3):
+        one = np.flatnonzero((count == 1) & cut[:, k])
+        t, m = np.roll(triangles[one], -k, axis=1), middle[one, k]
+        pieces += [np.stack([t[:, 0], m, t[:, 2]], axis=1), np.stack([m, t[:, 1], t[:, 2]], axis=1)]
+        two = np.flatnonzero((count == 2) & ~cut[:, (k + 2) % 3])
+        t, m = np.roll(triangles[two], -k, axis=1), np.roll(middle[two], -k, axis=1)
+        pieces += [np.stack([m[:, 0], t[:, 1], m[:, 1]], axis=1), np.stack([t[:, 0], m[:, 0], m[:, 1]], axis=1),
+                   np.stack([t[:, 0], m[:, 1], t[:, 2]], axis=1)]
+        parts += [one, one, two, two, two]
+    three = np.flatnonzero(count == 3)
+    t, m = triangles[three], middle[three]
+    pieces += [np.stack([t[:, 0], m[:, 0], m[:, 2]], axis=1), np.stack([m[:, 0], t[:, 1], m[:, 1]], axis=1),
+               np.stack([m[:, 2], m[:, 1], t[:, 2]], axis=1), m]
+    parts += [three] * 4
+    return np.concatenate(pieces), np.concatenate(parts)
 
 
 def boundary_edges(triangles, count):
@@ -173,8 +269,8 @@ class Gap:
         rank = np.full(len(points), -1, dtype=np.int64)
         rank[self.vertex] = np.arange(len(self.vertex))
         at = (rank[triangles] >= 0).any(axis=1)   # the triangles with a boundary vertex
-        self.frame = tangent_frames(vertex_normals(triangle_normals(points, triangles[at]), rank[triangles[at]],
-                                                   len(self.vertex)))
+        self.normal = vertex_normals(triangle_normals(points, triangles[at]), rank[triangles[at]], len(self.vertex))
+        self.frame = tangent_frames(self.normal)
         self.edges = existing_edges(rank[triangles[at]])
         self.chart = chart[self.vertex]
         self.source, self.target = rank[boundary[:, 1]], rank[boundary[:, 0]]
