@@ -78,9 +78,13 @@ def spec_examples(kind=None):
 
 
 def example_bytes(text, hex_payload):
-    """The file of a worked example: its text, or its header lines then its payload given in hex."""
+    """The file of a worked example: its text, or its header lines then its payload given in hex, or
+    (a binary header, dwt2d 7.0: no ``data`` line) its magic line then the rest of the file in hex."""
     if not hex_payload:
         return text.encode()
+    if "data\n" not in text:
+        magic, rest = text.split("\n", 1)
+        return (magic + "\n").encode() + bytes.fromhex(rest)
     header, payload = text.split("data\n")
     return (header + "data\n").encode() + bytes.fromhex(payload)
 

@@ -15,11 +15,15 @@ from mzc.codecs.dwt2d import entropy as en
 def parts(data):
     """{header, mask, tables, coefficients: bytes} of a whole (not tiled) dwt2d file, summing to its size."""
     from mzc import decode
+    from mzc.codecs.dwt2d import compact
     from mzc.formats.header import read_header
 
     grid = decode(data)
-    header, body, _line = read_header(data, "<bytes>", "dwt2d", 99, binary=True)
-    decoder = en.Decoder(body, "<bytes>")
+    if compact.is_compact(data):   # the sections' tags, lengths and CRCs count as header
+        body = compact.read(data, "<bytes>")[1]
+    else:
+        body = read_header(data, "<bytes>", "dwt2d", 99, binary=True)[1]
+    decoder = en.Decoder(body, "<bytes>", parametric=compact.is_compact(data))
     tables = decoder.position - len(en.varint(len(decoder.tables)))
     mask = mask_bits(grid.valid, decoder.tables) / 8
     return {"header": len(data) - len(body), "mask": round(mask), "tables": tables,

@@ -158,7 +158,7 @@ def coded_block(values, frame, rows, cols, options, unit_checked):
 
     grid = ZGrid(z=values, **frame.block_fields(rows[0], cols[0]))
     check_grid_magnitudes(grid)
-    data, decoded = encode_whole(grid, **options, unit_checked=unit_checked)
+    data, decoded = encode_whole(grid, **options, unit_checked=unit_checked, compact=False)
     check_magnitude(decoded, "decoded heights", field="z")
     return data
 
