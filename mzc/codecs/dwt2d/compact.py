@@ -38,21 +38,21 @@ WORDS = ("planar", "cylindrical", "spherical", "bior4.4", "bior2.2", "integer") 
 # --------------------------------------------------------------------------- writing
 
 
-def zigzag(value):
-    """A signed integer as an unsigned one: 0, -1, 1, -2, ... -> 0, 1, 2, 3, ..."""
-    return 2 * value if value >= 0 else -2 * value - 1
+def signed(magnitude, negative):
+    """A signed integer as an unsigned one, 2|v| + 1 when negative: -0 (of -0.0) is 1, not 0."""
+    return 2 * magnitude + int(negative)
 
 
 def decimal_bytes(word):
-    """A number written as ``word`` (the shortest text of a binary64) as its decimal mantissa m and
-    exponent e: one varint 16 zigzag(m) + e + 8 for e in -8..6, else 16 zigzag(m) + 15 and a varint
-    zigzag(e). The text it reads back as is the number itself, on every machine; 0, 1 and 0.5 take a
-    byte (a face's transform is nine of them)."""
+    """A number written as ``word`` (the shortest text of a binary64) as its decimal digits m (signed,
+    -0 kept) and exponent e: one varint 16 s(m) + e + 8 for e in -8..6, else 16 s(m) + 15 and a varint
+    s(e), s being ``signed``. The text it reads back as is the number itself, on every machine; 0, 1
+    and 0.5 take a byte (a face's transform is nine of them)."""
     sign, digits, exponent = Decimal(word).as_tuple()
-    mantissa = int("".join(map(str, digits)) or "0") * (-1 if sign else 1)
+    mantissa = signed(int("".join(map(str, digits)) or "0"), sign)
     if SMALL_EXPONENTS[0] <= exponent <= SMALL_EXPONENTS[1]:
-        return varint(16 * zigzag(mantissa) + exponent + EXPONENT_BIAS)
-    return varint(16 * zigzag(mantissa) + 15) + varint(zigzag(exponent))
+        return varint(16 * mantissa + exponent + EXPONENT_BIAS)
+    return varint(16 * mantissa + 15) + varint(signed(abs(exponent), exponent < 0))
 
 
 def field_bytes(line):
@@ -130,11 +130,11 @@ class Reader:
     def decimal(self, end):
         """A number of ``decimal_bytes`` as the text 3.x writes for it."""
         head = self.varint(end)
-        mantissa, low = unzigzag(head >> 4), head & 15
-        exponent = unzigzag(self.varint(end)) if low == 15 else low - EXPONENT_BIAS
-        if abs(mantissa) >= 10 ** MAX_DIGITS or abs(exponent) > MAX_EXPONENT:
+        mantissa, low = head >> 4, head & 15
+        exponent = unsigned(self.varint(end)) if low == 15 else low - EXPONENT_BIAS
+        if mantissa >= 2 * 10 ** MAX_DIGITS or abs(exponent) > MAX_EXPONENT:
             raise self.error("a header number has too many digits")
-        return format_number(float(f"{mantissa}e{exponent}"))
+        return format_number(float(f"{'-' if mantissa % 2 else ''}{mantissa // 2}e{exponent}"))
 
     def header(self):
         """The Header of the header section (keywords and their value words, as a 3.x header's lines)."""
@@ -179,9 +179,9 @@ class Reader:
             raise self.error(f"{len(self.data) - self.position} byte(s) after the last section")
 
 
-def unzigzag(value):
-    """The signed integer of ``zigzag``."""
-    return value // 2 if value % 2 == 0 else -(value + 1) // 2
+def unsigned(value):
+    """The integer of ``signed`` (-0 as 0)."""
+    return -(value // 2) if value % 2 else value // 2
 
 
 def is_compact(data):
