@@ -14,7 +14,7 @@ from decimal import Decimal
 
 from mzc.codecs.dwt2d.entropy import varint
 from mzc.errors import MzcError
-from mzc.formats.header import Header, format_number
+from mzc.formats.header import CHECKSUM, Header, format_number
 
 MAGIC = b"mzc-dwt2d 7.0\n"
 HEADER, PAYLOAD = 1, 2          # section tags, in the order they come
@@ -89,10 +89,13 @@ class Reader:
 
     def __init__(self, data, source):
         self.data, self.source = memoryview(data), source
-        self.position = bytes(self.data[:len(MAGIC)]).find(b"\n") + 1   # after the magic line
+        self.position = bytes(self.data[:len(MAGIC) + 1]).find(b"\n") + 1   # after the magic line
+        if self.data[self.position - 2:self.position] == b"\r\n":
+            raise self.error("the magic line ends in CRLF: the file was copied as text, which changes its binary "
+                             "bytes; copy mzc files as binary", CHECKSUM)
 
-    def error(self, message):
-        return MzcError(message, source=self.source, field="data")
+    def error(self, message, field="data"):
+        return MzcError(message, source=self.source, field=field)
 
     def varint(self, end=None):
         """One unsigned LEB128 integer (at most MAX_VARINT_BYTES bytes) that ends before ``end``."""
@@ -123,7 +126,8 @@ class Reader:
             raise self.error(f"the file ends inside section {tag} (cut short?)")
         stated = CRC.unpack_from(self.data, end)[0]
         if zlib.crc32(self.data[start:end], zlib.crc32(before)) != stated:
-            raise self.error(f"checksum mismatch in section {tag}: the file is corrupt")
+            raise self.error(f"checksum mismatch: section {tag} of the file is corrupt (damaged, or bytes changed)",
+                             CHECKSUM)
         body, self.position = bytes(self.data[self.position:end]), end + CRC.size
         return body
 
@@ -174,9 +178,10 @@ class Reader:
         return [str(self.varint(end)) if kind == "u" else self.decimal(end) for _ in range(count)]
 
     def check_end(self):
-        """Refuse bytes after the last section."""
+        """Refuse bytes after the last section (added to the file, which its sections' CRC-32s do not cover)."""
         if self.position != len(self.data):
-            raise self.error(f"{len(self.data) - self.position} byte(s) after the last section")
+            raise self.error(f"checksum mismatch: {len(self.data) - self.position} byte(s) after the last section "
+                             "(added to the file)", CHECKSUM)
 
 
 def unsigned(value):
