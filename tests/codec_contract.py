@@ -89,6 +89,17 @@ def example_bytes(text, hex_payload):
     return (header + "data\n").encode() + bytes.fromhex(payload)
 
 
+def header_fields(data):
+    """{keyword: value words} of a compressed file's header: its text lines, or a dwt2d 7.0 file's
+    binary fields (the lines they stand for)."""
+    from mzc.codecs.dwt2d import compact
+
+    if compact.is_compact(data):
+        return {keyword: values for keyword, (values, _line) in compact.read(data, "t")[0].fields.items()}
+    lines = data.split(b"\ndata\n")[0].decode().splitlines()[1:]
+    return {line.split()[0]: line.split()[1:] for line in lines if line.strip()}
+
+
 def assert_heights(z, expected):
     """Decoded heights equal to a spec's expectation (NaN where it has nan, values to 1e-3)."""
     np.testing.assert_array_equal(np.isnan(z), np.isnan(expected))

@@ -534,14 +534,15 @@ def encode_grid(grid, **options):
     return encode_grid_with_decoded(grid, **options)[0]
 
 
-def encode_grid_with_decoded(grid, tile=None, **options):
+def encode_grid_with_decoded(grid, tile=None, compact=True, **options):
     """(bytes, the heights a decoder gets from them) of a ZGrid (options checked by CODEC): whole
-    (``encode_whole``) or, when ``tile`` or its size says so, in tiles (mzc.codecs.dwt2d.tiles)."""
+    (``encode_whole``; without ``compact`` in the text-header versions) or, when ``tile`` or its size
+    says so, in tiles (mzc.codecs.dwt2d.tiles)."""
     from mzc.codecs.dwt2d import tiles
 
     side = tiles.tile_side(grid.shape, tile, charted=grid.charts is not None)
     if side is None:
-        return encode_whole(grid, **options)
+        return encode_whole(grid, compact=compact, **options)
     data = tiles.encode(tiles.GridSource(grid), side, options)
     return data, tiles.read(data).z
 
