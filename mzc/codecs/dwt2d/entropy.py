@@ -72,12 +72,12 @@ def normalised(weights):
     the flooring leaves goes to the first class of largest weight. Integer arithmetic only,
     so every decoder builds the same table.
     """
-    weights = np.asarray(weights, dtype=object if max(weights, default=0) >= 1 << 62 else np.int64)
+    weights = np.asarray(weights, dtype=np.int64)   # at most 2**40 (parametric), so w * 2**14 fits
     total = 1 << TABLE_BITS
     spare = total - len(weights)
     freq = 1 + (weights * spare) // max(int(weights.sum()), 1)
     freq[np.argmax(weights)] += total - int(freq.sum())
-    return freq.astype(np.int64)
+    return freq
 
 
 # 7.0's parametric tables: P(0) = z/256, and a nonzero |v| - 1 geometric of ratio theta, 1 - theta =
