@@ -78,11 +78,26 @@ def spec_examples(kind=None):
 
 
 def example_bytes(text, hex_payload):
-    """The file of a worked example: its text, or its header lines then its payload given in hex."""
+    """The file of a worked example: its text, or its header lines then its payload given in hex, or
+    (a binary header, dwt2d 7.0: no ``data`` line) its magic line then the rest of the file in hex."""
     if not hex_payload:
         return text.encode()
+    if "data\n" not in text:
+        magic, rest = text.split("\n", 1)
+        return (magic + "\n").encode() + bytes.fromhex(rest)
     header, payload = text.split("data\n")
     return (header + "data\n").encode() + bytes.fromhex(payload)
+
+
+def header_fields(data):
+    """{keyword: value words} of a compressed file's header: its text lines, or a dwt2d 7.0 file's
+    binary fields (the lines they stand for)."""
+    from mzc.codecs.dwt2d import compact
+
+    if compact.is_compact(data):
+        return {keyword: values for keyword, (values, _line) in compact.read(data, "t")[0].fields.items()}
+    lines = data.split(b"\ndata\n")[0].decode().splitlines()[1:]
+    return {line.split()[0]: line.split()[1:] for line in lines if line.strip()}
 
 
 def assert_heights(z, expected):

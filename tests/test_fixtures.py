@@ -14,6 +14,7 @@ import numpy as np
 import pytest
 
 from mzc.codecs import BUILT_IN, dwt2d, get_codec
+from mzc.codecs.dwt2d import compact
 from mzc.codecs.rows import dct, dft, dwt, poly
 from mzc.errors import MzcError
 from mzc.formats import module_for, read_any, zgrid
@@ -285,6 +286,10 @@ def test_writers_take_the_projected_version_for_central_grids_only(kind, source,
     module = module_for(kind)
     major, minor = module.PROJECTED_VERSION if projected else module.VERSION
     data = write(grid, **options)
+    if kind == "dwt2d":   # 7.0 for every grid coded whole (its 3.x is what a 5.0 file's tiles are)
+        assert data.startswith(b"mzc-dwt2d 7.0\n")
+        assert compact.read(data, kind)[0].has("projection") == projected
+        data = dwt2d.encode_whole(grid, **options, compact=False)[0]
     assert data.startswith(f"mzc-{kind} {major}.{minor}\n".encode())
     assert (b"\nprojection " in data.split(b"\ndata\n")[0]) == projected
     assert read_any(data, kind).projection == grid.projection

@@ -33,6 +33,30 @@ def face_file():
     return mzc.encode(grid, "dwt2d", rmse=0.05)
 
 
+@pytest.fixture(scope="module")
+def text_face_file():
+    """The face of ``face_file`` in mzc-dwt2d 3.1, whose text header carries the ``crc32`` line (7.0's
+    sections carry their CRC-32s in binary)."""
+    from mzc.codecs.dwt2d import encode_whole
+
+    from conftest import face_path
+
+    grid = mzc.slice(face_path("f18.ply"), d1=0.5, d2=0.5)
+    return encode_whole(grid, rmse=0.05, compact=False)[0]
+
+
+def header_bytes(data):
+    """The bytes of a file's header: through its ``data`` line, or a dwt2d 7.0 file's magic line and
+    header section."""
+    from mzc.codecs.dwt2d import compact
+
+    if compact.is_compact(data):
+        reader = compact.Reader(data, "t")
+        reader.header()
+        return reader.position
+    return data.index(b"\ndata\n") + 6
+
+
 def codec_files():
     """(name, bytes) of every built-in codec's file of the generated grids (planar and central)."""
     files = []
@@ -73,8 +97,8 @@ def test_a_thousand_single_bit_flips_of_a_face_file_are_all_refused(face_file):
 def test_every_bit_of_every_codec_file_is_guarded(name, data):
     """Bits of every codec's file (planar and central grids; every bit of the header and up to
     3,000 in all): flipped, each is refused."""
-    assert CHECKSUM_LINE.search(data), f"{name} carries no crc32 line"
-    header_bits = 8 * (data.index(b"\ndata\n") + 6)
+    assert CHECKSUM_LINE.search(data) or data.startswith(b"mzc-dwt2d 7.0\n"), f"{name} carries no crc32 line"
+    header_bits = 8 * header_bytes(data)
     rng = np.random.default_rng(len(data))
     body_bits = rng.choice(np.arange(header_bits, len(data) * 8), size=min(3000, len(data) * 8 - header_bits),
                            replace=False)
@@ -93,6 +117,7 @@ def test_cut_appended_and_crlf_files_are_refused(name, data):
         assert "checksum mismatch" in refused(data + tail).message
     crlf = refused(data.replace(b"\n", b"\r\n"))
     assert "CRLF" in crlf.message and crlf.field == "crc32"
+    assert "CRLF" in refused(data.replace(b"\n", b"\r\n", 1)).message   # the magic line alone
 
 
 @settings(max_examples=200, deadline=None)
@@ -109,21 +134,23 @@ def test_any_edit_of_a_checksummed_file_is_refused(data):
             read_any(edited, name)
 
 
-def test_a_current_version_without_its_checksum_is_refused(face_file):
+def test_a_current_version_without_its_checksum_is_refused(text_face_file):
     """Taking the crc32 line out does not turn the check off: 3.1 requires it."""
-    error = refused(CHECKSUM_LINE.sub(b"", face_file, count=1))
+    error = refused(CHECKSUM_LINE.sub(b"", text_face_file, count=1))
     assert error.field == "crc32" and "missing" in error.message
 
 
 @pytest.mark.parametrize("value", ["0", "XYZXYZXY", "1234567890", "DEADBEEF"])
-def test_a_malformed_checksum_is_refused(face_file, value):
-    error = refused(CHECKSUM_LINE.sub(f"crc32 {value}\n".encode(), face_file, count=1))
+def test_a_malformed_checksum_is_refused(text_face_file, value):
+    error = refused(CHECKSUM_LINE.sub(f"crc32 {value}\n".encode(), text_face_file, count=1))
     assert error.field == "crc32" and "hexadecimal" in error.message
 
 
-def test_the_checksum_covers_the_version_so_an_older_version_number_does_not_hide_a_flip(face_file):
+def test_the_checksum_covers_the_version_so_an_older_version_number_does_not_hide_a_flip(text_face_file,
+                                                                                          face_file):
     """3.1 -> 3.0 on the magic line (3.0 needs no checksum): the crc32 line is still checked."""
-    assert "checksum mismatch" in refused(face_file.replace(b"mzc-dwt2d 3.1\n", b"mzc-dwt2d 3.0\n", 1)).message
+    assert "checksum mismatch" in refused(text_face_file.replace(b"mzc-dwt2d 3.1\n", b"mzc-dwt2d 3.0\n", 1)).message
+    assert "checksum mismatch" in refused(face_file.replace(b"mzc-dwt2d 7.0\n", b"mzc-dwt2d 7.1\n", 1)).message
 
 
 @pytest.mark.parametrize("name", ["dwt2d-3.0.mzw2", "dwt2d-2.0.mzw2"])

@@ -41,10 +41,11 @@ READS = web_reads()
 SUPPORTED = tuple(READS)   # the kinds web/mzc.mjs decodes
 
 
-def skip_unless_read(name):
-    """Skips fixture ``name`` with its reason when web/ does not read its major version (one
-    added to mzc since web/ was written) rather than fail."""
-    kind, major, _ = split_magic(fixture_bytes(name), name)
+def skip_unless_read(name, data=None):
+    """Skips fixture ``name`` (or the file of bytes ``data``) with its reason when web/ does not read
+    its major version (one added to mzc since web/ was written, such as the mzc-dwt2d 7.0 that mzc
+    encode writes) rather than fail."""
+    kind, major, _ = split_magic(fixture_bytes(name) if data is None else data, name)
     if major > READS[kind][1]:
         pytest.skip(f"web/ does not read mzc-{kind} {major}.x yet")
 
@@ -130,6 +131,7 @@ def sliced(tmp_path_factory):
 def test_faces_at_several_targets_decode_as_mzc_decodes_them(sliced, face, options, tmp_path):
     path = tmp_path / "face.mzc"
     run_mzc("encode", *options, sliced(face), "-o", path, check=True)
+    skip_unless_read(path.name, path.read_bytes())
     assert_decodes_alike(path)
 
 
@@ -218,7 +220,8 @@ def test_narrow_and_small_grids_decode_as_mzc_decodes_them(tmp_path):
     for rows, cols in [(4, 1), (1, 4), (3, 1), (5, 1), (8, 1), (4, 2), (2, 4), (5, 2), (1, 1), (2, 2)]:
         for level in (1, 2):
             grid = ZGrid(np.round(10 + rng.normal(0, 1, (rows, cols)), 3), d1=1.5, d2=2)
-            data = dwt2d.write(grid, max_error=0.05, level=level, slope_limit=2)
+            # the 3.1 file a tile is (web/ reads no 7.0 yet)
+            data = dwt2d.encode_whole(grid, max_error=0.05, level=level, slope_limit=2, compact=False)[0]
             paths.append(tmp_path / f"{rows}x{cols}-{level}.mzw2")
             paths[-1].write_bytes(data)
             expected.append(python_decode(data, paths[-1].name))

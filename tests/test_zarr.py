@@ -192,7 +192,10 @@ def test_a_2d_float_chunk_is_coded_as_it_always_was():
     import mzc
 
     z = terrain("<f8")[:64, :64]
-    assert Dwt2d(max_error=0.25).encode(z) == b"d" + mzc.encode(mzc.ZGrid(z, 1.0, 1.0), "dwt2d", max_error=0.25)
+    from mzc.codecs.dwt2d import encode_whole
+
+    text = encode_whole(mzc.ZGrid(z, 1.0, 1.0), max_error=0.25, compact=False)[0]   # 3.1, not mzc encode's 7.0
+    assert Dwt2d(max_error=0.25).encode(z) == b"d" + text
 
 
 @pytest.mark.parametrize("edit, message", [

@@ -67,12 +67,16 @@ def mzc_header(row, data, source, decode):
     a charted dwt2d file's ``chart_count`` (its records are in its payload), else None."""
     import numpy as np
 
+    from mzc.codecs.dwt2d import compact
     from mzc.formats import header_versions, read_as
     from mzc.formats.header import read_grid_fields, read_header, split_magic
     from mzc.grid import ZGrid
 
     kind, major, minor = split_magic(data, source)
-    header, _body, _line = read_header(data, source, kind, major, **header_versions(row))
+    if row.name == "dwt2d" and compact.is_compact(data):   # binary fields, shown as the lines they stand for
+        header = compact.read(data, source)[0]
+    else:
+        header, _body, _line = read_header(data, source, kind, major, **header_versions(row))
     fields, rows, cols = read_grid_fields(header)
     grid = read_as(row, data, source) if decode else ZGrid(z=np.broadcast_to(np.nan, (rows, cols)), **fields)
     lines = [f"{keyword} {' '.join(values)}" for keyword, (values, _) in header.fields.items()]

@@ -1,5 +1,6 @@
-"""The wavelet z-grid codec (``mzc-dwt2d 3.1``, 3.2 with a raster's crs and raster lines, 4.0 with charts, 6.0
-for a raster of integers that decodes to integers; 3.0 and 2.0 are read; extension ``.mzw2``): see spec/dwt2d.md.
+"""The wavelet z-grid codec (``mzc-dwt2d 7.0``, the fields of 3.1, 3.2 with a raster's crs and raster lines, 4.0
+with charts and 6.0 for a raster of integers that decodes to integers in a binary container; those are read, and
+written as the tiles of 5.0; 3.0 and 2.0 are read; extension ``.mzw2``): see spec/dwt2d.md.
 
 Text header (grid fields with the projection, wavelet, levels, steps, slope limit,
 correction step), a ``data`` line, then a binary payload: the validity mask as row spans,
@@ -17,7 +18,7 @@ import numpy as np
 
 from mzc import elementary
 from mzc.codecs.base import Codec, Option
-from mzc.codecs.dwt2d import _rows
+from mzc.codecs.dwt2d import _rows, compact
 from mzc.codecs.dwt2d import wavelet as w2
 from mzc.errors import MzcError
 from mzc.formats.header import (
@@ -44,7 +45,10 @@ ROUNDED_TILED_VERSION = (5, 1)   # 5.0 with ``rounding integer``: its tiles are 
 ROUNDED_VERSION = (6, 0)     # 4.0 with the crs and raster lines and ``rounding integer``: a raster of integers
                              # coded with max_error, whose decoded values are rounded to integers (a new major:
                              # a 4.0 reader, ignoring the line, would decode other values)
-GEOREF_SINCE = dict([GEOREFERENCED_VERSION, TILED_VERSION, ROUNDED_VERSION])   # major -> first minor with crs, raster
+COMPACT_VERSION = (7, 0)     # every grid coded whole: the fields of 3.x-6.0 in binary, tagged sections with CRC-32s
+                             # (mzc.codecs.dwt2d.compact); tiles of 5.0 stay 3.1 files
+GEOREF_SINCE = dict([GEOREFERENCED_VERSION, TILED_VERSION, ROUNDED_VERSION, COMPACT_VERSION])   # major -> first minor
+                                                                                         # with crs, raster
 ROUNDING = "integer"         # the one value of the rounding line
 ROUNDING_ULPS = 16           # the coded bound stays this many units in the last place of the largest value below
                              # floor(E) + 1/2, more than the float noise of a decoded value
@@ -376,7 +380,8 @@ class Prepared:
     the magnitude is 0 where the coefficient is not relevant, so it quantises to the 0 that
     is never coded)."""
 
-    def __init__(self, grid, wavelet, levels, slope_limit):
+    def __init__(self, grid, wavelet, levels, slope_limit, compact=True):
+        self.compact = compact   # 7.0, else the text header of 3.x, 4.0, 6.0 (a tile of a 5.0 file)
         self.transform = w2.TRANSFORMS[VERSION[0]]
         if np.isinf(grid.z).any():
             raise MzcError("the grid holds infinite heights", field="z")
@@ -429,7 +434,7 @@ class Prepared:
         from mzc.codecs.dwt2d.entropy import Encoder  # here, not at the top: `mzc encode` builds this
                                                        # module's CODEC whatever codec it runs
         qflat, decoded = self.decoded(step) if decoded is None else decoded
-        encoder = Encoder(same_size=SAME_SIZE)
+        encoder = Encoder(same_size=SAME_SIZE, parametric=self.compact)
         encode_mask(encoder, self.valid)
         encode_bands(encoder, qflat, self.relevant, expand_steps(header_steps(step, self.levels), len(qflat)))
         correction = 0.0
@@ -445,14 +450,16 @@ class Prepared:
             decoded[self.valid] = rounded_values(decoded[self.valid], self.grid.raster.sample)   # as the decoder
             max_error = rounded
         decoded[~self.valid] = np.nan
-        lines = self.header_lines(step, correction, max_error, rounded is not None)
+        version = written_version(self.grid, rounded is not None, self.compact)
+        lines = self.header_lines(version, step, correction, max_error, rounded is not None)
+        if version == COMPACT_VERSION:
+            return compact.file_bytes(lines[1:-1], encoder.finish()), decoded
         return file_bytes(lines, encoder.finish()), decoded
 
-    def header_lines(self, step, correction, max_error, rounded=False):
-        """The lines of the text header, the magic line to the ``data`` line."""
+    def header_lines(self, version, step, correction, max_error, rounded=False):
+        """The lines of the text header of ``version``, the magic line to the ``data`` line (7.0 codes
+        the lines between them as binary fields)."""
         # lines at their defaults are left out: a face's file can be 1.5 KB, and they were 50 B of it
-        version = ROUNDED_VERSION if rounded else file_version(self.grid, VERSION, PROJECTED_VERSION,
-                                                               GEOREFERENCED_VERSION, CHARTED_VERSION)
         lines = [magic_line(KIND, version), *grid_header_lines(self.grid, write_defaults=False, chart_records=False)]
         if self.grid.charts is not None:   # their records are in the payload: 8-10 bytes a chart, not 25
             lines.append(f"chart_count {len(self.grid.charts)}")
@@ -496,6 +503,16 @@ class Prepared:
         """Spread of the valid heights (at least 1e-6): scales the step searches."""
         z = self.grid.z[self.valid]
         return max(float(z.max() - z.min()), 1e-6) if z.size else 1.0
+
+
+def written_version(grid, rounded, compact=True):
+    """The version the reference encoder writes a grid coded whole in: 7.0, or without ``compact`` (a tile
+    of a 5.0 file) the 3.x, 4.0 or 6.0 (``rounded``: decoded values rounded to integers) it was before."""
+    if compact:
+        return COMPACT_VERSION
+    if rounded:
+        return ROUNDED_VERSION
+    return file_version(grid, VERSION, PROJECTED_VERSION, GEOREFERENCED_VERSION, CHARTED_VERSION)
 
 
 def header_steps(step, levels):
@@ -553,14 +570,15 @@ def encode_grid(grid, **options):
     return encode_grid_with_decoded(grid, **options)[0]
 
 
-def encode_grid_with_decoded(grid, tile=None, **options):
+def encode_grid_with_decoded(grid, tile=None, compact=True, **options):
     """(bytes, the heights a decoder gets from them) of a ZGrid (options checked by CODEC): whole
-    (``encode_whole``) or, when ``tile`` or its size says so, in tiles (mzc.codecs.dwt2d.tiles)."""
+    (``encode_whole``; without ``compact`` in the text-header versions) or, when ``tile`` or its size
+    says so, in tiles (mzc.codecs.dwt2d.tiles)."""
     from mzc.codecs.dwt2d import tiles
 
     side = tiles.tile_side(grid.shape, tile, charted=grid.charts is not None)
     if side is None:
-        return encode_whole(grid, **options)
+        return encode_whole(grid, compact=compact, **options)
     data = tiles.encode(tiles.GridSource(grid), side, options)
     return data, tiles.read(data).z
 
@@ -580,13 +598,14 @@ def window_writer(source, options, scheduler=None):
 
 
 def encode_whole(grid, max_error=None, rmse=None, size=None, wavelet=DEFAULT_WAVELET, level=None, slope_limit=None,
-                 unit_checked=False):
+                 unit_checked=False, compact=True):
     """(bytes, the heights a decoder gets from them) of a ZGrid coded whole; at most one of
     ``max_error`` (bound at every valid node, grid units), ``rmse`` (target RMS surface error; on a
     geographic grid the vertical one, in the height unit) or ``size`` (target file bytes, not
     exceeded when reachable), none being ``default_rmse``;
     ``unit_checked`` when the caller has judged the grid's unit already (a tile, by its tiled
-    grid's CRS).
+    grid's CRS); without ``compact`` the file has a 3.x, 4.0 or 6.0 text header, as
+    a tile of a 5.0 file has (written_version).
 
     ``slope_limit`` defaults to SLOPE_LIMIT for ``rmse`` and ``size``, whose errors are
     surface distances, and to 1 (equal steps) for ``max_error``, a bound on heights, where
@@ -601,7 +620,7 @@ def encode_whole(grid, max_error=None, rmse=None, size=None, wavelet=DEFAULT_WAV
     if slope_limit is None:
         slope_limit = 1.0 if max_error is not None or is_geographic(grid) else SLOPE_LIMIT
     check_slope_limit(grid, slope_limit)
-    prepared = Prepared(grid, wavelet, level, slope_limit)
+    prepared = Prepared(grid, wavelet, level, slope_limit, compact)
     if max_error is not None:
         bound, rounded = rounding_bounds(grid, max_error) or (max_error, None)
         # the smallest file, except that a finer step (lower RMS error) wins within ALPHA_SLACK of it
@@ -736,15 +755,19 @@ def read_codec_fields(header, shape, transform):
 
 
 def read(data, source="<bytes>"):
-    """Decode dwt2d bytes (3.x, 4.0, 6.0, 2.0 with its periodised transform, or the tiles of 5.0)
+    """Decode dwt2d bytes (7.0, 3.x, 4.0, 6.0, 2.0 with its periodised transform, or the tiles of 5.0)
     into a ZGrid; any bad input raises MzcError."""
     from mzc.codecs.dwt2d import tiles
 
     if tiles.is_tiled(data):
         return tiles.read(data, source)
-    header, body, _first = read_header(data, source, KIND, ROUNDED_VERSION[0], oldest_major=OLDEST_MAJOR,
-                                       projected_major=PROJECTED_VERSION[0], checksum_since=CHECKSUM_SINCE,
-                                       binary=True, georef_since=GEOREF_SINCE, charted_major=CHARTED_VERSION[0])
+    parametric = compact.is_compact(data)   # 7.0's table records
+    if parametric:
+        header, body = compact.read(data, source)
+    else:
+        header, body, _first = read_header(data, source, KIND, COMPACT_VERSION[0], oldest_major=OLDEST_MAJOR,
+                                           projected_major=PROJECTED_VERSION[0], checksum_since=CHECKSUM_SINCE,
+                                           binary=True, georef_since=GEOREF_SINCE, charted_major=CHARTED_VERSION[0])
     fields, rows, cols = read_grid_fields(header)
     transform = w2.TRANSFORMS[header.major]
     wavelet, levels, steps, slope_limit, correction = read_codec_fields(header, (rows, cols), transform)
@@ -753,7 +776,7 @@ def read(data, source="<bytes>"):
                               fields.get("projection", "planar"), fields.get("radius"))
     from mzc.codecs.dwt2d.entropy import Decoder
 
-    decoder = Decoder(body, source, SAME_SIZE)
+    decoder = Decoder(body, source, SAME_SIZE, parametric)
     valid = decode_mask(decoder, rows, cols)
     relevant = w2.flatten(transform.relevance(valid, wavelet, levels, geometry.periodic))
     qflat = decode_bands(decoder, relevant, steps)
@@ -776,7 +799,7 @@ def read(data, source="<bytes>"):
 
 
 CODEC = Codec(
-    "dwt2d", encode_grid, read, writer_with_decoded=encode_grid_with_decoded, version=ROUNDED_VERSION,
+    "dwt2d", encode_grid, read, writer_with_decoded=encode_grid_with_decoded, version=COMPACT_VERSION,
     oldest_major=OLDEST_MAJOR, extension=".mzw2", spec="spec/dwt2d.md", window_writer=window_writer,
     summary="2D wavelet of the whole grid, entropy coded, error-bounded", check_options=check_options,
     example={"max_error": 0.05}, options=(

@@ -12,6 +12,9 @@ decoded by the C loops of mzc.codecs.dwt2d._rows (a row's contexts depend on the
 just before). So a decode does not load constriction.
 """
 
+import functools
+import math
+
 import numpy as np
 
 from mzc import elementary
@@ -58,18 +61,69 @@ CODE_WEIGHTS = np.array([0] + [CODE_MANTISSAS[e % 4] << (e // 4) for e in range(
 
 
 def frequencies(codes):
-    """The table (frequencies >= 1 summing to 2**TABLE_BITS) that weight codes stand for.
+    """The table (frequencies >= 1 summing to 2**TABLE_BITS) that weight codes stand for (normalised)."""
+    return normalised(CODE_WEIGHTS[np.asarray(codes, dtype=np.int64)])
+
+
+def normalised(weights):
+    """The table (frequencies >= 1 summing to 2**TABLE_BITS) of integer ``weights``.
 
     Each class gets 1 plus its share of the rest in proportion to its weight (floored); what
     the flooring leaves goes to the first class of largest weight. Integer arithmetic only,
     so every decoder builds the same table.
     """
-    weights = CODE_WEIGHTS[np.asarray(codes, dtype=np.int64)]
+    weights = np.asarray(weights, dtype=np.int64)   # at most 2**40 (parametric), so w * 2**14 fits
     total = 1 << TABLE_BITS
     spare = total - len(weights)
     freq = 1 + (weights * spare) // max(int(weights.sum()), 1)
     freq[np.argmax(weights)] += total - int(freq.sum())
     return freq
+
+
+# 7.0's parametric tables: P(0) = z/256, and a nonzero |v| - 1 geometric of ratio theta, 1 - theta =
+# 2**(-t/16) for a code t (0..255), its powers in 32-bit fixed point (floored products), so that a
+# table is three bytes (S, z, t) instead of 1 + 6S/8, and every decoder builds it alike
+PARAMETRIC_BITS = 32
+ROOTS = tuple(math.isqrt(math.isqrt(math.isqrt(math.isqrt(1 << (16 * PARAMETRIC_BITS - i)))))   # floor(2**(32 - i/16))
+              for i in range(16))
+RATIO_CODES = 256
+ZERO_CODES = 256
+
+
+def power(theta, n):
+    """theta**n in PARAMETRIC_BITS fixed point, by squaring, each product floored: exact integers."""
+    result, base, one = 1 << PARAMETRIC_BITS, theta, PARAMETRIC_BITS
+    while n:
+        if n & 1:
+            result = (result * base) >> one
+        base = (base * base) >> one
+        n >>= 1
+    return result
+
+
+def parametric_weights(size, zero, ratio):
+    """Integer weights of ``size`` classes: class 0 ``zero``/256 of the mass; class k >= 1 holds |v| in
+    2**(k-1) .. 2**k - 1, whose share of the rest is theta**(2**(k-1) - 1) - theta**(2**k - 1), the last
+    class taking the whole tail theta**(2**(size-2) - 1)."""
+    theta = (1 << PARAMETRIC_BITS) - (ROOTS[ratio % 16] >> (ratio // 16))
+    tails = [power(theta, (1 << (k - 1)) - 1) for k in range(1, size)] + [0]
+    return [zero << PARAMETRIC_BITS] + [(ZERO_CODES - zero) * (tails[k] - tails[k + 1]) for k in range(size - 1)]
+
+
+def parametric_table(size, zero, ratio):
+    """The frequencies of a parametric table (normalised)."""
+    return normalised(parametric_weights(size, zero, ratio))
+
+
+def fit_parametric(counts):
+    """(zero code, ratio code) of the parametric table nearest ``counts`` (per class): z from the
+    share of zeros, t the best of all 256 by the ideal cost of the nonzero classes."""
+    counts = np.asarray(counts, dtype=np.float64)
+    total = counts.sum()
+    zero = int(np.clip(np.rint(ZERO_CODES * counts[0] / max(total, 1)), 1, ZERO_CODES - 1))
+    shares = ratio_shares(len(counts))
+    cost = -(np.log2(np.maximum(shares, 1e-300)) * counts[1:]).sum(axis=1)
+    return zero, int(np.argmin(cost))
 
 
 def table_codes(counts):
@@ -82,6 +136,13 @@ def table_codes(counts):
     target = elementary.log2(np.maximum(counts, 1e-300) * (CODE_WEIGHTS[-1] / counts.max()))
     distance = np.abs(target[:, None] - elementary.log2(np.maximum(CODE_WEIGHTS[1:], 1))[None, :])
     return np.where(counts > 0, 1 + np.argmin(distance, axis=1), 0)
+
+
+@functools.cache
+def ratio_shares(size):
+    """For every ratio code, the shares of classes 1..size-1 among the nonzero values (float: to fit only)."""
+    shares = np.array([parametric_weights(size, 0, ratio)[1:] for ratio in range(RATIO_CODES)], dtype=np.float64)
+    return shares / np.maximum(shares.sum(axis=1, keepdims=True), 1)
 
 
 def table_cost_bits(codes, counts):
@@ -134,9 +195,10 @@ class Encoder:
     decoder can mix them symbol by symbol (Decoder.read_rows).
     """
 
-    def __init__(self, same_size=()):
+    def __init__(self, same_size=(), parametric=False):
         self.models, self.values, self.signed = [], [], []
         self.same_size = [list(group) for group in same_size]
+        self.parametric = parametric   # 7.0's table records (parametric or weight codes), else 3.x's
 
     def add(self, model, values, signed=True):
         """Append ``values`` (ints) coded with context ``model``: one id, or one id per value.
@@ -154,9 +216,14 @@ class Encoder:
         cls = classes(values)
         count = int(models.max()) + 1 if len(models) else 0
         counts = np.bincount(models * MAX_CLASSES + cls, minlength=count * MAX_CLASSES).reshape(count, MAX_CLASSES)
-        codes = choose_tables(counts, self.table_sizes(counts))
-        words = ans_encode([frequencies(c) for c in codes], models, cls)
-        table_bytes = b"".join(b"\x00" if shared else encode_table(c) for c, shared in table_records(codes))
+        sizes = self.table_sizes(counts)
+        if self.parametric:
+            tables, table_bytes = choose_records(counts, sizes)
+        else:
+            codes = choose_tables(counts, sizes)
+            tables = [frequencies(c) for c in codes]
+            table_bytes = b"".join(b"\x00" if shared else encode_table(c) for c, shared in table_records(codes))
+        words = ans_encode(tables, models, cls)
         return (varint(count) + table_bytes + varint(len(words)) + words.astype("<u4").tobytes()
                 + np.packbits(raw_bits(values, cls, np.concatenate(self.signed or [np.zeros(0, np.int64)]))).tobytes())
 
@@ -187,6 +254,31 @@ def choose_tables(counts, sizes):
                 continue
         tables.append(own)
     return tables
+
+
+def choose_records(counts, sizes):
+    """(frequencies, bytes) of 7.0's table records, one per model: each the cheapest, by the ideal bits
+    of its symbols plus the record's own, of a repeat of the previous model's table (``00``), a
+    parametric table (varint 2S + 1, then z and t, a byte each) and a table of weight codes (varint 2S,
+    then the codes as in 3.x)."""
+    tables, out = [], []
+    for model_counts, size in zip(counts, sizes):
+        model_counts = model_counts[:size]
+        codes = table_codes(model_counts)
+        zero, ratio = fit_parametric(model_counts)
+        options = [(parametric_table(size, zero, ratio), varint(2 * size + 1) + bytes([zero, ratio])),
+                   (frequencies(codes), varint(2 * size) + encode_table(codes)[1:])]
+        if tables and len(tables[-1]) == size:
+            options.append((tables[-1], b"\x00"))
+        freq, record = min(options, key=lambda option: ideal_bits(option[0], model_counts) + 8 * len(option[1]))
+        tables.append(freq)
+        out.append(record)
+    return tables, b"".join(out)
+
+
+def ideal_bits(freq, counts):
+    """Bits of ``counts`` symbols per class under the table ``freq``."""
+    return float(-(counts * elementary.log2(freq[: len(counts)] / (1 << TABLE_BITS))).sum())
 
 
 def table_records(tables):
@@ -227,11 +319,11 @@ class Decoder:
     (``state``, uint64) and the ``cursor`` (words left, next raw bit, an error detail) in place.
     """
 
-    def __init__(self, payload, source, same_size=()):
+    def __init__(self, payload, source, same_size=(), parametric=False):
         self.source = source
         self.data = memoryview(payload)
         self.position = 0
-        self.tables = self.read_tables()
+        self.tables = self.read_tables(parametric)
         word_count = self.read_varint()
         end = self.position + 4 * word_count
         if end > len(self.data):
@@ -299,8 +391,9 @@ class Decoder:
                 return value
         raise self.error("varint longer than 5 bytes")
 
-    def read_tables(self):
-        """The model tables; a 0 class count repeats the previous table."""
+    def read_tables(self, parametric=False):
+        """The model tables; a 0 class count repeats the previous table. ``parametric`` (7.0): a record's
+        varint is 2S + 1 for a parametric table (z and t follow) or 2S for weight codes."""
         count = self.read_varint()
         if count > 4096:
             raise self.error(f"{count} model tables is more than 4096")
@@ -312,6 +405,14 @@ class Decoder:
                     raise self.error("the first model table cannot repeat a previous one")
                 tables.append(tables[-1])
                 continue
+            if parametric:
+                size, kind = divmod(size, 2)
+                if kind and 2 <= size <= MAX_CLASSES:
+                    if self.position + 2 > len(self.data):
+                        raise self.error("payload ends inside a model table")
+                    tables.append(parametric_table(size, self.data[self.position], self.data[self.position + 1]))
+                    self.position += 2
+                    continue
             if not 2 <= size <= MAX_CLASSES:
                 raise self.error(f"model table with {size} classes (allowed 2..{MAX_CLASSES})")
             end = self.position + (size * CODE_BITS + 7) // 8

@@ -180,7 +180,7 @@ def coded_block(values, frame, rows, cols, options, unit_checked, rounded=False)
 
     grid = ZGrid(z=values, **frame.block_fields(rows[0], cols[0], rounded))
     check_grid_magnitudes(grid)
-    data, decoded = encode_whole(grid, **options, unit_checked=unit_checked)
+    data, decoded = encode_whole(grid, **options, unit_checked=unit_checked, compact=False)
     check_magnitude(decoded, "decoded heights", field="z")
     return data
 

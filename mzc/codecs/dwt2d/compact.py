@@ -1,0 +1,204 @@
+"""The container of ``mzc-dwt2d 7.0`` (spec/dwt2d.md, Version 7.0): the magic line, then tagged
+sections, each with its own CRC-32, the first of them the header's fields in binary.
+
+A 3.x header of a face file took about 215 bytes of text; the same fields take about 60 here. The
+fields are the 3.x header lines (keyword and values), so one reader checks them all
+(mzc.formats.header.Header and the codec's read_codec_fields): this module turns the lines into
+bytes and back, and ``mzc info`` prints them as the text lines they stand for. A section's tag
+says what it holds, so a later version adds a section (a colour layer) without changing these.
+"""
+
+import struct
+import zlib
+from decimal import Decimal
+
+from mzc.codecs.dwt2d.entropy import varint
+from mzc.errors import MzcError
+from mzc.formats.header import CHECKSUM, Header, format_number
+
+MAGIC = b"mzc-dwt2d 7.0\n"
+HEADER, PAYLOAD = 1, 2          # section tags, in the order they come
+CRC = struct.Struct("<I")
+MAX_VARINT_BYTES = 10           # an unsigned 64-bit integer
+MAX_DIGITS = 40                 # a decimal's mantissa (repr of a binary64 has at most 17 digits)
+MAX_EXPONENT = 400
+# field id -> (keyword, type): u unsigned integers, d decimal numbers, e one word of a list, t text (one string)
+FIELDS = {
+    1: ("rows", "u"), 2: ("cols", "u"), 3: ("d1", "d"), 4: ("d2", "d"), 5: ("origin", "d"),
+    6: ("projection", "e"), 7: ("radius", "d"), 8: ("transform", "d"), 9: ("units", "t"), 10: ("nodata", "t"),
+    11: ("crs", "t"), 12: ("raster", "t"), 13: ("chart_count", "u"), 14: ("wavelet", "e"), 15: ("levels", "u"),
+    16: ("steps", "d"), 17: ("slope_limit", "d"), 18: ("correction", "d"), 19: ("rounding", "e"),
+    20: ("max_error", "d"),
+}
+IDS = {keyword: (number, kind) for number, (keyword, kind) in FIELDS.items()}
+SMALL_EXPONENTS, EXPONENT_BIAS = (-8, 6), 8   # a decimal exponent in this range shares the mantissa's varint
+WORDS = ("planar", "cylindrical", "spherical", "bior4.4", "bior2.2", "integer")   # the words of ``e`` fields
+
+
+# --------------------------------------------------------------------------- writing
+
+
+def signed(magnitude, negative):
+    """A signed integer as an unsigned one, 2|v| + 1 when negative: -0 (of -0.0) is 1, not 0."""
+    return 2 * magnitude + int(negative)
+
+
+def decimal_bytes(word):
+    """A number written as ``word`` (the shortest text of a binary64) as its decimal digits m (signed,
+    -0 kept) and exponent e: one varint 16 s(m) + e + 8 for e in -8..6, else 16 s(m) + 15 and a varint
+    s(e), s being ``signed``. The text it reads back as is the number itself, on every machine; 0, 1
+    and 0.5 take a byte (a face's transform is nine of them)."""
+    sign, digits, exponent = Decimal(word).as_tuple()
+    mantissa = signed(int("".join(map(str, digits)) or "0"), sign)
+    if SMALL_EXPONENTS[0] <= exponent <= SMALL_EXPONENTS[1]:
+        return varint(16 * mantissa + exponent + EXPONENT_BIAS)
+    return varint(16 * mantissa + 15) + varint(signed(abs(exponent), exponent < 0))
+
+
+def field_bytes(line):
+    """One header line (``keyword values...``) as its field id, value count and values."""
+    keyword, *words = line.split()
+    number, kind = IDS[keyword]
+    if kind == "t":
+        text = " ".join(words).encode("utf-8")
+        return varint(number) + varint(len(text)) + text
+    if kind == "e":
+        return varint(number) + varint(WORDS.index(words[0]))
+    values = [varint(int(w)) for w in words] if kind == "u" else [decimal_bytes(w) for w in words]
+    return varint(number) + varint(len(values)) + b"".join(values)
+
+
+def section(tag, body, before=b""):
+    """A section: its tag, the varint length of ``body``, ``body``, then the CRC-32 (little-endian) of
+    ``before`` (the magic line, for the header section) and the section's bytes so far."""
+    head = bytes([tag]) + varint(len(body)) + body
+    return head + CRC.pack(zlib.crc32(head, zlib.crc32(before)))
+
+
+def file_bytes(lines, payload):
+    """The 7.0 file of the header ``lines`` (3.x's, without the magic and ``data`` lines) and the payload."""
+    fields = b"".join(field_bytes(line) for line in lines)
+    return MAGIC + section(HEADER, fields, MAGIC) + section(PAYLOAD, payload)
+
+
+# --------------------------------------------------------------------------- reading
+
+
+class Reader:
+    """Reads the bytes of one 7.0 file front to back; every failure is a one-line MzcError."""
+
+    def __init__(self, data, source):
+        self.data, self.source = memoryview(data), source
+        self.position = bytes(self.data[:len(MAGIC) + 1]).find(b"\n") + 1   # after the magic line
+        if self.data[self.position - 2:self.position] == b"\r\n":
+            raise self.error("the magic line ends in CRLF: the file was copied as text, which changes its binary "
+                             "bytes; copy mzc files as binary", CHECKSUM)
+
+    def error(self, message, field="data"):
+        return MzcError(message, source=self.source, field=field)
+
+    def varint(self, end=None):
+        """One unsigned LEB128 integer (at most MAX_VARINT_BYTES bytes) that ends before ``end``."""
+        end = len(self.data) if end is None else end
+        value = 0
+        for shift in range(0, 7 * MAX_VARINT_BYTES, 7):
+            if self.position >= end:
+                raise self.error("the file ends inside a number" if end == len(self.data)
+                                 else "a header field runs past its section")
+            byte = self.data[self.position]
+            self.position += 1
+            value |= (byte & 0x7F) << shift
+            if not byte & 0x80:
+                return value
+        raise self.error(f"a number longer than {MAX_VARINT_BYTES} bytes")
+
+    def section(self, tag, before=b""):
+        """The body of the next section, which must be ``tag``'s, its CRC-32 checked."""
+        start = self.position
+        if start >= len(self.data):
+            raise self.error(f"the file ends before its section {tag}")
+        if self.data[start] != tag:
+            raise self.error(f"section tag {self.data[start]} where section {tag} belongs")
+        self.position += 1
+        length = self.varint()
+        end = self.position + length
+        if end + CRC.size > len(self.data):
+            raise self.error(f"the file ends inside section {tag} (cut short?)")
+        stated = CRC.unpack_from(self.data, end)[0]
+        if zlib.crc32(self.data[start:end], zlib.crc32(before)) != stated:
+            raise self.error(f"checksum mismatch: section {tag} of the file is corrupt (damaged, or bytes changed)",
+                             CHECKSUM)
+        body, self.position = bytes(self.data[self.position:end]), end + CRC.size
+        return body
+
+    def decimal(self, end):
+        """A number of ``decimal_bytes`` as the text 3.x writes for it."""
+        head = self.varint(end)
+        mantissa, low = head >> 4, head & 15
+        exponent = unsigned(self.varint(end)) if low == 15 else low - EXPONENT_BIAS
+        if mantissa >= 2 * 10 ** MAX_DIGITS or abs(exponent) > MAX_EXPONENT:
+            raise self.error("a header number has too many digits")
+        return format_number(float(f"{'-' if mantissa % 2 else ''}{mantissa // 2}e{exponent}"))
+
+    def header(self):
+        """The Header of the header section (keywords and their value words, as a 3.x header's lines)."""
+        magic = bytes(self.data[:self.position])
+        body = self.section(HEADER, magic)
+        fields = Reader(magic + body, self.source)
+        header = Header(self.source, 7, projected=True, georeferenced=True, charted=True)
+        end = len(fields.data)
+        while fields.position < end:
+            number = fields.varint(end)
+            if number not in FIELDS:
+                raise self.error(f"unknown header field {number}")
+            keyword, kind = FIELDS[number]
+            if header.has(keyword):
+                raise self.error(f"header field {keyword} given twice")
+            header.add(keyword, fields.words(kind, end), None)
+        return header
+
+    def words(self, kind, end):
+        """The value words of one field of ``kind`` (FIELDS) ending before ``end``."""
+        if kind == "e":
+            index = self.varint(end)
+            if index >= len(WORDS):
+                raise self.error(f"word number {index} of a header field is not 0..{len(WORDS) - 1}")
+            return [WORDS[index]]
+        count = self.varint(end)
+        if kind == "t":
+            if self.position + count > end:
+                raise self.error("a header field runs past its section")
+            text, self.position = bytes(self.data[self.position:self.position + count]), self.position + count
+            try:
+                return text.decode("utf-8").split()
+            except UnicodeDecodeError:
+                raise self.error("a header text is not UTF-8") from None
+        if count > end - self.position:
+            raise self.error("a header field runs past its section")
+        return [str(self.varint(end)) if kind == "u" else self.decimal(end) for _ in range(count)]
+
+    def check_end(self):
+        """Refuse bytes after the last section (added to the file, which its sections' CRC-32s do not cover)."""
+        if self.position != len(self.data):
+            raise self.error(f"checksum mismatch: {len(self.data) - self.position} byte(s) after the last section "
+                             "(added to the file)", CHECKSUM)
+
+
+def unsigned(value):
+    """The integer of ``signed`` (-0 as 0)."""
+    return -(value // 2) if value % 2 else value // 2
+
+
+def is_compact(data):
+    """True when ``data`` starts as a 7.x file."""
+    return bytes(data[:len(MAGIC) - 2]) == MAGIC[:-2]
+
+
+def read(data, source):
+    """(Header, payload bytes) of a 7.0 file."""
+    reader = Reader(data, source)
+    header = reader.header()
+    payload = reader.section(PAYLOAD)
+    reader.check_end()
+    return header, payload
+
