@@ -14,6 +14,7 @@ from hypothesis import strategies as st
 import mzc as api
 from mzc.codecs import dwt2d
 from mzc.errors import MzcError
+from mzc.formats.header import split_magic
 from mzc.grid import Raster, ZGrid
 
 from codec_contract import header_fields, rechecksummed

@@ -176,6 +176,7 @@ def python_decode(data, name):
 def test_every_expected_zgrid_decodes_as_mzc_decodes_it():
     """The fixtures' expectations: plain z-grids of every kind of grid (a raw one for charts)."""
     paths = [FIXTURES / f"{name}.expected.zg" for name in fixture_names()]
+    paths = [path for path in paths if split_magic(path.read_bytes(), path.name)[1] <= READS["zgrid"][1]]
     for path, result in zip(paths, node_decode_all(paths)):
         assert "zgrid" in result, (path.name, result)
         assert bytes.fromhex(result["zgrid"]) == python_decode(path.read_bytes(), path.name), path.name

@@ -659,10 +659,10 @@ def rounding_bounds(grid, max_error):
 
 
 def read_rounding(header, fields, since):
-    """True when a header of version ``since`` or later has the ``rounding`` line (checked: its one
-    value, and a ``raster`` line of an integer type among the grid ``fields``); before, the line is
-    ignored (spec/dwt2d.md, Rounding; Tiled files)."""
-    if header.major != since[0] or header.minor < since[1] or not header.has("rounding"):
+    """True when a header of version ``since`` or later (6.0 and 7.0 files, 5.1 tiled ones) has the
+    ``rounding`` line (checked: its one value, and a ``raster`` line of an integer type among the grid
+    ``fields``); before, the line is ignored (spec/dwt2d.md, Rounding; Tiled files)."""
+    if (header.major, header.minor) < since or not header.has("rounding"):
         return False
     header.word("rounding", (ROUNDING,))
     if fields.get("raster") is None or np.dtype(fields["raster"].sample).kind not in "iu":
