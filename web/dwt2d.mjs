@@ -1,9 +1,11 @@
-// The 2D wavelet codec `mzc-dwt2d` 2.0, 3.0, 3.1, 3.2, 4.0, 5.0 (tiles), 5.1 (rounded tiles) and 6.0 (rounding)
+// The 2D wavelet codec `mzc-dwt2d` 2.0, 3.0, 3.1, 3.2, 4.0, 5.0 (tiles), 5.1 (rounded tiles), 6.0 (rounding)
+// and 7.0 (binary header and parametric tables, in the sections of compact.mjs)
 // (spec/dwt2d.md): header, payload (tables, rANS, raw bits), mask, relevance, bands, slope
 // factors, inverse transform, correction layer, chart records, rounding and tiles.
 
 import { fail, headerFields, fieldReader, gridFields, checkChecksum, checkCharts, VIEWS, crc32, splitHeader, parseMagic } from "./header.mjs";
 import { cos } from "./elementary.mjs";
+import { sections, headerLines, HEADER, PAYLOAD } from "./compact.mjs";
 import { inversePeriodized2d, relevantPeriodized2d } from "./pywt.mjs";
 
 const WAVELETS_3 = ["bior4.4", "bior2.2"];
@@ -13,12 +15,24 @@ const WAVELETS_2 = ["bior4.4", "bior2.2", "bior3.3", "db2", "db4", "sym4", "coif
 export function decodeDwt2d(bytes, lines, body, magic) {
   if (magic.major === 5) return decodeTiled(bytes, lines, body, magic);
   const fields = headerFields(lines, false);
-  const h = fieldReader(fields);
   checkChecksum(bytes, lines, fields, magic.major >= 4 || (magic.major === 3 && magic.minor >= 1));
-  const georef = magic.major === 6 || (magic.major === 3 && magic.minor >= 2);
+  return decodeWhole(fields, bytes.subarray(body), magic);
+}
+
+/** Decodes a 7.0 file (bytes; the end of its magic line; its magic): its two sections, the
+ * header's fields read as the lines they stand for, the payload with 7.0's table records. */
+export function decodeCompact(bytes, magicEnd, magic) {
+  const bodies = sections(bytes, magicEnd, [HEADER, PAYLOAD]);
+  return decodeWhole(headerLines(bodies[HEADER]), bodies[PAYLOAD], magic);
+}
+
+/** Decodes a grid coded whole from its header lines (keyword -> words) and its payload. */
+function decodeWhole(fields, bytes, magic) {
+  const h = fieldReader(fields);
+  const georef = magic.major >= 6 || (magic.major === 3 && magic.minor >= 2);
   const grid = gridFields(h, { projected: magic.major >= 3, georef });
   const p = codecFields(h, magic, grid);
-  const payload = new Payload(bytes.subarray(body));
+  const payload = new Payload(bytes, magic.major >= 7);
   const z = decodeGrid(payload, grid, p);
   const charts = p.chartCount ? chartRecords(payload, p.chartCount, grid, z) : undefined;
   payload.finish();
@@ -146,10 +160,11 @@ const SAME_SIZE = [range(4, 14), range(15, 22), range(23, 26)];   // detail, sig
 
 /** A reader of the payload: its tables, its rANS state and its raw-bit cursor. */
 class Payload {
-  constructor(bytes) {
+  /** `parametric`: 7.0's table records (Tables of 7.0), else 3.x's. */
+  constructor(bytes, parametric) {
     this.bytes = bytes;
     this.at = 0;
-    this.tables = this.readTables();
+    this.tables = this.readTables(parametric);
     this.startRans();
     this.bitAt = this.at * 8;
   }
@@ -167,34 +182,55 @@ class Payload {
   }
 
   /** The M model tables, each a lookup from a 14-bit slot to its class. */
-  readTables() {
+  readTables(parametric) {
     const m = this.varint("tables");
     if (m > 4096) fail("tables", `${m} tables (at most 4096)`);
     const tables = [];
     for (let t = 0; t < m; t++) {
-      const s = this.varint("tables");
+      let s = this.varint("tables");
       if (s === 0) {
         if (!t) fail("tables", "the first table repeats none");
         tables.push(tables[t - 1]);
         continue;
       }
+      const kind = parametric ? s % 2 : 0;
+      if (parametric) s = Math.floor(s / 2);
       if (s < 2 || s > 48) fail("tables", `a table of ${s} classes (2..48)`);
-      const nbytes = Math.ceil((6 * s) / 8);
-      if (this.at + nbytes > this.bytes.length) fail("tables", "the payload is cut short");
-      const codes = [];
-      for (let i = 0; i < s; i++) {
-        const bit = i * 6;
-        const word = (this.bytes[this.at + (bit >> 3)] << 8) | (this.bytes[this.at + (bit >> 3) + 1] ?? 0);
-        codes.push((word >> (10 - (bit & 7))) & 63);
-      }
-      this.at += nbytes;
-      tables.push(frequencyTable(codes));
+      tables.push(frequencyTable(kind ? this.parametricWeights(s) : this.codeWeights(s)));
     }
     for (const group of SAME_SIZE) {
       const sizes = new Set(group.filter((m) => m < tables.length).map((m) => tables[m].freq.length));
       if (sizes.size > 1) fail("tables", "tables mixed in one row have different class counts");
     }
     return tables;
+  }
+
+  /** The weights of S 6-bit weight codes, most significant bit first (Tables). */
+  codeWeights(s) {
+    const nbytes = Math.ceil((6 * s) / 8);
+    if (this.at + nbytes > this.bytes.length) fail("tables", "the payload is cut short");
+    const weights = [];
+    for (let i = 0; i < s; i++) {
+      const bit = i * 6;
+      const word = (this.bytes[this.at + (bit >> 3)] << 8) | (this.bytes[this.at + (bit >> 3) + 1] ?? 0);
+      const e = (word >> (10 - (bit & 7))) & 63;
+      weights.push(e === 0 ? 0n : BigInt(WEIGHT_MANTISSA[e % 4]) << BigInt(e >> 2));
+    }
+    this.at += nbytes;
+    return weights;
+  }
+
+  /** The weights of a parametric table of S classes from its bytes z and t (Tables of 7.0). */
+  parametricWeights(s) {
+    if (this.at + 2 > this.bytes.length) fail("tables", "the payload is cut short");
+    const z = BigInt(this.bytes[this.at]);
+    const t = this.bytes[this.at + 1];
+    this.at += 2;
+    const theta = ONE - (ROOTS[t % 16] >> BigInt(t >> 4));
+    const tails = [];
+    for (let k = 1; k < s; k++) tails.push(power(theta, 2 ** (k - 1) - 1));
+    tails.push(0n);
+    return [z << 32n, ...tails.slice(0, -1).map((tail, k) => (256n - z) * (tail - tails[k + 1]))];
   }
 
   /** Reads the W words and sets the 64-bit state (hi, lo) from the last ones popped. */
@@ -272,14 +308,18 @@ class Payload {
   }
 }
 
-/** A table's frequencies (summing to 16384) from its weight codes, with the lookup of a
- * 14-bit slot to its class and the cumulative frequencies. */
-function frequencyTable(codes) {
-  const s = codes.length;
-  const weights = codes.map((e) => (e === 0 ? 0 : WEIGHT_MANTISSA[e % 4] * 2 ** (e >> 2)));
-  const total = weights.reduce((a, b) => a + b, 0);
-  const freq = weights.map((w) => (total === 0 ? 1 : 1 + Math.floor((w * (TOTAL - s)) / total)));
-  const largest = weights.indexOf(Math.max(...weights));
+/** A table's frequencies (summing to 16384) from its integer weights (BigInts: a parametric
+ * table's reach 2^40, their products 2^54), with the lookup of a 14-bit slot to its class and
+ * the cumulative frequencies. */
+function frequencyTable(weights) {
+  const s = weights.length;
+  const total = weights.reduce((a, b) => a + b, 0n);
+  const spare = BigInt(TOTAL - s);
+  const freq = weights.map((w) => (total === 0n ? 1 : 1 + Number((w * spare) / total)));
+  let largest = 0;
+  weights.forEach((w, i) => {
+    if (w > weights[largest]) largest = i;
+  });
   freq[largest] += TOTAL - freq.reduce((a, b) => a + b, 0);
   const cum = [];
   const slot = new Uint8Array(TOTAL);
@@ -288,6 +328,22 @@ function frequencyTable(codes) {
     slot.fill(i, c, c + freq[i]);
   }
   return { freq, cum, slot };
+}
+
+const ONE = 1n << 32n;
+/** R[i] = floor(2^(32 - i/16)) (Tables of 7.0). */
+const ROOTS = [4294967296n, 4112874773n, 3938502375n, 3771522796n, 3611622602n, 3458501653n, 3311872529n,
+  3171459999n, 3037000499n, 2908241642n, 2784941737n, 2666869344n, 2553802833n, 2445529971n, 2341847523n, 2242560871n];
+
+/** theta^n in 32-bit fixed point by squaring, every product floored (exact integers). */
+function power(theta, n) {
+  let result = ONE;
+  let base = theta;
+  for (; n; n = Math.floor(n / 2)) {
+    if (n % 2) result = (result * base) >> 32n;
+    base = (base * base) >> 32n;
+  }
+  return result;
 }
 
 // ---------------------------------------------------------------------------------------
