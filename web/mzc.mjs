@@ -18,7 +18,7 @@ export { MzcError, writeZgrid, formatNumber };
 const DECODERS = { dwt2d: decodeDwt2d, zgrid: decodeZgrid, ...ROW_CODECS };
 
 /** The major versions read of each kind, [oldest, newest] (tests/test_web.py asks for them). */
-export const READS = { dwt2d: [2, 7], zgrid: [1, 4], poly: [1, 2], dft: [1, 2], dct: [1, 2], dwt: [1, 2] };
+export const READS = { dwt2d: [2, 7], zgrid: [1, 5], poly: [1, 2], dft: [1, 2], dct: [1, 2], dwt: [1, 2] };
 
 /** Decodes the bytes of an mzc file into its grid; throws MzcError on any bad file. */
 export function decode(bytes) {
