@@ -196,7 +196,7 @@ class Payload {
       const kind = parametric ? s % 2 : 0;
       if (parametric) s = Math.floor(s / 2);
       if (s < 2 || s > 48) fail("tables", `a table of ${s} classes (2..48)`);
-      tables.push(frequencyTable(kind ? this.parametricWeights(s) : this.codeWeights(s)));
+      tables.push(frequencyTable(kind ? this.parametricRecord(s) : this.codeWeights(s)));
     }
     for (const group of SAME_SIZE) {
       const sizes = new Set(group.filter((m) => m < tables.length).map((m) => tables[m].freq.length));
@@ -220,17 +220,11 @@ class Payload {
     return weights;
   }
 
-  /** The weights of a parametric table of S classes from its bytes z and t (Tables of 7.0). */
-  parametricWeights(s) {
+  /** A parametric table's weights (S classes) from its bytes z and t. */
+  parametricRecord(s) {
     if (this.at + 2 > this.bytes.length) fail("tables", "the payload is cut short");
-    const z = BigInt(this.bytes[this.at]);
-    const t = this.bytes[this.at + 1];
     this.at += 2;
-    const theta = ONE - (ROOTS[t % 16] >> BigInt(t >> 4));
-    const tails = [];
-    for (let k = 1; k < s; k++) tails.push(power(theta, 2 ** (k - 1) - 1));
-    tails.push(0n);
-    return [z << 32n, ...tails.slice(0, -1).map((tail, k) => (256n - z) * (tail - tails[k + 1]))];
+    return parametricWeights(s, this.bytes[this.at - 2], this.bytes[this.at - 1]);
   }
 
   /** Reads the W words and sets the 64-bit state (hi, lo) from the last ones popped. */
@@ -311,7 +305,7 @@ class Payload {
 /** A table's frequencies (summing to 16384) from its integer weights (BigInts: a parametric
  * table's reach 2^40, their products 2^54), with the lookup of a 14-bit slot to its class and
  * the cumulative frequencies. */
-function frequencyTable(weights) {
+export function frequencyTable(weights) {
   const s = weights.length;
   const total = weights.reduce((a, b) => a + b, 0n);
   const spare = BigInt(TOTAL - s);
@@ -334,6 +328,17 @@ const ONE = 1n << 32n;
 /** R[i] = floor(2^(32 - i/16)) (Tables of 7.0). */
 const ROOTS = [4294967296n, 4112874773n, 3938502375n, 3771522796n, 3611622602n, 3458501653n, 3311872529n,
   3171459999n, 3037000499n, 2908241642n, 2784941737n, 2666869344n, 2553802833n, 2445529971n, 2341847523n, 2242560871n];
+
+/** The BigInt weights of a parametric table of S classes with bytes z and t (Tables of 7.0):
+ * class 0 z/256 of the mass, class k >= 1 the |v| in 2^(k-1) .. 2^k - 1 of a |v| - 1 geometric of
+ * ratio theta / 2^32, the last class the whole tail. */
+export function parametricWeights(s, z, t) {
+  const theta = ONE - (ROOTS[t % 16] >> BigInt(t >> 4));
+  const tails = [];
+  for (let k = 1; k < s; k++) tails.push(power(theta, 2 ** (k - 1) - 1));
+  tails.push(0n);
+  return [BigInt(z) << 32n, ...tails.slice(0, -1).map((tail, k) => BigInt(256 - z) * (tail - tails[k + 1]))];
+}
 
 /** theta^n in 32-bit fixed point by squaring, every product floored (exact integers). */
 function power(theta, n) {
