@@ -159,7 +159,7 @@ const range = (from, to) => Array.from({ length: to - from + 1 }, (_, i) => from
 const SAME_SIZE = [range(4, 14), range(15, 22), range(23, 26)];   // detail, sign and correction tables
 
 /** A reader of the payload: its tables, its rANS state and its raw-bit cursor. */
-class Payload {
+export class Payload {
   /** `parametric`: 7.0's table records (Tables of 7.0), else 3.x's. */
   constructor(bytes, parametric) {
     this.bytes = bytes;
@@ -414,7 +414,7 @@ function decodeMask(payload, rows, cols) {
 
 /** The bands' shapes in band order, each {rows, cols, level, orient (0 band 0, 1 H, 2 V, 3 D)}:
  * in 3.0 ceil/floor halves of each level, in 2.0 (periodization) ceil halves. */
-function bandShapes(rows, cols, p) {
+export function bandShapes(rows, cols, p) {
   const levels = [];
   let r = rows;
   let c = cols;
@@ -439,7 +439,7 @@ function bandShapes(rows, cols, p) {
 
 /** Band 0's integers from their planar residuals: cumulative sums down the columns, then
  * along the rows (Order of the integers, 4). */
-function decodeBand0(payload, shape) {
+export function decodeBand0(payload, shape) {
   const { rows, cols } = shape;
   const q = new Float64Array(rows * cols);
   for (let i = 0; i < q.length; i++) q[i] = payload.signed(3);
@@ -456,7 +456,7 @@ const at = (q, shape, r, c) => (r >= 0 && c >= 0 && r < shape.rows && c < shape.
 
 /** The integers of detail band b, row by row in even and odd passes: magnitudes grouped by
  * context, then the signs of the nonzero ones (Order of the integers, 5). */
-function decodeDetail(payload, q, b, shapes, relevant, p) {
+export function decodeDetail(payload, q, b, shapes, relevant, p) {
   const shape = shapes[b];
   const { rows, cols } = shape;
   const out = new Float64Array(rows * cols);
@@ -506,7 +506,7 @@ function decodeDetail(payload, q, b, shapes, relevant, p) {
 
 /** The correction integers k at the valid nodes, row by row in two passes, by context
  * (Order of the integers, 6). */
-function decodeCorrection(payload, mask, rows, cols) {
+export function decodeCorrection(payload, mask, rows, cols) {
   const k = new Float64Array(rows * cols);
   const shape = { rows, cols };
   for (let r = 0; r < rows; r++) {
@@ -578,7 +578,7 @@ function transpose(a, r, c) {
 
 /** The relevant coefficients of every band (3.0): each level's marks along the rows, then
  * down the columns of both halves; band 0's marks are the next level's mask. */
-function relevance3(mask, rows, cols, p, periodic) {
+export function relevance3(mask, rows, cols, p, periodic) {
   const reach = LIFTING[p.wavelet].reach;
   const detail = [];
   let current = mask;
@@ -695,21 +695,21 @@ function linear(get, n, m) {
 }
 
 /** The inverse 3.0 transform of the dequantised bands: coarsest level first, each level
- * columns before rows. */
-function inverse3(bands, shapes, rows, cols, p, periodic) {
-  const lift = LIFTING[p.wavelet];
+ * columns before rows. `merge(low, high, n, wrap)` is one inverse level of a signal: by default
+ * the lifting of p.wavelet (the colour section's integer 5/3 gives its own). */
+export function inverse3(bands, shapes, rows, cols, p, periodic, merge = liftingMerge(LIFTING[p.wavelet])) {
   let low = bands[0];
   for (let l = p.levels; l >= 1; l--) {
     const b = 1 + 3 * (p.levels - l);
     const { r, c } = shapes[b].input;
     const lc = Math.ceil(c / 2);
     const hc = c - lc;
-    const rowLow = mergeColumns(low, bands[b], r, lc, lift);
-    const rowHigh = mergeColumns(bands[b + 1], bands[b + 2], r, hc, lift);
+    const rowLow = mergeColumns(low, bands[b], r, lc, merge);
+    const rowHigh = mergeColumns(bands[b + 1], bands[b + 2], r, hc, merge);
     const wrap = periodic && c % 2 === 0 && c > 2;
     const out = new Float64Array(r * c);
     for (let i = 0; i < r; i++) {
-      out.set(inverseLevel(rowLow.subarray(i * lc, (i + 1) * lc), rowHigh.subarray(i * hc, (i + 1) * hc), c, lift, wrap), i * c);
+      out.set(merge(rowLow.subarray(i * lc, (i + 1) * lc), rowHigh.subarray(i * hc, (i + 1) * hc), c, wrap), i * c);
     }
     low = out;
   }
@@ -717,14 +717,17 @@ function inverse3(bands, shapes, rows, cols, p, periodic) {
 }
 
 /** Columns of a low (ceil(r/2) x w) and a high (floor(r/2) x w) half merged into r x w. */
-function mergeColumns(lo, hi, r, w, lift) {
+function mergeColumns(lo, hi, r, w, merge) {
   const lr = (r + 1) >> 1;
   const low = transpose(lo, lr, w);
   const high = transpose(hi, r - lr, w);
   const out = new Float64Array(w * r);
-  for (let j = 0; j < w; j++) out.set(inverseLevel(low.subarray(j * lr, (j + 1) * lr), high.subarray(j * (r - lr), (j + 1) * (r - lr)), r, lift, false), j * r);
+  for (let j = 0; j < w; j++) out.set(merge(low.subarray(j * lr, (j + 1) * lr), high.subarray(j * (r - lr), (j + 1) * (r - lr)), r, false), j * r);
   return transpose(out, w, r);
 }
+
+/** The inverse level of a wavelet's lifting steps, as a merge of inverse3. */
+const liftingMerge = (lift) => (low, high, n, wrap) => inverseLevel(low, high, n, lift, wrap);
 
 /** One inverse level of an n-sample signal from its low and high coefficients: undo the
  * scales, then the lifting steps from the last to the first (a d step reads only s and an
