@@ -1,7 +1,8 @@
 // mzc's decoders in one dependency-free ES module, written from spec/ alone.
 //
 //   import { decode, writeZgrid } from "./mzc.mjs";
-//   const grid = decode(bytes);     // {kind, version, rows, cols, z: Float64Array, d1, d2, ...}
+//   const grid = decode(bytes);     // {kind, version, rows, cols, z: Float64Array, d1, d2, ...,
+//                                   //  colors: Uint8Array rows * cols * 3 of a z-grid 5.x}
 //   const zg = writeZgrid(grid);    // the raw float64 z-grid `mzc decode` writes
 //
 // decode() reads the formats of DECODERS below. Every bad file throws an MzcError with one
