@@ -4,10 +4,8 @@ the lossless integer 5/3), the spec's worked example and fresh sections of rando
 masks; damaged sections (cut, bytes added, bytes changed under a right CRC-32, another mask)
 refused where mzc refuses them and decoded alike otherwise. Skipped when node is not installed."""
 
-import json
 import random
 import shutil
-import subprocess
 import zlib
 
 import numpy as np
@@ -15,13 +13,13 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 from test_colour_codec import spec_example
+from test_web_compact import node_json
 
 from mzc.codecs.dwt2d import colour
 from mzc.errors import MzcError
 
 from codec_contract import FIXTURES
 
-WEB = FIXTURES.parents[1] / "web"
 NODE = shutil.which("node")
 COLOUR_FIXTURES = FIXTURES / "colour"
 
@@ -47,12 +45,8 @@ process.stdout.write(JSON.stringify(cases.map(({ section, rows, cols, mask }) =>
 
 def web_decoded(cases):
     """decodeColour's image bytes (hex) for each (section, mask), None where it refuses it."""
-    payload = [{"section": section.hex(), "rows": mask.shape[0], "cols": mask.shape[1],
-                "mask": mask.astype(np.uint8).tobytes().hex()} for section, mask in cases]
-    run = subprocess.run([NODE, "--input-type=module", "-e", SCRIPT], input=json.dumps(payload).encode(),
-                         capture_output=True, cwd=WEB, timeout=300)
-    assert run.returncode == 0, run.stderr.decode()
-    return json.loads(run.stdout)
+    return node_json(SCRIPT, [{"section": section.hex(), "rows": mask.shape[0], "cols": mask.shape[1],
+                               "mask": mask.astype(np.uint8).tobytes().hex()} for section, mask in cases])
 
 
 def mzc_decoded(section, mask):
