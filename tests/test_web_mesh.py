@@ -17,6 +17,7 @@ from test_zipper import bored_box, cube, hemisphere, sphere, torus, two_spheres
 from mzc.formats import read_any, zgrid
 from mzc.grid import Chart, ZGrid
 from mzc.meshes.obj import write as obj_bytes
+from mzc.ops.colouring import nearest_colours
 from mzc.ops.triangulation import CHART_JUMP_ANGLE, GridMesh, grid_to_mesh
 from mzc.ops.zipper import zip_charts
 
@@ -122,6 +123,27 @@ def test_charts_zip_as_mzc_zips_them(tmp_path):
     assert_same_mesh(ZGrid(z, d1=0.5, d2=0.5, transform=transform, charts=charts), tmp_path, None, 0, 5)
 
 
+def coloured(grid, rng):
+    """``grid`` with a random colour at every node (0 0 0 at its invalid ones, as mzc keeps them)."""
+    return grid.with_z(grid.z, colors=rng.integers(0, 256, (*grid.z.shape, 3), dtype=np.uint8))
+
+
+def test_coloured_grids_give_their_vertices_their_nodes_colours(tmp_path):
+    """A coloured grid (mzc-zgrid 5.0) gives each vertex its node's colour, a pole's vertex its first
+    valid node's, the zipper's added points their nearest chart point's, as mzc's OBJ has them."""
+    rng = np.random.default_rng(38)
+    radius = 20.0
+    z = heights(rng, (9, 12), radius, 0.5, 9)
+    z[0, :2] = np.nan
+    sphere_grid = ZGrid(z, d1=np.pi * radius / 8, d2=2 * np.pi * radius / 12, origin=(0, -np.pi * radius / 2),
+                        projection="spherical", radius=radius)
+    assert_same_mesh(coloured(sphere_grid, rng), tmp_path, None, 0)
+    run_mzc("sample", "blob", "-o", tmp_path / "blob.obj", check=True)
+    run_mzc("slice", tmp_path / "blob.obj", "--charts", "6", "-o", tmp_path / "blob.zg", check=True)
+    blob = read_any((tmp_path / "blob.zg").read_bytes(), "blob.zg")
+    assert_same_mesh(coloured(blob, rng), tmp_path)
+
+
 def chart_triangle_count(grid):
     """How many triangles ``grid``'s charts' meshes have before the zipper."""
     return sum(len(GridMesh(chart, CHART_JUMP_ANGLE).mesh().triangles) for chart in grid.chart_grids())
@@ -212,6 +234,48 @@ def test_zip_charts_gives_mzc_zippers_points_and_triangles(tmp_path):
     assert len(stitched) > len(SURFACES) + 20   # nor soups
 
 
+NEAREST_SCRIPT = """
+import { readFileSync } from "node:fs";
+import { nearestColours } from "./zipper.mjs";
+const cases = JSON.parse(readFileSync(process.argv[1], "utf8"));
+process.stdout.write(JSON.stringify(cases.map(({ points, count, colors }) =>
+  Array.from(nearestColours(Float64Array.from(points), count, Uint8Array.from(colors))))));
+"""
+
+
+def test_points_the_zipper_adds_take_their_nearest_points_colour(tmp_path):
+    """nearestColours colours the points mzc's zipper adds (zip_charts on the zipper cases) as
+    mzc.ops.colouring.nearest_colours does: the colour of the nearest of the charts' points, where
+    one is nearest; of equally near ones (an added point midway on a cube's edge) the spec names
+    none (mzc takes its search tree's), web/ the first: both then give one of theirs."""
+    import json
+
+    cases = []
+    for name, points, triangles, chart, spacing in zip_cases():
+        zipped = zip_charts(points, triangles, chart, spacing)[0]
+        if len(zipped) > len(points):
+            colours = np.random.default_rng(len(cases)).integers(0, 256, (len(points), 3), dtype=np.uint8)
+            cases.append((name, zipped, len(points), colours))
+    assert len(cases) > 5
+    (tmp_path / "cases.json").write_text(json.dumps([
+        {"points": zipped.ravel().tolist(), "count": count, "colors": colours.ravel().tolist()}
+        for _name, zipped, count, colours in cases]))
+    run = subprocess.run([NODE, "--input-type=module", "-e", NEAREST_SCRIPT, str(tmp_path / "cases.json")],
+                         capture_output=True, cwd=WEB, timeout=300)
+    assert run.returncode == 0, run.stderr.decode()
+    ties = 0
+    for (name, zipped, count, colours), made in zip(cases, json.loads(run.stdout), strict=True):
+        made = np.reshape(made, (-1, 3))
+        assert np.array_equal(made[:count], colours), name
+        mzc_colours = nearest_colours(zipped[count:], zipped[:count], colours)
+        for point, got, want in zip(zipped[count:], made[count:], mzc_colours):
+            distances = ((zipped[:count] - point) ** 2).sum(axis=1)
+            nearest = colours[distances == distances.min()].tolist()
+            assert got.tolist() in nearest and want.tolist() in nearest, name
+            ties += len(nearest) > 1
+    assert ties < sum(len(zipped) - count for _name, zipped, count, _colours in cases)   # not all ties
+
+
 @pytest.fixture(scope="module")
 def with_three(tmp_path_factory):
     """A folder holding a copy of web/ as web/ and three.js from npm in node_modules (nothing of
@@ -238,8 +302,10 @@ globalThis.ProgressEvent ??= class extends Event {   // a browser's, which three
 const parsed = new MZCLoader().parse(readFileSync(path));
 const loaded = await new MZCLoader().loadAsync(url);
 const array = (attribute) => Array.from(attribute.array);
+const color = parsed.attributes.color;
 process.stdout.write(JSON.stringify({ info: parsed.userData.mzc, position: array(parsed.attributes.position),
-  normal: parsed.attributes.normal.count, index: array(parsed.index), loaded: array(loaded.index) }));
+  normal: parsed.attributes.normal.count, index: array(parsed.index), loaded: array(loaded.index),
+  color: color && { values: array(color), normalized: color.normalized, type: color.array.constructor.name } }));
 """
 
 
@@ -267,7 +333,7 @@ def served():
     server.shutdown()
 
 
-@pytest.mark.parametrize("name", ["dwt2d-3.0.mzw2", "zgrid-2.0.zg", "dwt2d-4.0.mzw2"])
+@pytest.mark.parametrize("name", ["dwt2d-3.0.mzw2", "zgrid-2.0.zg", "dwt2d-4.0.mzw2", "dwt2d-7.0.mzw2", "zgrid-5.0.zg"])
 def test_three_loader_gives_mzc_mesh_as_a_buffer_geometry(with_three, served, name):
     import json
 
@@ -288,6 +354,10 @@ def test_three_loader_gives_mzc_mesh_as_a_buffer_geometry(with_three, served, na
     assert info["centre"] == centre.tolist()
     assert np.array_equal(np.float32(made["position"]), (mesh.points - centre).astype(np.float32).ravel())
     assert made["index"] == made["loaded"] == mesh.triangles.ravel().tolist()
+    if mesh.colors is None:
+        assert "color" not in made
+    else:   # a coloured grid's vertex colours, uint8 read as 0..1
+        assert made["color"] == {"values": mesh.colors.ravel().tolist(), "normalized": True, "type": "Uint8Array"}
 
 
 RECENTRED_SCRIPT = """

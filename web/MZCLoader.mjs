@@ -12,6 +12,9 @@
 //
 //   mesh.position.fromArray(geometry.userData.mzc.centre);
 //
+// A grid with colours (mzc-zgrid 5.x) gives a `color` attribute too: each vertex's red, green and
+// blue bytes, normalised (uint8 read as 0..1; a material with `vertexColors: true` shows them).
+//
 // Its userData.mzc says what was read: {bytes, rows, cols, nodes (valid), vertices, triangles,
 // decodeMs, triangulateMs, kind, version, units, centre}.
 
@@ -56,10 +59,11 @@ export class MZCLoader extends Loader {
     const start = performance.now();
     const grid = decode(bytes);
     const decoded = performance.now();
-    const { positions, indices } = triangulate(grid, { jumpAngle: this.jumpAngle });
+    const { positions, indices, colors } = triangulate(grid, { jumpAngle: this.jumpAngle });
     const { local, centre } = recentred(positions);
     const geometry = new BufferGeometry();
     geometry.setAttribute("position", new BufferAttribute(local, 3));
+    if (colors) geometry.setAttribute("color", new BufferAttribute(colors, 3, true));
     geometry.setIndex(new BufferAttribute(indices, 1));
     geometry.computeVertexNormals();
     geometry.userData.mzc = {

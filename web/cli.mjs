@@ -16,11 +16,15 @@ const COMMANDS = {
   triangulate: (grid, options) => objText(triangulate(grid, options)),
 };
 
-/** The OBJ mzc writes: `v x y z` in Python's repr of each float, then `f a b c` from 1. */
-function objText({ positions, indices }) {
+/** The OBJ mzc writes: `v x y z` in Python's repr of each float (then `r g b`, each level / 255,
+ * when the mesh has colours), then `f a b c` from 1. */
+function objText({ positions, indices, colors }) {
   const repr = (x) => { const s = formatNumber(x); return /^-?\d+$/.test(s) ? `${s}.0` : s; };
   const lines = [];
-  for (let i = 0; i < positions.length; i += 3) lines.push(`v ${repr(positions[i])} ${repr(positions[i + 1])} ${repr(positions[i + 2])}\n`);
+  for (let i = 0; i < positions.length; i += 3) {
+    const rgb = colors ? ` ${repr(colors[i] / 255)} ${repr(colors[i + 1] / 255)} ${repr(colors[i + 2] / 255)}` : "";
+    lines.push(`v ${repr(positions[i])} ${repr(positions[i + 1])} ${repr(positions[i + 2])}${rgb}\n`);
+  }
   for (let i = 0; i < indices.length; i += 3) lines.push(`f ${indices[i] + 1} ${indices[i + 1] + 1} ${indices[i + 2] + 1}\n`);
   return lines.join("");
 }

@@ -1,9 +1,11 @@
-// The 2D wavelet codec `mzc-dwt2d` 2.0, 3.0, 3.1, 3.2, 4.0, 5.0 (tiles), 5.1 (rounded tiles) and 6.0 (rounding)
+// The 2D wavelet codec `mzc-dwt2d` 2.0, 3.0, 3.1, 3.2, 4.0, 5.0 (tiles), 5.1 (rounded tiles), 6.0 (rounding)
+// and 7.0 (binary header and parametric tables, in the sections of compact.mjs)
 // (spec/dwt2d.md): header, payload (tables, rANS, raw bits), mask, relevance, bands, slope
 // factors, inverse transform, correction layer, chart records, rounding and tiles.
 
 import { fail, headerFields, fieldReader, gridFields, checkChecksum, checkCharts, VIEWS, crc32, splitHeader, parseMagic } from "./header.mjs";
 import { cos } from "./elementary.mjs";
+import { sections, headerLines, HEADER, PAYLOAD } from "./compact.mjs";
 import { inversePeriodized2d, relevantPeriodized2d } from "./pywt.mjs";
 
 const WAVELETS_3 = ["bior4.4", "bior2.2"];
@@ -13,12 +15,24 @@ const WAVELETS_2 = ["bior4.4", "bior2.2", "bior3.3", "db2", "db4", "sym4", "coif
 export function decodeDwt2d(bytes, lines, body, magic) {
   if (magic.major === 5) return decodeTiled(bytes, lines, body, magic);
   const fields = headerFields(lines, false);
-  const h = fieldReader(fields);
   checkChecksum(bytes, lines, fields, magic.major >= 4 || (magic.major === 3 && magic.minor >= 1));
-  const georef = magic.major === 6 || (magic.major === 3 && magic.minor >= 2);
+  return decodeWhole(fields, bytes.subarray(body), magic);
+}
+
+/** Decodes a 7.0 file (bytes; the end of its magic line; its magic): its two sections, the
+ * header's fields read as the lines they stand for, the payload with 7.0's table records. */
+export function decodeCompact(bytes, magicEnd, magic) {
+  const bodies = sections(bytes, magicEnd, [HEADER, PAYLOAD]);
+  return decodeWhole(headerLines(bodies[HEADER]), bodies[PAYLOAD], magic);
+}
+
+/** Decodes a grid coded whole from its header lines (keyword -> words) and its payload. */
+function decodeWhole(fields, bytes, magic) {
+  const h = fieldReader(fields);
+  const georef = magic.major >= 6 || (magic.major === 3 && magic.minor >= 2);
   const grid = gridFields(h, { projected: magic.major >= 3, georef });
   const p = codecFields(h, magic, grid);
-  const payload = new Payload(bytes.subarray(body));
+  const payload = new Payload(bytes, magic.major >= 7);
   const z = decodeGrid(payload, grid, p);
   const charts = p.chartCount ? chartRecords(payload, p.chartCount, grid, z) : undefined;
   payload.finish();
@@ -145,11 +159,12 @@ const range = (from, to) => Array.from({ length: to - from + 1 }, (_, i) => from
 const SAME_SIZE = [range(4, 14), range(15, 22), range(23, 26)];   // detail, sign and correction tables
 
 /** A reader of the payload: its tables, its rANS state and its raw-bit cursor. */
-class Payload {
-  constructor(bytes) {
+export class Payload {
+  /** `parametric`: 7.0's table records (Tables of 7.0), else 3.x's. */
+  constructor(bytes, parametric) {
     this.bytes = bytes;
     this.at = 0;
-    this.tables = this.readTables();
+    this.tables = this.readTables(parametric);
     this.startRans();
     this.bitAt = this.at * 8;
   }
@@ -167,34 +182,49 @@ class Payload {
   }
 
   /** The M model tables, each a lookup from a 14-bit slot to its class. */
-  readTables() {
+  readTables(parametric) {
     const m = this.varint("tables");
     if (m > 4096) fail("tables", `${m} tables (at most 4096)`);
     const tables = [];
     for (let t = 0; t < m; t++) {
-      const s = this.varint("tables");
+      let s = this.varint("tables");
       if (s === 0) {
         if (!t) fail("tables", "the first table repeats none");
         tables.push(tables[t - 1]);
         continue;
       }
+      const kind = parametric ? s % 2 : 0;
+      if (parametric) s = Math.floor(s / 2);
       if (s < 2 || s > 48) fail("tables", `a table of ${s} classes (2..48)`);
-      const nbytes = Math.ceil((6 * s) / 8);
-      if (this.at + nbytes > this.bytes.length) fail("tables", "the payload is cut short");
-      const codes = [];
-      for (let i = 0; i < s; i++) {
-        const bit = i * 6;
-        const word = (this.bytes[this.at + (bit >> 3)] << 8) | (this.bytes[this.at + (bit >> 3) + 1] ?? 0);
-        codes.push((word >> (10 - (bit & 7))) & 63);
-      }
-      this.at += nbytes;
-      tables.push(frequencyTable(codes));
+      tables.push(frequencyTable(kind ? this.parametricRecord(s) : this.codeWeights(s)));
     }
     for (const group of SAME_SIZE) {
       const sizes = new Set(group.filter((m) => m < tables.length).map((m) => tables[m].freq.length));
       if (sizes.size > 1) fail("tables", "tables mixed in one row have different class counts");
     }
     return tables;
+  }
+
+  /** The weights of S 6-bit weight codes, most significant bit first (Tables). */
+  codeWeights(s) {
+    const nbytes = Math.ceil((6 * s) / 8);
+    if (this.at + nbytes > this.bytes.length) fail("tables", "the payload is cut short");
+    const weights = [];
+    for (let i = 0; i < s; i++) {
+      const bit = i * 6;
+      const word = (this.bytes[this.at + (bit >> 3)] << 8) | (this.bytes[this.at + (bit >> 3) + 1] ?? 0);
+      const e = (word >> (10 - (bit & 7))) & 63;
+      weights.push(e === 0 ? 0n : BigInt(WEIGHT_MANTISSA[e % 4]) << BigInt(e >> 2));
+    }
+    this.at += nbytes;
+    return weights;
+  }
+
+  /** A parametric table's weights (S classes) from its bytes z and t. */
+  parametricRecord(s) {
+    if (this.at + 2 > this.bytes.length) fail("tables", "the payload is cut short");
+    this.at += 2;
+    return parametricWeights(s, this.bytes[this.at - 2], this.bytes[this.at - 1]);
   }
 
   /** Reads the W words and sets the 64-bit state (hi, lo) from the last ones popped. */
@@ -272,14 +302,18 @@ class Payload {
   }
 }
 
-/** A table's frequencies (summing to 16384) from its weight codes, with the lookup of a
- * 14-bit slot to its class and the cumulative frequencies. */
-function frequencyTable(codes) {
-  const s = codes.length;
-  const weights = codes.map((e) => (e === 0 ? 0 : WEIGHT_MANTISSA[e % 4] * 2 ** (e >> 2)));
-  const total = weights.reduce((a, b) => a + b, 0);
-  const freq = weights.map((w) => (total === 0 ? 1 : 1 + Math.floor((w * (TOTAL - s)) / total)));
-  const largest = weights.indexOf(Math.max(...weights));
+/** A table's frequencies (summing to 16384) from its integer weights (BigInts: a parametric
+ * table's reach 2^40, their products 2^54), with the lookup of a 14-bit slot to its class and
+ * the cumulative frequencies. */
+export function frequencyTable(weights) {
+  const s = weights.length;
+  const total = weights.reduce((a, b) => a + b, 0n);
+  const spare = BigInt(TOTAL - s);
+  const freq = weights.map((w) => (total === 0n ? 1 : 1 + Number((w * spare) / total)));
+  let largest = 0;
+  weights.forEach((w, i) => {
+    if (w > weights[largest]) largest = i;
+  });
   freq[largest] += TOTAL - freq.reduce((a, b) => a + b, 0);
   const cum = [];
   const slot = new Uint8Array(TOTAL);
@@ -288,6 +322,33 @@ function frequencyTable(codes) {
     slot.fill(i, c, c + freq[i]);
   }
   return { freq, cum, slot };
+}
+
+const ONE = 1n << 32n;
+/** R[i] = floor(2^(32 - i/16)) (Tables of 7.0). */
+const ROOTS = [4294967296n, 4112874773n, 3938502375n, 3771522796n, 3611622602n, 3458501653n, 3311872529n,
+  3171459999n, 3037000499n, 2908241642n, 2784941737n, 2666869344n, 2553802833n, 2445529971n, 2341847523n, 2242560871n];
+
+/** The BigInt weights of a parametric table of S classes with bytes z and t (Tables of 7.0):
+ * class 0 z/256 of the mass, class k >= 1 the |v| in 2^(k-1) .. 2^k - 1 of a |v| - 1 geometric of
+ * ratio theta / 2^32, the last class the whole tail. */
+export function parametricWeights(s, z, t) {
+  const theta = ONE - (ROOTS[t % 16] >> BigInt(t >> 4));
+  const tails = [];
+  for (let k = 1; k < s; k++) tails.push(power(theta, 2 ** (k - 1) - 1));
+  tails.push(0n);
+  return [BigInt(z) << 32n, ...tails.slice(0, -1).map((tail, k) => BigInt(256 - z) * (tail - tails[k + 1]))];
+}
+
+/** theta^n in 32-bit fixed point by squaring, every product floored (exact integers). */
+function power(theta, n) {
+  let result = ONE;
+  let base = theta;
+  for (; n; n = Math.floor(n / 2)) {
+    if (n % 2) result = (result * base) >> 32n;
+    base = (base * base) >> 32n;
+  }
+  return result;
 }
 
 // ---------------------------------------------------------------------------------------
@@ -353,7 +414,7 @@ function decodeMask(payload, rows, cols) {
 
 /** The bands' shapes in band order, each {rows, cols, level, orient (0 band 0, 1 H, 2 V, 3 D)}:
  * in 3.0 ceil/floor halves of each level, in 2.0 (periodization) ceil halves. */
-function bandShapes(rows, cols, p) {
+export function bandShapes(rows, cols, p) {
   const levels = [];
   let r = rows;
   let c = cols;
@@ -378,7 +439,7 @@ function bandShapes(rows, cols, p) {
 
 /** Band 0's integers from their planar residuals: cumulative sums down the columns, then
  * along the rows (Order of the integers, 4). */
-function decodeBand0(payload, shape) {
+export function decodeBand0(payload, shape) {
   const { rows, cols } = shape;
   const q = new Float64Array(rows * cols);
   for (let i = 0; i < q.length; i++) q[i] = payload.signed(3);
@@ -395,7 +456,7 @@ const at = (q, shape, r, c) => (r >= 0 && c >= 0 && r < shape.rows && c < shape.
 
 /** The integers of detail band b, row by row in even and odd passes: magnitudes grouped by
  * context, then the signs of the nonzero ones (Order of the integers, 5). */
-function decodeDetail(payload, q, b, shapes, relevant, p) {
+export function decodeDetail(payload, q, b, shapes, relevant, p) {
   const shape = shapes[b];
   const { rows, cols } = shape;
   const out = new Float64Array(rows * cols);
@@ -445,7 +506,7 @@ function decodeDetail(payload, q, b, shapes, relevant, p) {
 
 /** The correction integers k at the valid nodes, row by row in two passes, by context
  * (Order of the integers, 6). */
-function decodeCorrection(payload, mask, rows, cols) {
+export function decodeCorrection(payload, mask, rows, cols) {
   const k = new Float64Array(rows * cols);
   const shape = { rows, cols };
   for (let r = 0; r < rows; r++) {
@@ -517,7 +578,7 @@ function transpose(a, r, c) {
 
 /** The relevant coefficients of every band (3.0): each level's marks along the rows, then
  * down the columns of both halves; band 0's marks are the next level's mask. */
-function relevance3(mask, rows, cols, p, periodic) {
+export function relevance3(mask, rows, cols, p, periodic) {
   const reach = LIFTING[p.wavelet].reach;
   const detail = [];
   let current = mask;
@@ -634,21 +695,21 @@ function linear(get, n, m) {
 }
 
 /** The inverse 3.0 transform of the dequantised bands: coarsest level first, each level
- * columns before rows. */
-function inverse3(bands, shapes, rows, cols, p, periodic) {
-  const lift = LIFTING[p.wavelet];
+ * columns before rows. `merge(low, high, n, wrap)` is one inverse level of a signal: by default
+ * the lifting of p.wavelet (the colour section's integer 5/3 gives its own). */
+export function inverse3(bands, shapes, rows, cols, p, periodic, merge = liftingMerge(LIFTING[p.wavelet])) {
   let low = bands[0];
   for (let l = p.levels; l >= 1; l--) {
     const b = 1 + 3 * (p.levels - l);
     const { r, c } = shapes[b].input;
     const lc = Math.ceil(c / 2);
     const hc = c - lc;
-    const rowLow = mergeColumns(low, bands[b], r, lc, lift);
-    const rowHigh = mergeColumns(bands[b + 1], bands[b + 2], r, hc, lift);
+    const rowLow = mergeColumns(low, bands[b], r, lc, merge);
+    const rowHigh = mergeColumns(bands[b + 1], bands[b + 2], r, hc, merge);
     const wrap = periodic && c % 2 === 0 && c > 2;
     const out = new Float64Array(r * c);
     for (let i = 0; i < r; i++) {
-      out.set(inverseLevel(rowLow.subarray(i * lc, (i + 1) * lc), rowHigh.subarray(i * hc, (i + 1) * hc), c, lift, wrap), i * c);
+      out.set(merge(rowLow.subarray(i * lc, (i + 1) * lc), rowHigh.subarray(i * hc, (i + 1) * hc), c, wrap), i * c);
     }
     low = out;
   }
@@ -656,14 +717,17 @@ function inverse3(bands, shapes, rows, cols, p, periodic) {
 }
 
 /** Columns of a low (ceil(r/2) x w) and a high (floor(r/2) x w) half merged into r x w. */
-function mergeColumns(lo, hi, r, w, lift) {
+function mergeColumns(lo, hi, r, w, merge) {
   const lr = (r + 1) >> 1;
   const low = transpose(lo, lr, w);
   const high = transpose(hi, r - lr, w);
   const out = new Float64Array(w * r);
-  for (let j = 0; j < w; j++) out.set(inverseLevel(low.subarray(j * lr, (j + 1) * lr), high.subarray(j * (r - lr), (j + 1) * (r - lr)), r, lift, false), j * r);
+  for (let j = 0; j < w; j++) out.set(merge(low.subarray(j * lr, (j + 1) * lr), high.subarray(j * (r - lr), (j + 1) * (r - lr)), r, false), j * r);
   return transpose(out, w, r);
 }
+
+/** The inverse level of a wavelet's lifting steps, as a merge of inverse3. */
+const liftingMerge = (lift) => (low, high, n, wrap) => inverseLevel(low, high, n, lift, wrap);
 
 /** One inverse level of an n-sample signal from its low and high coefficients: undo the
  * scales, then the lifting steps from the last to the first (a d step reads only s and an

@@ -326,13 +326,22 @@ function zgridHeaderLines(grid) {
   return lines;
 }
 
-/** The grid as the raw float64 z-grid `mzc decode` writes by default: 4.0 for a
- * multi-chart grid, 3.1 with `crs` or `raster`, else 3.0; every NaN the one quiet NaN. */
+/** The version of z-grid `mzc decode` writes for a grid: 5.0 with colours (5.1 with `crs` or
+ * `raster` too), 4.0 for a multi-chart grid, 3.1 with `crs` or `raster`, else 3.0. */
+function zgridVersion(grid) {
+  const georeferenced = grid.crs !== undefined || grid.raster !== undefined;
+  if (grid.colors) return georeferenced ? "5.1" : "5.0";
+  return grid.charts ? "4.0" : georeferenced ? "3.1" : "3.0";
+}
+
+/** The grid as the raw float64 z-grid `mzc decode` writes by default (zgridVersion), every
+ * NaN the one quiet NaN, the colours (rows x cols x 3 bytes) after the heights when it has them. */
 export function writeZgrid(grid) {
-  const version = grid.charts ? "4.0" : grid.crs !== undefined || grid.raster !== undefined ? "3.1" : "3.0";
+  const colours = grid.colors ? ["colours rgb8"] : [];
   const enc = new TextEncoder();
-  const head = enc.encode([`mzc-zgrid ${version}`, ...zgridHeaderLines(grid), "raw float64", ""].join("\n"));
-  const body = new Uint8Array(grid.rows * grid.cols * 8);
+  const head = enc.encode([`mzc-zgrid ${zgridVersion(grid)}`, ...zgridHeaderLines(grid), "raw float64", ...colours, ""].join("\n"));
+  const body = new Uint8Array(grid.rows * grid.cols * (grid.colors ? 11 : 8));
+  if (grid.colors) body.set(grid.colors, grid.rows * grid.cols * 8);
   const view = new DataView(body.buffer);
   grid.z.forEach((v, i) => {
     if (Number.isNaN(v)) view.setUint32(i * 8 + 4, 0x7ff80000, true);

@@ -1,14 +1,15 @@
 // mzc's decoders in one dependency-free ES module, written from spec/ alone.
 //
 //   import { decode, writeZgrid } from "./mzc.mjs";
-//   const grid = decode(bytes);     // {kind, version, rows, cols, z: Float64Array, d1, d2, ...}
+//   const grid = decode(bytes);     // {kind, version, rows, cols, z: Float64Array, d1, d2, ...,
+//                                   //  colors: Uint8Array rows * cols * 3 of a z-grid 5.x}
 //   const zg = writeZgrid(grid);    // the raw float64 z-grid `mzc decode` writes
 //
 // decode() reads the formats of DECODERS below. Every bad file throws an MzcError with one
 // line of text; nothing is returned half decoded.
 
 import { MzcError, fail, parseMagic, splitHeader, writeZgrid, formatNumber, checkMajor } from "./header.mjs";
-import { decodeDwt2d } from "./dwt2d.mjs";
+import { decodeDwt2d, decodeCompact } from "./dwt2d.mjs";
 import { ROW_CODECS } from "./rows.mjs";
 import { decodeZgrid } from "./zgrid.mjs";
 
@@ -18,19 +19,32 @@ export { MzcError, writeZgrid, formatNumber };
 const DECODERS = { dwt2d: decodeDwt2d, zgrid: decodeZgrid, ...ROW_CODECS };
 
 /** The major versions read of each kind, [oldest, newest] (tests/test_web.py asks for them). */
-export const READS = { dwt2d: [2, 6], zgrid: [1, 4], poly: [1, 2], dft: [1, 2], dct: [1, 2], dwt: [1, 2] };
+export const READS = { dwt2d: [2, 7], zgrid: [1, 5], poly: [1, 2], dft: [1, 2], dct: [1, 2], dwt: [1, 2] };
 
 /** Decodes the bytes of an mzc file into its grid; throws MzcError on any bad file. */
 export function decode(bytes) {
   if (!(bytes instanceof Uint8Array)) bytes = new Uint8Array(bytes);
-  const { lines, body } = splitHeader(bytes);
-  const magic = parseMagic(lines[0]);
+  const compact = compactMagic(bytes);
+  const { lines, body } = compact ? {} : splitHeader(bytes);
+  const magic = compact ?? parseMagic(lines[0]);
   const decoder = DECODERS[magic.kind];
   if (!decoder) fail(null, `mzc-${magic.kind} is not a format this decoder reads`);
   checkMajor(magic, ...READS[magic.kind]);
-  const grid = decoder(bytes, lines, body, magic);
+  const grid = compact ? decodeCompact(bytes, compact.end, magic) : decoder(bytes, lines, body, magic);
   checkMagnitudes(grid);
   return { kind: magic.kind, version: `${magic.major}.${magic.minor}`, ...grid };
+}
+
+const COMPACT = new TextEncoder().encode("mzc-dwt2d 7.");
+
+/** The magic of a file of sections (`mzc-dwt2d 7.x`, its line within 15 bytes) and the end of
+ * that line; null for a file of text header lines. */
+function compactMagic(bytes) {
+  if (!COMPACT.every((b, i) => bytes[i] === b)) return null;
+  const end = bytes.subarray(0, 15).indexOf(10) + 1;
+  if (!end) fail(null, "not an mzc file (no `mzc-KIND MAJOR.MINOR` magic line)");
+  const magic = parseMagic(new TextDecoder().decode(bytes.subarray(0, end - 1)).replace(/\r$/, ""));
+  return { ...magic, end };
 }
 
 const MAX_MAGNITUDE = 1e100;

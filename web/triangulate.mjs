@@ -15,7 +15,7 @@
 
 import { IDENTITY, fail } from "./header.mjs";
 import { cos, sin } from "./elementary.mjs";
-import { zipCharts } from "./zipper.mjs";
+import { zipCharts, nearestColours } from "./zipper.mjs";
 
 export const JUMP_ANGLE = 3;         // degrees: an edge this close to its node line is a depth jump
 export const CHART_JUMP_ANGLE = 30;  // a chart's (its surface faces its lines within 60 degrees)
@@ -36,7 +36,9 @@ export function triangulate(grid, { jumpAngle, zip = true } = {}) {
   if (!grid.charts) return gridMesh(metricFrame(grid), jumpAngle ?? JUMP_ANGLE);
   const meshes = chartGrids(grid).map((chart) => gridMesh(chart, jumpAngle ?? CHART_JUMP_ANGLE));
   const charts = joined(meshes);
-  return zip ? zipCharts(charts.positions, charts.indices, charts.charts, Math.max(grid.d1, grid.d2)) : charts;
+  if (!zip) return charts;
+  const zipped = zipCharts(charts.positions, charts.indices, charts.charts, Math.max(grid.d1, grid.d2));
+  return charts.colors ? { ...zipped, colors: nearestColours(zipped.positions, charts.positions.length / 3, charts.colors) } : zipped;
 }
 
 /** {local: Float32Array, centre: [x, y, z]}: `positions` (Float64Array, n * 3) less the centre
@@ -115,35 +117,44 @@ function chartGrids(grid) {
   const t = grid.transform ?? IDENTITY;
   return grid.charts.map((c) => {
     const z = new Float64Array(c.rows * c.cols);
-    for (let r = 0; r < c.rows; r++) z.set(grid.z.subarray((c.row0 + r) * grid.cols + c.col0, (c.row0 + r) * grid.cols + c.col0 + c.cols), r * c.cols);
+    const colors = grid.colors && new Uint8Array(c.rows * c.cols * 3);
+    for (let r = 0; r < c.rows; r++) {
+      const from = (c.row0 + r) * grid.cols + c.col0;
+      z.set(grid.z.subarray(from, from + c.cols), r * c.cols);
+      colors?.set(grid.colors.subarray(3 * from, 3 * (from + c.cols)), 3 * r * c.cols);
+    }
     const v = VIEW_AXES[c.view];   // v[k]: the k-th axis (a column of the view's rotation)
     const transform = [];
     for (let i = 0; i < 3; i++) {
       for (let j = 0; j < 3; j++) transform.push(t[4 * i] * v[j][0] + t[4 * i + 1] * v[j][1] + t[4 * i + 2] * v[j][2]);
       transform.push(t[4 * i + 3]);
     }
-    return { rows: c.rows, cols: c.cols, z, d1: grid.d1, d2: grid.d2, origin: [c.i0 * grid.d2, c.j0 * grid.d1], projection: "planar", transform };
+    return { rows: c.rows, cols: c.cols, z, colors, d1: grid.d1, d2: grid.d2, origin: [c.i0 * grid.d2, c.j0 * grid.d1], projection: "planar", transform };
   });
 }
 
-/** One mesh of several (the charts'), each's vertices after the last's, with the chart of each vertex. */
+/** One mesh of several (the charts'), each's vertices after the last's, with the chart of each
+ * vertex (and their colours, when they have them). */
 function joined(meshes) {
   const vertices = meshes.reduce((n, m) => n + m.positions.length / 3, 0);
   const positions = new Float64Array(vertices * 3);
   const indices = new Uint32Array(meshes.reduce((n, m) => n + m.indices.length, 0));
   const charts = new Uint32Array(vertices);
+  const colors = meshes[0]?.colors && new Uint8Array(vertices * 3);
   let point = 0, corner = 0;
   meshes.forEach((m, chart) => {
     positions.set(m.positions, point * 3);
+    colors?.set(m.colors, point * 3);
     for (let k = 0; k < m.indices.length; k++) indices[corner + k] = m.indices[k] + point;
     charts.fill(chart, point, point + m.positions.length / 3);
     point += m.positions.length / 3;
     corner += m.indices.length;
   });
-  return { positions, indices, charts };
+  return colors ? { positions, indices, charts, colors } : { positions, indices, charts };
 }
 
-/** The mesh of one grid (no charts): its triangles over the node numbers, then the used nodes' points. */
+/** The mesh of one grid (no charts): its triangles over the node numbers, then the used nodes'
+ * points, and their colours (3 bytes a vertex: a pole's vertex its first node's) when the grid has them. */
 function gridMesh(grid, jumpAngle) {
   const shape = Shape.of(grid);
   const triangles = nodeTriangles(grid, shape, jumps(grid, shape, jumpAngle));
@@ -152,7 +163,11 @@ function gridMesh(grid, jumpAngle) {
   let count = 0;
   for (let node = 0; node < number.length; node++) if (number[node] === 0) number[node] = count++;
   const indices = triangles.map((node) => number[node]);
-  return { positions: points(grid, shape, number, count), indices };
+  const positions = points(grid, shape, number, count);
+  if (!grid.colors) return { positions, indices };
+  const colors = new Uint8Array(count * 3);
+  number.forEach((k, node) => k >= 0 && colors.set(grid.colors.subarray(3 * node, 3 * node + 3), 3 * k));
+  return { positions, indices, colors };
 }
 
 /** What the grid's projection makes of its rows and columns: u and v of each, the rays'

@@ -1,5 +1,5 @@
 // The z-grid itself (spec/zgrid.md): `mzc decode` reads it as any grid and writes it again,
-// so decode() reads its plain (1.x, 2.x) and raw (3.x, 4.0) bodies too.
+// so decode() reads its plain (1.x, 2.x) and raw (3.x, 4.0, 5.x with colours) bodies too.
 
 import { fail, headerFields, fieldReader, gridFields, checkChecksum, checkCharts, VIEWS, words, bodyLines } from "./header.mjs";
 
@@ -12,11 +12,24 @@ export function decodeZgrid(bytes, lines, body, magic) {
   const fields = headerFields(lines, !raw);
   const h = fieldReader(fields);
   checkChecksum(bytes, lines, fields, raw);
-  const grid = gridFields(h, { projected: magic.major >= 2, georef: magic.minor >= 1 && (magic.major === 1 || magic.major === 3) });
+  const grid = gridFields(h, { projected: magic.major >= 2, georef: magic.minor >= 1 && [1, 3, 5].includes(magic.major) });
   const charts = h.has("charts") ? chartsLine(h, magic) : undefined;
-  const z = raw ? rawBody(h, bytes.subarray(body), grid) : plainBody(bytes.subarray(body), grid);
+  let data = bytes.subarray(body);
+  let colors;
+  if (magic.major >= 5) [data, colors] = colourBytes(h, data, grid);
+  const z = raw ? rawBody(h, data, grid) : plainBody(data, grid);
   if (charts) checkCharts(charts, grid, z);
-  return { ...grid, z, charts };
+  if (colors) z.forEach((v, i) => Number.isNaN(v) && colors.fill(0, 3 * i, 3 * i + 3));
+  return { ...grid, z, charts, colors };
+}
+
+/** A 5.x body split into its heights and a copy of its colours (Colours): the `colours rgb8` line,
+ * then the body's last rows x cols x 3 bytes, red, green, blue a node; an invalid node's are made 0. */
+function colourBytes(h, data, grid) {
+  h.word("colours", ["rgb8"]);
+  const size = grid.rows * grid.cols * 3;
+  if (data.length < size) fail("data", `the raw body has ${data.length} bytes, fewer than the ${size} of the nodes' colours alone`);
+  return [data.subarray(0, data.length - size), data.slice(data.length - size)];
 }
 
 /** The `charts` line of a 4.0 file: seven words a chart (view, then six integers). */

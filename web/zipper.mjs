@@ -44,6 +44,24 @@ export function zipCharts(positions, indices, charts, spacing) {
   return { positions: points, indices: out };
 }
 
+/** The colours (n * 3 bytes) of the zipped mesh's points: the charts' own (the first `count`), then
+ * for each point the zipper added the colour of the nearest of those (the first of equally near
+ * ones), as mzc colours them (mzc.ops.colouring.nearest_colours). */
+export function nearestColours(positions, count, colors) {
+  const out = new Uint8Array(positions.length);
+  out.set(colors);
+  for (let a = count; a < positions.length / 3; a++) {
+    let best = 0, nearest = Infinity;
+    for (let k = 0; k < count; k++) {
+      const dx = positions[3 * k] - positions[3 * a], dy = positions[3 * k + 1] - positions[3 * a + 1], dz = positions[3 * k + 2] - positions[3 * a + 2];
+      const d = dx * dx + dy * dy + dz * dz;
+      if (d < nearest) [best, nearest] = [k, d];
+    }
+    out.copyWithin(3 * a, 3 * best, 3 * best + 3);
+  }
+  return out;
+}
+
 /** {tail, head, triangle} (Int32Arrays): the edges of `t` (over n vertices) in one triangle
  * only (no other runs them either way, and they run once), each as its triangle runs it, in
  * the order of the triangles' edges 0-1, 1-2, 2-0. */

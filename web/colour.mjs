@@ -1,0 +1,132 @@
+// The colour section, version 1 (spec/colour.md): the R x C x 3 8-bit image of a grid's nodes
+// from its bytes and the grid's validity mask. A dwt2d payload of the three YCoCg-R channels'
+// bands (the integer LeGall 5/3 or dwt2d 3.0's CDF 9/7), then an optional correction layer.
+//
+//   import { decodeColour } from "./colour.mjs";
+//   const rgb = decodeColour(bytes, { rows, cols, valid });   // Uint8Array, rows * cols * 3
+
+import { fail, crc32 } from "./header.mjs";
+import { Payload, bandShapes, relevance3, decodeBand0, decodeDetail, decodeCorrection, inverse3 } from "./dwt2d.mjs";
+
+const MAGIC = [0x6d, 0x7a, 0x63, 0x43];   // "mzcC"
+const HEADER = 30;
+const UNIT = 16;                          // a step's sixteenths of a level
+const MAX_SIDE = 2 ** 24;
+const MAX_QUANTUM = 2 ** 24;
+const WAVELETS = ["bior2.2", "bior4.4"];  // the relevance of transform 0 and 1
+const STEP_FACTORS = [[177, 116, 63], [177, 116, 63], [256, 199, 116]];   // H, V, D in 256ths, levels 1..3
+const BAND0_FACTOR = 248;
+
+/** The image (Uint8Array, rows * cols * 3: red, green, blue a node, 0 at invalid nodes) of a colour
+ * section that spans `bytes`, decoded with `mask` ({rows, cols, valid: rows * cols 0/1}); any damage
+ * or a mask of another shape throws an MzcError. */
+export function decodeColour(bytes, mask) {
+  if (!(bytes instanceof Uint8Array)) bytes = new Uint8Array(bytes);
+  const h = sectionHeader(bytes, mask);
+  const valid = Uint8Array.from(mask.valid, (v) => (v ? 1 : 0));
+  const payload = new Payload(bytes.subarray(HEADER), false);
+  const p = { v3: true, levels: h.levels, wavelet: WAVELETS[h.transform] };
+  const shapes = bandShapes(h.rows, h.cols, p);
+  const relevant = relevance3(valid, h.rows, h.cols, p, false);
+  const planes = h.steps.map((step) => {
+    const steps = h.transform ? new Array(1 + 3 * h.levels).fill(step) : bandSteps(step, h.levels);
+    const q = [decodeBand0(payload, shapes[0])];
+    const bands = { ...p, steps: steps.map((s) => s / UNIT) };
+    for (let b = 1; b < shapes.length; b++) q.push(decodeDetail(payload, q, b, shapes, relevant, bands));
+    if (q.some((band) => band.some((v) => Math.abs(v) > MAX_QUANTUM))) fail("colour", "a quantised coefficient is far outside 8-bit colour");
+    return channelPlane(q, steps, shapes, h, p);
+  });
+  const image = clip(rgbOf(planes), valid);
+  if (h.correction) {
+    const k = [0, 1, 2].map(() => decodeCorrection(payload, valid, h.rows, h.cols));
+    if (k.some((grid) => grid.some((v) => Math.abs(v) > 255))) fail("colour", "a correction is larger than 255 levels");
+    for (let i = 0; i < image.length; i++) image[i] += h.correction * k[i % 3][Math.floor(i / 3)];
+    clip(image, valid);
+  }
+  payload.finish();
+  return Uint8Array.from(image);
+}
+
+/** The header's fields (Layout), each checked, with the section's length and CRC-32. */
+function sectionHeader(bytes, mask) {
+  if (bytes.length < HEADER) fail("colour", `colour section of ${bytes.length} bytes ends inside its ${HEADER}-byte header`);
+  if (MAGIC.some((b, i) => bytes[i] !== b)) fail("colour", "not a colour section (no mzcC)");
+  if (bytes[4] !== 1) fail("colour", `colour section version ${bytes[4]} (this decoder reads 1)`);
+  const view = new DataView(bytes.buffer, bytes.byteOffset, HEADER);
+  const h = {
+    rows: view.getUint32(5, true), cols: view.getUint32(9, true), levels: bytes[13], transform: bytes[14],
+    steps: [view.getUint16(15, true), view.getUint16(17, true), view.getUint16(19, true)], correction: bytes[21],
+  };
+  const length = view.getUint32(22, true);
+  if (h.rows !== mask.rows || h.cols !== mask.cols) fail("colour", `the section's grid is ${h.rows} x ${h.cols} nodes, the mask ${mask.rows} x ${mask.cols}`);
+  if (Math.min(h.rows, h.cols) < 1 || Math.max(h.rows, h.cols) > MAX_SIDE) fail("colour", `a colour grid of ${h.rows} x ${h.cols} nodes`);
+  if (h.levels > 12) fail("colour", `${h.levels} wavelet levels (allowed 0..12)`);
+  if (h.transform > 1) fail("colour", `transform ${h.transform} (0 or 1)`);
+  if (Math.min(...h.steps) < UNIT) fail("colour", "a step below 1 level");
+  if (bytes.length !== HEADER + length) fail("colour", `the section declares ${HEADER + length} bytes and has ${bytes.length}`);
+  if (crc32(bytes.subarray(0, 26), bytes.subarray(HEADER)) !== view.getUint32(26, true)) fail("colour", "the colour section's CRC-32 does not match");
+  return h;
+}
+
+/** Transform 0's step of every band (sixteenths) from a channel's step S (Band steps). */
+function bandSteps(step, levels) {
+  const steps = [Math.max(UNIT, Math.floor((step * BAND0_FACTOR) / 2 ** (8 + levels)))];
+  for (let level = levels; level >= 1; level--) {
+    for (const f of STEP_FACTORS) {
+      const factor = level <= 3 ? f[level - 1] : Math.floor(f[2] / 2 ** (level - 3));
+      steps.push(Math.max(UNIT, Math.floor((step * factor) / 256)));
+    }
+  }
+  return steps;
+}
+
+/** A channel's plane of integers from its band integers: transform 0 dequantised in integers and
+ * merged by the integer 5/3, transform 1 q * (S / 16) in binary64 through the CDF 9/7, rounded to
+ * the nearest integer, ties to even. */
+function channelPlane(q, steps, shapes, h, p) {
+  if (h.transform) {
+    const bands = q.map((band, b) => band.map((v) => v * (steps[b] / UNIT)));
+    return inverse3(bands, shapes, h.rows, h.cols, p, false).map(roundHalfEven);
+  }
+  const bands = q.map((band, b) => band.map((v) => Math.sign(v) * Math.floor((Math.abs(v) * steps[b] + UNIT / 2) / UNIT)));
+  return inverse3(bands, shapes, h.rows, h.cols, p, false, merge53);
+}
+
+/** x rounded to the nearest integer, ties to even (numpy's rint). */
+function roundHalfEven(x) {
+  const r = Math.round(x);
+  return r - x === 0.5 && r % 2 !== 0 ? r - 1 : r;
+}
+
+/** One inverse level of the integer LeGall 5/3 (JPEG 2000's reversible): n samples from ceil(n/2)
+ * low s and floor(n/2) high d; symmetric extension (d_-1 = d_0, past the ends the last). */
+function merge53(low, high, n) {
+  if (n === 1) return Float64Array.of(low[0]);
+  const s = Float64Array.from(low), d = Float64Array.from(high);
+  const ns = s.length, nd = d.length;
+  for (let k = 0; k < ns; k++) s[k] -= Math.floor((d[k ? k - 1 : 0] + d[Math.min(k, nd - 1)] + 2) / 4);
+  for (let k = 0; k < nd; k++) d[k] += Math.floor((s[k] + s[Math.min(k + 1, ns - 1)]) / 2);
+  const x = new Float64Array(n);
+  for (let k = 0; k < ns; k++) x[2 * k] = s[k];
+  for (let k = 0; k < nd; k++) x[2 * k + 1] = d[k];
+  return x;
+}
+
+/** The interleaved R, G, B of the Y, Co, Cg planes (the inverse of YCoCg-R). */
+function rgbOf([y, co, cg]) {
+  const out = new Float64Array(y.length * 3);
+  for (let i = 0; i < y.length; i++) {
+    const t = y[i] - Math.floor(cg[i] / 2);
+    const b = t - Math.floor(co[i] / 2);
+    out[3 * i] = b + co[i];
+    out[3 * i + 1] = cg[i] + t;
+    out[3 * i + 2] = b;
+  }
+  return out;
+}
+
+/** Every value held to 0..255 at valid nodes, 0 at invalid ones (in place). */
+function clip(image, valid) {
+  for (let i = 0; i < image.length; i++) image[i] = valid[Math.floor(i / 3)] ? Math.min(Math.max(image[i], 0), 255) : 0;
+  return image;
+}

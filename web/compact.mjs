@@ -1,0 +1,118 @@
+// The container of `mzc-dwt2d 7.0` (spec/dwt2d.md, Version 7.0): the magic line, then tagged
+// sections each under its own CRC-32, the header's fields in binary turned back into the header
+// lines they stand for, so that dwt2d.mjs reads them as it reads a 3.x file's lines.
+
+import { fail, crc32, formatNumber, words } from "./header.mjs";
+
+const TEXT = new TextDecoder("utf-8", { fatal: true });
+const MAX_VARINT_BYTES = 10;   // a header's varints: an unsigned 64-bit integer (as mzc reads them)
+const MAX_DIGITS = 40;
+const MAX_EXPONENT = 400;
+/** Field id -> [keyword, type]: u unsigned integers, d decimals, e one word of WORDS, t text. */
+const FIELDS = {
+  1: ["rows", "u"], 2: ["cols", "u"], 3: ["d1", "d"], 4: ["d2", "d"], 5: ["origin", "d"], 6: ["projection", "e"],
+  7: ["radius", "d"], 8: ["transform", "d"], 9: ["units", "t"], 10: ["nodata", "t"], 11: ["crs", "t"],
+  12: ["raster", "t"], 13: ["chart_count", "u"], 14: ["wavelet", "e"], 15: ["levels", "u"], 16: ["steps", "d"],
+  17: ["slope_limit", "d"], 18: ["correction", "d"], 19: ["rounding", "e"], 20: ["max_error", "d"],
+};
+const WORDS = ["planar", "cylindrical", "spherical", "bior4.4", "bior2.2", "integer"];
+export const HEADER = 1;
+export const PAYLOAD = 2;
+
+/** A front-to-back reader of a byte range whose every failure is a one-line MzcError. */
+class Cursor {
+  constructor(bytes, at, end = bytes.length) {
+    this.bytes = bytes;
+    this.at = at;
+    this.end = end;
+  }
+
+  /** An unsigned LEB128 integer of at most 10 bytes, as a BigInt (a decimal's digits need 64 bits). */
+  varint() {
+    let value = 0n;
+    for (let i = 0; i < MAX_VARINT_BYTES; i++) {
+      if (this.at >= this.end) fail("data", this.end === this.bytes.length ? "the file ends inside a number" : "a header field runs past its section");
+      const b = this.bytes[this.at++];
+      value |= BigInt(b & 0x7f) << BigInt(7 * i);
+      if (!(b & 0x80)) return value;
+    }
+    return fail("data", `a number longer than ${MAX_VARINT_BYTES} bytes`);
+  }
+}
+
+/** The sections of a container file after its magic line (`magicEnd` bytes, which the first
+ * section's CRC-32 covers): each tag in `tags` in order, its body checked, and nothing after them.
+ * Returns the bodies by tag. */
+export function sections(bytes, magicEnd, tags) {
+  if (bytes[magicEnd - 2] === 13) fail("crc32", "the magic line ends in CRLF: the file was copied as text; copy mzc files as binary");
+  const cursor = new Cursor(bytes, magicEnd);
+  const bodies = {};
+  tags.forEach((tag, i) => {
+    const start = cursor.at;
+    if (start >= bytes.length) fail("data", `the file ends before its section ${tag}`);
+    if (bytes[start] !== tag) fail("data", `section tag ${bytes[start]} where section ${tag} belongs`);
+    cursor.at++;
+    const length = cursor.varint();
+    const end = cursor.at + Number(length);
+    if (end + 4 > bytes.length) fail("data", `the file ends inside section ${tag} (cut short?)`);
+    const stated = new DataView(bytes.buffer, bytes.byteOffset + end, 4).getUint32(0, true);
+    if (crc32(bytes.subarray(i ? start : 0, end)) !== stated) fail("crc32", `checksum mismatch: section ${tag} of the file is corrupt`);
+    bodies[tag] = bytes.subarray(cursor.at, end);
+    cursor.at = end + 4;
+  });
+  if (cursor.at !== bytes.length) fail("crc32", `checksum mismatch: ${bytes.length - cursor.at} byte(s) after the last section (added to the file)`);
+  return bodies;
+}
+
+/** The header section's fields as the map of header lines (keyword -> value words) they stand for. */
+export function headerLines(body) {
+  const cursor = new Cursor(body, 0);
+  const fields = new Map();
+  while (cursor.at < body.length) {
+    const id = cursor.varint();
+    const field = id <= 20n ? FIELDS[Number(id)] : undefined;
+    if (!field) fail("data", `unknown header field ${id}`);
+    const [keyword, type] = field;
+    if (fields.has(keyword)) fail("data", `header field ${keyword} given twice`);
+    fields.set(keyword, values(cursor, type));
+  }
+  return fields;
+}
+
+/** The value words of one field of `type`. */
+function values(cursor, type) {
+  if (type === "e") {
+    const index = cursor.varint();
+    if (index >= BigInt(WORDS.length)) fail("data", `word number ${index} of a header field is not 0..${WORDS.length - 1}`);
+    return [WORDS[Number(index)]];
+  }
+  const count = cursor.varint();
+  if (count > BigInt(cursor.end - cursor.at)) fail("data", "a header field runs past its section");
+  const n = Number(count);
+  if (type === "t") {
+    const text = cursor.bytes.subarray(cursor.at, cursor.at + n);
+    cursor.at += n;
+    try {
+      return words(TEXT.decode(text));
+    } catch {
+      return fail("data", "a header text is not UTF-8");
+    }
+  }
+  return Array.from({ length: n }, () => (type === "u" ? String(cursor.varint()) : decimal(cursor)));
+}
+
+/** The signed integer of 2|v| + (1 when negative). */
+const unsigned = (s) => (s & 1n ? -(s >> 1n) : s >> 1n);
+
+/** A decimal (Decimals): digits m and exponent e, as the text of the binary64 nearest m x 10^e
+ * (JavaScript's Number() of a decimal text rounds correctly, as Python's float() does). */
+function decimal(cursor) {
+  const head = cursor.varint();
+  const mantissa = head >> 4n;
+  const low = head & 15n;
+  const exponent = low === 15n ? unsigned(cursor.varint()) : low - 8n;
+  if (mantissa >= 2n * 10n ** BigInt(MAX_DIGITS) || (exponent < 0n ? -exponent : exponent) > BigInt(MAX_EXPONENT)) {
+    fail("data", "a header number has too many digits");
+  }
+  return formatNumber(Number(`${mantissa & 1n ? "-" : ""}${mantissa >> 1n}e${exponent}`));
+}
