@@ -144,8 +144,11 @@ def mzc_codec(grid, **options):
 
 
 def header_bytes(data):
-    """The size of an mzc file's text header (through its ``data`` line): the CRS's WKT is in it."""
-    return data.index(b"\ndata\n") + len(b"\ndata\n")
+    """The size of an mzc file's header (3.x: its text through the ``data`` line; 7.0: its binary
+    fields and the sections' framing): the CRS's WKT is in it."""
+    from mzc.codecs.dwt2d import anatomy
+
+    return anatomy.parts(data)["header"]
 
 
 def geotiff_profile(grid):

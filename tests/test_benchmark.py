@@ -11,6 +11,7 @@ import pytest
 from mzc.grid import ZGrid
 from mzc.measure.metrics import heightfield_filters, surface_distance, surface_distance_parts
 
+from codec_contract import header_fields
 from conftest import REPO, face_path, run_mzc
 
 BENCHMARK = REPO / "benchmarks" / "rd.py"
@@ -55,7 +56,7 @@ def test_every_encoder_gains_variant_writes_a_file_the_unchanged_decoder_reads(n
         data = mzc.encode(grid, "dwt2d", rmse=0.05, **options)
     decoded = mzc.decode(data)
     assert np.sqrt(np.mean(np.square(decoded.z - z))) <= 0.05 * 1.5   # the target is a surface RMS
-    steps = [float(v) for v in next(line for line in data.split(b"\n") if line.startswith(b"steps ")).split()[1:]]
+    steps = [float(v) for v in header_fields(data)["steps"]]
     levels = options.get("level", dwt2d.w2.default_levels(grid.shape, dwt2d.w2.TRANSFORMS[dwt2d.VERSION[0]].coarsest))
     assert len(steps) == (2 if ratio is None else 1 + 3 * levels)
     expanded = dwt2d.expand_steps(steps, 1 + 3 * levels)

@@ -97,9 +97,14 @@ def geographic_wkt(crs):
     EPSG code spelled out (``georef.grid_crs``), else WGS 84's, as a lon/lat export's (the keys
     say longitude and latitude, but name no datum mzc can spell). So the cloud is known to be in
     degrees and is sliced as terrain in them (``mzc.ops.slicing.lonlat_grid``)."""
+    import warnings
+
+    from mzc.errors import MzcWarning
     from mzc.georef import WGS84_WKT, crs_kind, grid_crs
 
-    wkt = None if crs is None else grid_crs(crs)
+    with warnings.catch_warnings():   # a code GDAL does not know is not dropped here: WGS 84 stands in
+        warnings.simplefilter("ignore", MzcWarning)
+        wkt = None if crs is None else grid_crs(crs)
     return wkt if wkt is not None and crs_kind(wkt) == "geographic" else WGS84_WKT
 
 
