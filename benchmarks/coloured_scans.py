@@ -180,6 +180,10 @@ def markdown(document):
                          f"{c['colour_bytes']} | {fmt(c['colour_rms'])} | {fmt(p['colour_psnr_measured'])} | "
                          f"{'n/a (outside Draco range)' if c['draco_bytes'] is None else round(c['draco_bytes'])} | "
                          f"{'n/a' if c['ratio'] is None else fmt(c['ratio'])} | {'yes' if c['goal_met'] else 'no'} |")
+        met = [c for c in s["comparisons"] if c["goal_met"]]
+        where = f", from {fmt(min(c['whole_rms'] for c in met))} % D" if met else ""
+        lines += ["", f"Goal (mzc / Draco <= {RATIO_GOAL} at equal shape RMS, colour RMS <= {COLOUR_RMS_GOAL:g}) "
+                  f"met at {len(met)} of {len(s['comparisons'])} points{where}."]
         lines += ["", "Draco's points:", "", "| bits | bytes | shape RMS % D | colour RMS | colour PSNR |",
                   "|---|---|---|---|---|"]
         lines += [f"| {p['setting']} | {p['bytes']} | {fmt(p['whole']['rms'])} | {fmt(p['colour_rms'])} | "
