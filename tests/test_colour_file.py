@@ -189,3 +189,24 @@ def test_batch_encode_names_the_colours_a_tiled_file_drops(tmp_path):
         row = work.run_item(Job("encode", str(tmp_path), settings), items.Item(str(source), f"c{len(options)}.mzw2"))
         assert row["status"] == "ok" and ("the nodes' colours" in row["warning"]) == warned, row
         assert (mzc.decode((tmp_path / f"c{len(options)}.mzw2").read_bytes()).colors is None) == warned
+
+
+def test_the_benchmarks_colour_error_is_the_surface_colour_at_the_nearest_point():
+    """benchmarks/coloured_scans.py's colour error: 0 (infinite PSNR) for the source's own vertices,
+    3 levels RMS (38.59 dB) for colours 3 levels off, and on a triangle's interior the mix of its
+    corners' colours, not the nearest vertex's."""
+    import sys
+
+    from conftest import REPO
+
+    sys.path.insert(0, str(REPO / "benchmarks"))
+    from coloured_scans import colour_errors
+
+    mesh = coloured_surface()
+    assert colour_errors(mesh, mesh.points, mesh.colors) == (0.0, float("inf"))
+    rms, peak = colour_errors(mesh, mesh.points, mesh.colors.astype(int) + 3)
+    assert rms == pytest.approx(3.0) and peak == pytest.approx(10 * np.log10(255.0 ** 2 / 9))
+    corners = mesh.triangles[100]
+    centre = mesh.points[corners].mean(axis=0, keepdims=True)
+    mixed = np.round(mesh.colors[corners].astype(float).mean(axis=0, keepdims=True))
+    assert colour_errors(mesh, centre, mixed)[0] < 0.5
