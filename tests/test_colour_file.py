@@ -8,7 +8,7 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
-from test_colour import analytic_colour, ascii_ply, coloured_surface
+from test_colour import analytic_colour, ascii_ply, coloured_surface, textured_obj
 
 import mzc
 from mzc.codecs.dwt2d import compact
@@ -210,3 +210,20 @@ def test_the_benchmarks_colour_error_is_the_surface_colour_at_the_nearest_point(
     centre = mesh.points[corners].mean(axis=0, keepdims=True)
     mixed = np.round(mesh.colors[corners].astype(float).mean(axis=0, keepdims=True))
     assert colour_errors(mesh, centre, mixed)[0] < 0.5
+
+
+def test_a_map_kd_name_with_spaces_is_read_whole(tmp_path):
+    """``map_Kd fuze uv.jpg`` (trimesh's fuze bottle) names one file with a space in it: the texture
+    is read, with no warning; after options the name is still the last word."""
+    import warnings
+
+    from mzc.errors import MzcWarning
+    from mzc.meshes import read_mesh
+
+    path = textured_obj(tmp_path, image_name="skin tone.png")
+    (tmp_path / "face.mtl").write_text("newmtl skin\nKd 1 1 1\nmap_Kd skin tone.png\n")
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", MzcWarning)
+        mesh = read_mesh(path)
+    errors = mesh.colors - analytic_colour(mesh.points[:, 0], mesh.points[:, 1])
+    assert np.abs(errors).max() <= 4
