@@ -227,3 +227,12 @@ def test_a_map_kd_name_with_spaces_is_read_whole(tmp_path):
         mesh = read_mesh(path)
     errors = mesh.colors - analytic_colour(mesh.points[:, 0], mesh.points[:, 1])
     assert np.abs(errors).max() <= 4
+
+
+def test_a_window_of_a_coloured_file_keeps_its_colours():
+    """mzc.decode(data, window=...) of a 7.0 file with colours: the window's heights and colours."""
+    grid = sliced()
+    data = mzc.encode(grid, "dwt2d", max_error=0.05, colour_max_error=0)
+    whole, part = mzc.decode(data), mzc.decode(data, window=(3, 5, 10, 12))
+    assert part.colors.tobytes() == whole.colors[3:13, 5:17].tobytes()
+    np.testing.assert_array_equal(part.z, whole.z[3:13, 5:17])
