@@ -38,6 +38,8 @@ class EncodeOptions(TypedDict, total=False):
     size: int            # dwt2d: the file size aimed at, in bytes
     slope_limit: float   # dwt2d: steps grow as 1/sqrt(cos lean) up to this many times
     tile: int            # dwt2d: the side of independent tiles (0: the grid whole)
+    colour_psnr: float   # dwt2d: the PSNR of the grid's colours, dB [default: 36]
+    colour_max_error: int   # dwt2d: |decoded - input| <= this many 8-bit levels in every colour channel
     wavelet: str         # dwt2d: bior4.4 or bior2.2; dwt: a PyWavelets name
     level: int           # dwt2d and dwt: wavelet levels
     quality: int         # dft, dct, dwt: the percentage of coefficients kept
@@ -242,7 +244,7 @@ def encode(grid: ZGrid | np.ndarray, codec: str = DEFAULT_CODEC, **options: Unpa
 
     chosen, grid = get_codec(codec), as_grid(grid)
     data = chosen.encode(grid, **options)
-    warn_uncoded(grid, chosen.kind)
+    warn_uncoded(grid, chosen, options)
     return data
 
 

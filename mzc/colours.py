@@ -58,14 +58,14 @@ def unpack_rgb(values):
     return packed.view("<u4").view(np.uint8).reshape(-1, 4)[:, 2::-1].copy()
 
 
-def warn_uncoded(grid, codec):
-    """One MzcWarning when ``grid`` has colours that the compressed format of ``codec`` (a name)
-    does not carry yet, so that they are not lost without a word (issue 32: the z-grid carries
-    them, the codecs' formats code the shape alone)."""
-    if grid.colors is not None:
+def warn_uncoded(grid, codec, options):
+    """One MzcWarning when ``grid`` has colours that the file ``codec`` (a Codec) writes with
+    ``options`` does not carry (the row codecs, zarr, a dwt2d file in tiles: ``Codec.keeps_colour``),
+    so that they are not lost without a word (issue 32)."""
+    if grid.colors is not None and not codec.keeps_colour(grid, options):
         import warnings
 
         from mzc.errors import MzcWarning
 
-        warnings.warn(MzcWarning(f"not kept: the nodes' colours (mzc-{codec} codes the shape alone; the z-grid "
-                                 "keeps them)"), stacklevel=2)
+        warnings.warn(MzcWarning(f"not kept: the nodes' colours (this mzc-{codec.kind} file codes the shape "
+                                 "alone; the z-grid and a dwt2d file coded whole keep them)"), stacklevel=2)

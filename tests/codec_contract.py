@@ -20,7 +20,9 @@ REPO = Path(__file__).resolve().parents[1]
 SPEC = REPO / "spec"
 FIXTURES = REPO / "tests" / "fixtures"
 EXPECTED = ".expected.zg"
-FIXTURE_NAME = re.compile(r"^(?P<kind>[a-z0-9]+)-(?P<major>\d+)\.(?P<minor>\d+)(?P<ext>\.[a-z0-9]+)$")
+# a fixture: KIND-MAJOR.MINOR[-VARIANT].EXT, a variant being a second file of one version (a 7.0 file with colours)
+FIXTURE_NAME = re.compile(r"^(?P<kind>[a-z0-9]+)-(?P<major>\d+)\.(?P<minor>\d+)(?P<variant>-[a-z]+)?"
+                          r"(?P<ext>\.[a-z0-9]+)$")
 # a worked example: the file as text (or as its header then the payload in hex), then, after any
 # prose, the values it decodes to
 EXAMPLE_BLOCK = re.compile(r"```mzc-example(-hex)?\n(.*?)```.*?```expected\n(.*?)```", re.S)

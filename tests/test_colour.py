@@ -386,9 +386,12 @@ def test_the_cli_pipeline_keeps_colours_from_a_coloured_ply_to_the_rebuilt_one(t
     assert stl.stderr.decode().count("mzc: warning: not kept: the vertex colours (STL") == 1
 
 
-def test_encoding_a_coloured_grid_names_the_colours_it_does_not_code(tmp_path):
-    """The compressed formats code the shape alone for now: encode says so in one warning (the
-    CLI and the API), and the file decodes to the grid's heights without colours."""
+def test_encoding_a_coloured_grid_keeps_its_colours_or_names_them(tmp_path):
+    """A dwt2d file coded whole carries the colours (no warning; they decode within the bound); the
+    formats that code the shape alone (a dwt2d file in tiles, the row codecs) say so in one warning
+    (the CLI and the API), and their files decode without colours."""
+    import warnings
+
     import mzc
     from mzc.errors import MzcWarning
     from mzc.formats import zgrid
@@ -398,11 +401,20 @@ def test_encoding_a_coloured_grid_names_the_colours_it_does_not_code(tmp_path):
 
     grid = slice_surface(coloured_surface(), d1=0.2, align="pca")
     (tmp_path / "c.zg").write_bytes(zgrid.write(grid, raw="float64"))
-    result = run_mzc("encode", "--dwt2d", "--max-error", "0.05", tmp_path / "c.zg", "-o", tmp_path / "c.mzw2",
-                     check=True)
-    assert result.stderr.decode().count("mzc: warning: not kept: the nodes' colours (mzc-dwt2d") == 1
+    kept = run_mzc("encode", "--dwt2d", "--max-error", "0.05", "--colour-max-error", "2", tmp_path / "c.zg",
+                   "-o", tmp_path / "c.mzw2", check=True)
+    assert "colours" not in kept.stderr.decode()
+    decoded = mzc.decode((tmp_path / "c.mzw2").read_bytes())
+    assert np.abs(decoded.colors.astype(int) - grid.colors)[grid.valid].max() <= 2
+    for flags in (["--dwt2d", "--tile", "16"], ["--dct", "--quality", "20"]):
+        result = run_mzc("encode", *flags, tmp_path / "c.zg", "-o", tmp_path / "d", check=True)
+        assert result.stderr.decode().count("mzc: warning: not kept: the nodes' colours") == 1, flags
+        assert mzc.decode((tmp_path / "d").read_bytes()).colors is None
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", MzcWarning)
+        assert mzc.decode(mzc.encode(grid, "dwt2d", max_error=0.05)).colors is not None
     with pytest.warns(MzcWarning, match="the nodes' colours"):
-        data = mzc.encode(grid, "dwt2d", max_error=0.05)
+        data = mzc.encode(grid, "dwt2d", max_error=0.05, tile=16)
     assert mzc.decode(data).colors is None
 
 

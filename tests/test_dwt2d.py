@@ -532,9 +532,10 @@ def test_the_mask_spans_of_any_flips_stay_inside_the_grid(rows, cols, data):
 
 
 def spec_examples():
-    """(file bytes, expected values) of every worked example in spec/dwt2d.md (2.0, 3.0, 3.1, 5.0, 6.0, 5.1, 7.0)."""
+    """(file bytes, expected values) of every worked example in spec/dwt2d.md (2.0, 3.0, 3.1, 5.0, 6.0, 5.1, 7.0,
+    7.0 with colours)."""
     examples = [(data, values) for data, values, _id in contract_examples("dwt2d")]
-    assert len(examples) == 7
+    assert len(examples) == 8
     return examples
 
 
@@ -543,7 +544,8 @@ def spec_example():
     return spec_examples()[0]
 
 
-@pytest.mark.parametrize("data, expected", spec_examples(), ids=["2.0", "3.0", "3.1", "5.0", "6.0", "5.1", "7.0"])
+@pytest.mark.parametrize("data, expected", spec_examples(), ids=["2.0", "3.0", "3.1", "5.0", "6.0", "5.1", "7.0",
+                                                                   "7.0 colour"])
 def test_spec_examples_decode_to_the_expected_values(data, expected):
     decoded = dwt2d.read(data, "spec")
     assert np.array_equal(np.isnan(decoded.z), np.isnan(expected))
@@ -551,7 +553,7 @@ def test_spec_examples_decode_to_the_expected_values(data, expected):
 
 
 def test_spec_example_of_3_0_is_the_2_0_grid_on_a_sphere_and_still_within_its_bound():
-    (planar, heights), (central, distances), _checksummed, _tiled, _rounded, _tiled_rounded, _compact = spec_examples()
+    (planar, heights), (central, distances), *_others = spec_examples()
     grid = dwt2d.read(central, "spec")
     assert (grid.projection, grid.radius, grid.origin) == ("spherical", 10.0, (-1.25, -0.75))
     input_values = np.array([[10, 10.5, 11, 11.2, 11.1, 10.8], [10.2, 10.9, 11.6, 11.9, 11.7, 11],

@@ -175,3 +175,28 @@ def test_damaged_headers_with_matching_checksums_raise_only_mzc_errors(data):
     except MzcError:
         return
     assert np.isfinite(decoded.z[decoded.valid]).all() and math.isfinite(decoded.d1)
+
+
+def test_spec_colour_example_decodes_to_its_expected_colours():
+    """The worked example of 7.0 with colours: its heights are checked with every example
+    (codec_contract.spec_examples); its colours are the expected-colours block, node by node, within
+    its colour_max_error of the colours the spec states it coded."""
+    import re
+
+    from mzc.formats import read_any
+
+    from codec_contract import REPO, example_bytes
+
+    found = re.findall(r"```mzc-example-hex\n([^`]*)```\s*```expected\n[^`]*```\s*```expected-colours\n([^`]*)```",
+                       (REPO / "spec" / "dwt2d.md").read_text())
+    assert len(found) == 1
+    example, colours = found[0]
+    data = example_bytes(example, True)
+    grid = read_any(data, "spec")
+    expected = np.array([[int(v) for v in line.split()] for line in colours.strip().splitlines()])
+    assert grid.colors.tolist() == expected.reshape(*grid.shape, 3).tolist()
+    row, col = np.mgrid[0:4, 0:6]
+    coded = np.stack([20 + 40 * col, 30 + 60 * row, 200 - 10 * col - 20 * row], axis=-1)
+    assert np.abs(grid.colors.astype(int) - coded)[grid.valid].max() <= 2
+    header, _payload, colour = compact.read(data, "spec")
+    assert header.tokens("colour_max_error") == ["2"] and len(colour) == 118

@@ -342,7 +342,7 @@ def compact_edited(data, keyword, words):
     sections' CRC-32s made right again."""
     from mzc.codecs.dwt2d import compact
 
-    header, payload = compact.read(data, "t")
+    header, payload, _colour = compact.read(data, "t")
     fields = {name: values for name, (values, _line) in header.fields.items()} | {keyword: words}
     return compact.file_bytes([f"{name} {' '.join(values)}" for name, values in fields.items()], payload)
 

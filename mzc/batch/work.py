@@ -251,6 +251,7 @@ def encode_item(job, item, data, row, timings):
     import numpy as np
 
     from mzc.codecs import get_codec
+    from mzc.colours import warn_uncoded
     from mzc.formats import read
     from mzc.ops.slicing import slice_surface
 
@@ -262,6 +263,7 @@ def encode_item(job, item, data, row, timings):
     codec = get_codec(settings["codec"])
     with timings.stage("encode"), about(source, f"encoding it with {codec.name}"):
         output, decoded = codec.encode_with_decoded(grid, **settings["codec_options"])
+    warn_uncoded(grid, codec, settings["codec_options"])
     valid = grid.valid
     errors = np.abs(decoded[valid] - grid.z[valid])
     row.update(rows=grid.shape[0], cols=grid.shape[1], valid_nodes=int(valid.sum()),

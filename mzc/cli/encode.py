@@ -170,7 +170,7 @@ def build_command():
         grid = read_grid(input)
         with about(display_name(input), f"encoding it with {codec.name}"):
             data = codec.encode(grid, **options)
-        warn_uncoded(grid, codec.kind)
+        warn_uncoded(grid, codec, options)
         write_output(output, data)
 
     scheduler = click.Option(["--scheduler"], metavar="ADDRESS",

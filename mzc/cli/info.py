@@ -29,7 +29,7 @@ def command(input, decode):
         grid, format_line, header, tiles = tiled_header(data, source, decode)
         chart_count = None
     else:
-        grid, format_line, header, chart_count = mzc_header(row, data, source, decode)
+        grid, format_line, header, chart_count, tiles = mzc_header(row, data, source, decode)
     rows, cols = grid.shape
     lines = [
         f"file      {source}",
@@ -62,9 +62,10 @@ def metric_lines(grid):
 
 
 def mzc_header(row, data, source, decode):
-    """(grid, format line, header lines, chart count) of an mzc file of the format ``row``, from its
-    header alone (its checksum checked), the grid decoded only with ``decode``; the chart count is
-    a charted dwt2d file's ``chart_count`` (its records are in its payload), else None."""
+    """(grid, format line, header lines, chart count, colour lines) of an mzc file of the format ``row``,
+    from its header alone (its checksum checked), the grid decoded only with ``decode``; the chart
+    count is a charted dwt2d file's ``chart_count`` (its records are in its payload), else None; the
+    colour lines say what a 7.0 file's colour section holds (``colour_lines``)."""
     import numpy as np
 
     from mzc.codecs.dwt2d import compact
@@ -73,15 +74,26 @@ def mzc_header(row, data, source, decode):
     from mzc.grid import ZGrid
 
     kind, major, minor = split_magic(data, source)
+    colour = None
     if row.name == "dwt2d" and compact.is_compact(data):   # binary fields, shown as the lines they stand for
-        header = compact.read(data, source)[0]
+        header, _payload, colour = compact.read(data, source)
     else:
         header, _body, _line = read_header(data, source, kind, major, **header_versions(row))
     fields, rows, cols = read_grid_fields(header)
     grid = read_as(row, data, source) if decode else ZGrid(z=np.broadcast_to(np.nan, (rows, cols)), **fields)
     lines = [f"{keyword} {' '.join(values)}" for keyword, (values, _) in header.fields.items()]
     chart_count = " ".join(header.tokens("chart_count")) if header.charted and header.has("chart_count") else None
-    return grid, f"mzc-{kind} {major}.{minor}", lines, chart_count
+    return grid, f"mzc-{kind} {major}.{minor}", lines, chart_count, colour_lines(header, colour)
+
+
+def colour_lines(header, colour):
+    """The line of a 7.0 file's colour section (None: no line): its bytes and the target its encoder
+    aimed at (the header's ``colour_psnr`` or ``colour_max_error``)."""
+    if colour is None:
+        return []
+    targets = [f"{keyword} {' '.join(header.tokens(keyword))}" for keyword in ("colour_psnr", "colour_max_error")
+               if header.has(keyword)]
+    return [f"colour    {len(colour)} bytes (section 3), {', '.join(targets) or 'no target given'}"]
 
 
 def tiled_header(data, source, decode):

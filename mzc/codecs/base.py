@@ -93,7 +93,8 @@ class Codec:
     ``window_writer(source, options, scheduler)``, for a codec that codes a grid too large to hold
     a window at a time (a raster read by windows, mzc.rasters.windows; on the Dask ``scheduler`` at
     that address, when not None), gives the file's bytes in chunks, or None when it codes that grid
-    whole (the caller then reads it whole).
+    whole (the caller then reads it whole); ``keeps_colour(grid, options)`` says whether the file of a
+    grid with colours carries them (mzc.colours.warn_uncoded names them when not).
     """
 
     name: str
@@ -111,6 +112,7 @@ class Codec:
     check_options: Callable[[dict[str, Any]], None] = field(default=lambda options: None)
     writer_with_decoded: Callable[..., tuple[bytes, np.ndarray]] | None = None
     window_writer: Callable[[Any, dict[str, Any], str | None], Iterator[bytes] | None] | None = None
+    keeps_colour: Callable[[ZGrid, Mapping[str, Any]], bool] = field(default=lambda grid, options: False)
 
     def __post_init__(self) -> None:
         if not self.kind:

@@ -59,9 +59,15 @@ def material_image(source, libraries):
         found = re.search(r"(?m)^\s*map_Kd\s+(.+?)\s*$", text)
         if found is None:
             continue
-        name = found.group(1).split()[-1]   # options (-s, -o, -clamp ...) come before the file name
+        name = texture_name(found.group(1))
         return image_beside(source, os.path.join(os.path.dirname(library), name), f"map_Kd of {library}")
     return None
+
+
+def texture_name(value):
+    """The file name of a ``map_Kd`` line's ``value``: all of it (a name may hold spaces, as trimesh's
+    ``fuze uv.jpg``), or after options (-s, -o, -clamp ..., which come first) its last word."""
+    return value.split()[-1] if value.startswith("-") else value
 
 
 def image_beside(source, name, named_by):

@@ -28,22 +28,28 @@ def sampled_colours(grid, mesh):
     a multi-chart grid's charts each place their own nodes."""
     if mesh.colors is None:
         return None
-    from mzc.measure.metrics import nearest_triangles
-
     colours = np.zeros((*grid.shape, 3), dtype=np.uint8)
     blocks = [chart.block() for chart in grid.charts] if grid.charts is not None else [(slice(None), slice(None))]
-    triangles = mesh.triangles if len(mesh.triangles) else point_triangles(len(mesh.points))
     for block, part in zip(blocks, grid.chart_grids()):
         valid = part.valid
         if not valid.any():
             continue
-        points = part.to_input_frame(part.node_points()[valid])
-        nearest = nearest_triangles(points, mesh.points, triangles)[1]
-        corners = triangles[nearest]
-        weights = barycentric(points, *(mesh.points[corners[:, i]] for i in range(3)))
-        mixed = sum(weights[:, i:i + 1] * mesh.colors[corners[:, i]] for i in range(3))
+        mixed = surface_colours(part.to_input_frame(part.node_points()[valid]), mesh)
         colours[block][valid] = np.clip(np.round(mixed), 0, 255).astype(np.uint8)
     return colours
+
+
+def surface_colours(points, mesh):
+    """(n, 3) float colours of the coloured ``mesh`` at the point of its surface nearest each of
+    ``points``: its triangle's vertex colours mixed by the point's barycentric weights; of a cloud,
+    the nearest point's colour (what slicing samples, and what benchmarks/coloured_scans.py measures
+    a rebuilt colour against)."""
+    from mzc.measure.metrics import nearest_triangles
+
+    triangles = mesh.triangles if len(mesh.triangles) else point_triangles(len(mesh.points))
+    corners = triangles[nearest_triangles(points, mesh.points, triangles)[1]]
+    weights = barycentric(points, *(mesh.points[corners[:, i]] for i in range(3)))
+    return sum(weights[:, i:i + 1] * mesh.colors[corners[:, i]].astype(np.float64) for i in range(3))
 
 
 def barycentric(points, a, b, c):

@@ -76,6 +76,8 @@ SLOPE_LIMIT = 2.0          # steps grow as 1/sqrt(cos(lean)) up to 2x (76 degree
 APPROXIMATION_GAIN = 0.7   # band 0's step over the finest detail step (measured: 0.5-3% smaller files)
 LEVEL_RATIO = 0.9          # each coarser detail level's step over the next finer one's (measured: 0.4-3.6%)
 TARGETS = ("max_error", "rmse", "size")   # at most one of them says what the encoder aims at...
+COLOUR_TARGETS = ("colour_psnr", "colour_max_error")   # ...and at most one of these, for the colours...
+DEFAULT_COLOUR_PSNR = 36.0   # ...whose default PSNR keeps the colour RMS error near 4 levels
 DEFAULT_RMSE_SPACING = 0.1   # ...and without one, rmse is a tenth of the grid's node spacing (default_rmse)
 DEADZONE = 0.5             # encoder-only rounding offset (floor(|c|/step + 1 - DEADZONE)): to the nearest, and
 RDO_LAMBDA = 0.05          # lowered_toward_zero's lambda in squared steps per bit then moves some toward zero
@@ -380,8 +382,9 @@ class Prepared:
     the magnitude is 0 where the coefficient is not relevant, so it quantises to the 0 that
     is never coded)."""
 
-    def __init__(self, grid, wavelet, levels, slope_limit, compact=True):
+    def __init__(self, grid, wavelet, levels, slope_limit, compact=True, colour=None):
         self.compact = compact   # 7.0, else the text header of 3.x, 4.0, 6.0 (a tile of a 5.0 file)
+        self.colour = colour     # (target line, colour section bytes) of a 7.0 file of a grid with colours
         self.transform = w2.TRANSFORMS[VERSION[0]]
         if np.isinf(grid.z).any():
             raise MzcError("the grid holds infinite heights", field="z")
@@ -453,7 +456,7 @@ class Prepared:
         version = written_version(self.grid, rounded is not None, self.compact)
         lines = self.header_lines(version, step, correction, max_error, rounded is not None)
         if version == COMPACT_VERSION:
-            return compact.file_bytes(lines[1:-1], encoder.finish()), decoded
+            return compact.file_bytes(lines[1:-1], encoder.finish(), self.colour and self.colour[1]), decoded
         return file_bytes(lines, encoder.finish()), decoded
 
     def header_lines(self, version, step, correction, max_error, rounded=False):
@@ -476,6 +479,8 @@ class Prepared:
             lines.append(f"rounding {ROUNDING}")
         if max_error is not None:
             lines.append(f"max_error {format_number(max_error)}")
+        if self.colour is not None:
+            lines.append(self.colour[0])
         return [*lines, "data"]
 
     def surface_rms(self, decoded):
@@ -543,10 +548,13 @@ def band_steps(geometry, steps, shapes, approximation_q, slope_limit):
 
 
 def check_options(options):
-    """Refuse more than one of max_error, rmse and size (none: ``default_rmse``), and a tile side
-    out of range."""
+    """Refuse more than one of max_error, rmse and size (none: ``default_rmse``), both colour targets,
+    and a tile side out of range."""
     if sum(options.get(name) is not None for name in TARGETS) > 1:
         raise MzcError("give one of max_error, rmse or size, not several", field="dwt2d", options=TARGETS)
+    if sum(options.get(name) is not None for name in COLOUR_TARGETS) > 1:
+        raise MzcError("give one of colour_psnr or colour_max_error, not both", field="dwt2d",
+                       options=COLOUR_TARGETS)
     from mzc.codecs.dwt2d.tiles import check_tile_option
 
     check_tile_option(options.get("tile"))
@@ -598,14 +606,15 @@ def window_writer(source, options, scheduler=None):
 
 
 def encode_whole(grid, max_error=None, rmse=None, size=None, wavelet=DEFAULT_WAVELET, level=None, slope_limit=None,
-                 unit_checked=False, compact=True):
+                 unit_checked=False, compact=True, colour_psnr=None, colour_max_error=None):
     """(bytes, the heights a decoder gets from them) of a ZGrid coded whole; at most one of
     ``max_error`` (bound at every valid node, grid units), ``rmse`` (target RMS surface error; on a
     geographic grid the vertical one, in the height unit) or ``size`` (target file bytes, not
     exceeded when reachable), none being ``default_rmse``;
     ``unit_checked`` when the caller has judged the grid's unit already (a tile, by its tiled
     grid's CRS); without ``compact`` the file has a 3.x, 4.0 or 6.0 text header, as
-    a tile of a 5.0 file has (written_version).
+    a tile of a 5.0 file has (written_version). A 7.0 file of a grid with colours carries them in its
+    colour section, coded at ``colour_psnr`` dB or within ``colour_max_error`` levels (``colour_section``).
 
     ``slope_limit`` defaults to SLOPE_LIMIT for ``rmse`` and ``size``, whose errors are
     surface distances, and to 1 (equal steps) for ``max_error``, a bound on heights, where
@@ -620,7 +629,8 @@ def encode_whole(grid, max_error=None, rmse=None, size=None, wavelet=DEFAULT_WAV
     if slope_limit is None:
         slope_limit = 1.0 if max_error is not None or is_geographic(grid) else SLOPE_LIMIT
     check_slope_limit(grid, slope_limit)
-    prepared = Prepared(grid, wavelet, level, slope_limit, compact)
+    colour = colour_section(grid, colour_psnr, colour_max_error) if compact else None
+    prepared = Prepared(grid, wavelet, level, slope_limit, compact, colour)
     if max_error is not None:
         bound, rounded = rounding_bounds(grid, max_error) or (max_error, None)
         # the smallest file, except that a finer step (lower RMS error) wins within ALPHA_SLACK of it
@@ -638,6 +648,28 @@ def encode_whole(grid, max_error=None, rmse=None, size=None, wavelet=DEFAULT_WAV
     inverse = w2.search_step(cost, target, 1.0 / (4.0 * span), 1.0 / finest, SIZE_GUESS / span, SIZE_SLOPE,
                              snap=lambda inv: 1.0 / w2.round_step(1.0 / inv))
     return kept.get(inverse) or prepared.encode(w2.round_step(1.0 / inverse))
+
+
+def colour_section(grid, psnr=None, max_error=None):
+    """(the header line of its target, the colour section's bytes) of a grid's colours, None without
+    them: coded within ``max_error`` levels, else at ``psnr`` dB (default DEFAULT_COLOUR_PSNR) over the
+    valid nodes (mzc.codecs.dwt2d.colour, spec/colour.md)."""
+    if grid.colors is None:
+        return None
+    from mzc.codecs.dwt2d.colour import encode_colour
+
+    if max_error is not None:
+        return f"colour_max_error {int(max_error)}", encode_colour(grid.colors, grid.valid, max_error=max_error)
+    psnr = DEFAULT_COLOUR_PSNR if psnr is None else psnr
+    return f"colour_psnr {format_number(psnr)}", encode_colour(grid.colors, grid.valid, psnr=psnr)
+
+
+def keeps_colour(grid, options):
+    """True when the file of ``grid`` with ``options`` carries its colours: coded whole, as 7.0 (the
+    tiles of a 5.0 file are 3.x files, which code the shape alone)."""
+    from mzc.codecs.dwt2d import tiles
+
+    return tiles.tile_side(grid.shape, options.get("tile"), charted=grid.charts is not None) is None
 
 
 def rounding_bounds(grid, max_error):
@@ -762,8 +794,9 @@ def read(data, source="<bytes>"):
     if tiles.is_tiled(data):
         return tiles.read(data, source)
     parametric = compact.is_compact(data)   # 7.0's table records
+    colour = None
     if parametric:
-        header, body = compact.read(data, source)
+        header, body, colour = compact.read(data, source)
     else:
         header, body, _first = read_header(data, source, KIND, COMPACT_VERSION[0], oldest_major=OLDEST_MAJOR,
                                            projected_major=PROJECTED_VERSION[0], checksum_since=CHECKSUM_SINCE,
@@ -795,6 +828,10 @@ def read(data, source="<bytes>"):
     if not np.isfinite(z[valid]).all():
         raise MzcError("decoded heights are not finite (corrupt steps or payload)", source=source, field="data")
     z[~valid] = np.nan
+    if colour is not None:
+        from mzc.codecs.dwt2d.colour import decode_colour
+
+        fields["colors"] = decode_colour(colour, valid, source)
     return ZGrid(z=z, **fields)
 
 
@@ -802,7 +839,7 @@ CODEC = Codec(
     "dwt2d", encode_grid, read, writer_with_decoded=encode_grid_with_decoded, version=COMPACT_VERSION,
     oldest_major=OLDEST_MAJOR, extension=".mzw2", spec="spec/dwt2d.md", window_writer=window_writer,
     summary="2D wavelet of the whole grid, entropy coded, error-bounded", check_options=check_options,
-    example={"max_error": 0.05}, options=(
+    example={"max_error": 0.05}, keeps_colour=keeps_colour, options=(
         Option("max_error", float, None, 0, MAX_MAGNITUDE, min_open=True, metavar="E",
                help="|decoded - input| <= E at every valid node (a raster of integers: integers within "
                     "floor(E))."),
@@ -817,6 +854,10 @@ CODEC = Codec(
         Option("slope_limit", float, None, 1, metavar="F",
                help="Steps grow as 1/sqrt(cos lean) up to F times; 1 = equal steps [default: 2 for rmse and size, "
                     "1 for max_error]."),
+        Option("colour_psnr", float, None, 0, 200, min_open=True, metavar="DB",
+               help="Code the grid's colours at this PSNR over the valid nodes [default: 36]."),
+        Option("colour_max_error", int, None, 0, 127, metavar="LEVELS",
+               help="Code the grid's colours within this many 8-bit levels at every valid node (0: lossless)."),
         Option("tile", int, None, 0, metavar="N",
                help="Code the grid in independent N x N tiles (4..4096), each decoded on its own; 0 = whole "
                     "[default: tiles of 1024 above 1024 x 1024 nodes]."),

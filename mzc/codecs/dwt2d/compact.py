@@ -17,7 +17,7 @@ from mzc.errors import MzcError
 from mzc.formats.header import CHECKSUM, Header, format_number
 
 MAGIC = b"mzc-dwt2d 7.0\n"
-HEADER, PAYLOAD = 1, 2          # section tags, in the order they come
+HEADER, PAYLOAD, COLOUR = 1, 2, 3   # section tags, in the order they come (COLOUR only in a file with colours)
 CRC = struct.Struct("<I")
 MAX_VARINT_BYTES = 10           # an unsigned 64-bit integer
 MAX_DIGITS = 40                 # a decimal's mantissa (repr of a binary64 has at most 17 digits)
@@ -28,7 +28,7 @@ FIELDS = {
     6: ("projection", "e"), 7: ("radius", "d"), 8: ("transform", "d"), 9: ("units", "t"), 10: ("nodata", "t"),
     11: ("crs", "t"), 12: ("raster", "t"), 13: ("chart_count", "u"), 14: ("wavelet", "e"), 15: ("levels", "u"),
     16: ("steps", "d"), 17: ("slope_limit", "d"), 18: ("correction", "d"), 19: ("rounding", "e"),
-    20: ("max_error", "d"),
+    20: ("max_error", "d"), 21: ("colour_psnr", "d"), 22: ("colour_max_error", "d"),
 }
 IDS = {keyword: (number, kind) for number, (keyword, kind) in FIELDS.items()}
 SMALL_EXPONENTS, EXPONENT_BIAS = (-8, 6), 8   # a decimal exponent in this range shares the mantissa's varint
@@ -75,10 +75,12 @@ def section(tag, body, before=b""):
     return head + CRC.pack(zlib.crc32(head, zlib.crc32(before)))
 
 
-def file_bytes(lines, payload):
-    """The 7.0 file of the header ``lines`` (3.x's, without the magic and ``data`` lines) and the payload."""
+def file_bytes(lines, payload, colour=None):
+    """The 7.0 file of the header ``lines`` (3.x's, without the magic and ``data`` lines), the payload
+    and, for a grid with colours, its colour section (mzc.codecs.dwt2d.colour's bytes)."""
     fields = b"".join(field_bytes(line) for line in lines)
-    return MAGIC + section(HEADER, fields, MAGIC) + section(PAYLOAD, payload)
+    coloured = b"" if colour is None else section(COLOUR, colour)
+    return MAGIC + section(HEADER, fields, MAGIC) + section(PAYLOAD, payload) + coloured
 
 
 # --------------------------------------------------------------------------- reading
@@ -195,10 +197,12 @@ def is_compact(data):
 
 
 def read(data, source):
-    """(Header, payload bytes) of a 7.0 file."""
+    """(Header, payload bytes, colour section bytes or None) of a 7.0 file."""
     reader = Reader(data, source)
     header = reader.header()
     payload = reader.section(PAYLOAD)
+    colour = reader.section(COLOUR) if bytes(reader.data[reader.position:reader.position + 1]) == bytes([COLOUR]) \
+        else None
     reader.check_end()
-    return header, payload
+    return header, payload, colour
 

@@ -418,13 +418,13 @@ def check_window(shape, window, source=None):
                     field="window")
 
 
-def window_grid(frame, z, row, col):
-    """The ZGrid of the values ``z`` of the window at node (``row``, ``col``) of ``frame``: its
-    fields, its own origin."""
+def window_grid(frame, z, row, col, colors=None):
+    """The ZGrid of the values ``z`` (and ``colors``, when the grid has them) of the window at node
+    (``row``, ``col``) of ``frame``: its fields, its own origin."""
     from mzc.grid import ZGrid
 
     fields = {**frame.fields, "origin": frame.block_fields(row, col)["origin"]}
-    return ZGrid(z=z, **fields)
+    return ZGrid(z=z, colors=colors, **fields)
 
 
 def window_of(grid, window):
@@ -433,7 +433,8 @@ def window_of(grid, window):
         raise MzcError("a multi-chart grid's window would cut its charts: decode it whole", field="window")
     row, col, rows, cols = window
     check_window(grid.shape, window)
-    return window_grid(frame_of(grid), grid.z[row:row + rows, col:col + cols], row, col)
+    colours = None if grid.colors is None else grid.colors[row:row + rows, col:col + cols]
+    return window_grid(frame_of(grid), grid.z[row:row + rows, col:col + cols], row, col, colours)
 
 
 def open_tiled(path):

@@ -1,0 +1,214 @@
+"""Coloured scans, whole files (issue 32): mzc's dwt2d file with its colour section beside Draco
+with its 8-bit colour attribute, shape and colour measured in the same run.
+
+    python benchmarks/coloured_scans.py [--quick] [--out DIR]
+
+Scans (tests/data/public; no face of shared/data is coloured: the 12 PLY faces have no colour
+and example.obj names no material, so none is measured):
+
+- ``fuze``: trimesh's fuze bottle, a textured OBJ (``map_Kd`` JPEG); ``mzc.read`` gives each
+  vertex its texture colour and ``mzc.slice`` samples the surface's colour at every node.
+- ``milk``: PCL's Kinect RGB-D cloud of a milk carton (``rgba``), sliced by ``mzc.slice``.
+
+mzc through its API only: ``mzc.slice(scan)`` with its defaults, ``mzc.encode(grid, "dwt2d",
+rmse=..., colour_psnr=...)`` at a ladder of RMS targets in % of D (the scan's bounding-box
+diagonal), ``mzc.decode`` and ``mzc.triangulate``: the whole file, shape and colour. Draco
+(DracoPy, compression level 10) codes the scan itself (the cloud as a point cloud) with its
+colours as an 8-bit attribute at a ladder of position bits, in the same run.
+
+Shape error: the whole-surface RMS distance of benchmarks/objects.py (``errors``: area-weighted
+samples each way, point-to-surface; a cloud's points as discs), % of D. Colour error: each
+rebuilt vertex's colour against the source colour at the nearest source point (on the
+fuze's surface, its vertex colours mixed barycentrically; a point of the milk cloud), RMS
+over the three channels in 8-bit levels, and PSNR. Draco's bytes at mzc's shape error are
+interpolated log-log on its Pareto front (report.bytes_at).
+Writes coloured-scans-results.md and coloured-scans-results.json into --out.
+"""
+
+import datetime
+import json
+import os
+import sys
+import time
+import warnings
+from pathlib import Path
+
+for _name in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
+    os.environ.setdefault(_name, "1")  # single-threaded timings
+
+import numpy as np  # noqa: E402
+
+HERE = Path(__file__).resolve().parent
+sys.path.insert(0, str(HERE))
+sys.path.insert(0, str(HERE.parent))
+
+from contenders import load  # noqa: E402
+from objects import QUICK_SAMPLES, SAMPLES, Surface, errors  # noqa: E402
+from report import benchmark_parser, bytes_at, fmt, git_commit, machine, pareto, versions  # noqa: E402
+
+PUBLIC = HERE.parent / "tests" / "data" / "public"
+SCANS = {"fuze": PUBLIC / "fuze" / "fuze.obj", "milk": PUBLIC / "pcl-milk" / "milk_color.pcd"}
+RMSE_LADDER = (0.01, 0.02, 0.035, 0.05, 0.1, 0.2)   # % of D
+DRACO_BITS = tuple(range(4, 15))   # 4-6 reach the milk cloud's grid, 0.3% D from its noisy points
+COLOUR_PSNRS = (30.0, 36.0)   # dB: the colour section's targets tried at every shape target
+RATIO_GOAL, COLOUR_RMS_GOAL = 0.25, 12.0   # issue 32: mzc's whole file / Draco's; levels
+PACKAGES = ("numpy", "scipy", "constriction", "DracoPy", "Pillow", "trimesh")
+
+
+def colour_errors(source, points, rebuilt_colours):
+    """(RMS in 8-bit levels, PSNR dB) of ``rebuilt_colours`` at ``points`` against the colour of the
+    source (an mzc Mesh) at its point nearest each (mzc.ops.colouring.surface_colours: on a mesh's
+    surface its vertex colours mixed barycentrically, in a cloud the nearest point's)."""
+    from mzc.ops.colouring import surface_colours
+
+    error = rebuilt_colours.astype(np.float64) - surface_colours(points, source)
+    mse = float(np.mean(error ** 2))
+    return float(np.sqrt(mse)), (float("inf") if mse == 0 else float(10 * np.log10(255.0 ** 2 / mse)))
+
+
+def mzc_point(grid, rmse, psnr, mesh, source, samples):
+    """One mzc file of ``grid`` (sliced from the scan ``mesh``, ``source`` its Surface): bytes (and the
+    colour section's), shape and colour errors, times."""
+    import mzc
+    from mzc.codecs.dwt2d import compact
+
+    start = time.perf_counter()
+    data = mzc.encode(grid, "dwt2d", rmse=rmse * source.diagonal / 100, colour_psnr=psnr)
+    encoded = time.perf_counter()
+    rebuilt = mzc.triangulate(mzc.decode(data))
+    decoded = time.perf_counter()
+    colour_bytes = len(compact.read(data, "mzc")[2])
+    rms, peak = colour_errors(mesh, rebuilt.points, rebuilt.colors)
+    return {"contender": "mzc", "setting": rmse, "colour_psnr": psnr, "bytes": len(data),
+            "colour_bytes": colour_bytes, "shape_bytes": len(data) - colour_bytes,
+            "encode_s": encoded - start, "decode_s": decoded - encoded,
+            **errors(source, Surface.of(rebuilt), samples), "colour_rms": rms, "colour_psnr_measured": peak}
+
+
+def draco_point(draco, mesh, bits, source, samples):
+    """One Draco file of the scan ``mesh`` (``source`` its Surface) with its colours (8 bits a channel) at
+    ``bits`` position bits."""
+    faces = mesh.triangles.astype(np.uint32) if len(mesh.triangles) else None
+    start = time.perf_counter()
+    data = bytes(draco.encode(mesh.points.astype(np.float32), faces, quantization_bits=bits, compression_level=10,
+                              colors=mesh.colors))
+    encoded = time.perf_counter()
+    decoded = draco.decode(data)
+    done = time.perf_counter()
+    points = np.asarray(decoded.points, dtype=float)
+    triangles = np.asarray([] if faces is None else decoded.faces, dtype=np.int64).reshape(-1, 3)
+    rms, peak = colour_errors(mesh, points, np.asarray(decoded.colors, dtype=np.uint8)[:, :3])
+    return {"contender": "Draco", "setting": bits, "bytes": len(data), "encode_s": encoded - start,
+            "decode_s": done - encoded, **errors(source, Surface(points, triangles), samples),
+            "colour_rms": rms, "colour_psnr_measured": peak}
+
+
+def run_scan(name, path, samples, quick, missing):
+    """Every point of one scan: the uncoded grid (the floor), mzc's ladder at each colour target,
+    Draco's ladder."""
+    import mzc
+
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        mesh = mzc.read(str(path))
+        source = Surface.of(mesh)
+        grid = mzc.slice(mesh)
+        floor = mzc.triangulate(grid)
+    result = {"scan": name, "path": str(path.relative_to(HERE.parent)), "points_in": len(mesh.points),
+              "triangles_in": len(mesh.triangles), "diagonal": source.diagonal, "grid": list(grid.shape),
+              "valid_nodes": int(grid.valid.sum()), "warnings": sorted({str(w.message) for w in caught}),
+              "floor": {**errors(source, Surface.of(floor), samples),
+                        **dict(zip(("colour_rms", "colour_psnr_measured"),
+                                   colour_errors(mesh, floor.points, floor.colors)))},
+              "points": []}
+    ladder = RMSE_LADDER[1::2] if quick else RMSE_LADDER
+    for psnr in COLOUR_PSNRS:
+        result["points"] += [mzc_point(grid, rmse, psnr, mesh, source, samples) for rmse in ladder]
+    draco = load("DracoPy", missing, "Draco (DracoPy)")
+    if draco:
+        bits = DRACO_BITS[::2] if quick else DRACO_BITS
+        result["points"] += [draco_point(draco, mesh, b, source, samples) for b in bits]
+    result["comparisons"] = comparisons(result["points"])
+    return result
+
+
+def comparisons(points):
+    """Each mzc point beside Draco's bytes at its whole-surface RMS (None outside Draco's range)."""
+    front = pareto([p for p in points if p["contender"] == "Draco"], "whole rms")
+    rows = []
+    for p in (p for p in points if p["contender"] == "mzc"):
+        draco = bytes_at(front, p["whole"]["rms"])
+        rows.append({"rmse_target": p["setting"], "colour_psnr": p["colour_psnr"], "whole_rms": p["whole"]["rms"],
+                     "mzc_bytes": p["bytes"], "colour_bytes": p["colour_bytes"], "draco_bytes": draco,
+                     "ratio": None if draco is None else p["bytes"] / draco, "colour_rms": p["colour_rms"],
+                     "goal_met": draco is not None and p["bytes"] / draco <= RATIO_GOAL
+                     and p["colour_rms"] <= COLOUR_RMS_GOAL})
+    return rows
+
+
+def markdown(document):
+    """The report: method, the scans, each scan's comparison table and Draco's points."""
+    lines = ["# Coloured scans: whole files (shape and colour), mzc beside Draco (issue 32)", "",
+             f"`python benchmarks/coloured_scans.py{' --quick' if document['quick'] else ''}` at commit "
+             f"{document['commit']}, {document['date']}, on {document['machine']}; {document['seconds']:.0f} s.",
+             "Package versions: " + ", ".join(f"{k} {v}" for k, v in document["versions"].items()) + ".", "",
+             "Shape error: whole-surface RMS distance (benchmarks/objects.py's `errors`, "
+             f"{document['samples']} area-weighted samples each way), % of D (the scan's bounding-box diagonal). "
+             "Colour error: each rebuilt vertex's colour against the source colour at the nearest source point "
+             "(on the fuze's surface, its vertex colours mixed barycentrically; of the milk cloud, "
+             "the nearest point's), "
+             "RMS in 8-bit levels over the three channels, and PSNR. Draco codes the scan (the cloud as points) "
+             "with its colours as an 8-bit attribute, compression level 10; its bytes at mzc's shape error are "
+             "interpolated log-log on its Pareto front. mzc's bytes are the whole `.mzw2` file (header, shape "
+             f"payload, colour section). Goal: mzc / Draco <= {RATIO_GOAL} at equal shape error with colour RMS "
+             f"<= {COLOUR_RMS_GOAL:g} levels.", "",
+             "| scan | input | grid (valid nodes) | D | uncoded grid: shape RMS % D | colour RMS | PSNR |",
+             "|---|---|---|---|---|---|---|"]
+    for s in document["scans"]:
+        what = f"{s['points_in']} points" + (f", {s['triangles_in']} triangles" if s["triangles_in"] else "")
+        lines.append(f"| {s['scan']} | {what} | {s['grid'][0]} x {s['grid'][1]} ({s['valid_nodes']}) | "
+                     f"{fmt(s['diagonal'])} | {fmt(s['floor']['whole']['rms'])} | {fmt(s['floor']['colour_rms'])} | "
+                     f"{fmt(s['floor']['colour_psnr_measured'])} |")
+    for s in document["scans"]:
+        lines += ["", f"## {s['scan']}", "",
+                  "| rmse target % D | colour PSNR target | shape RMS % D | mzc bytes | of them colour | colour RMS | "
+                  "colour PSNR | Draco bytes at that RMS | mzc / Draco | goal met |", "|---" * 10 + "|"]
+        measured = {(p["setting"], p["colour_psnr"]): p for p in s["points"] if p["contender"] == "mzc"}
+        for c in s["comparisons"]:
+            p = measured[(c["rmse_target"], c["colour_psnr"])]
+            lines.append(f"| {c['rmse_target']} | {c['colour_psnr']:g} | {fmt(c['whole_rms'])} | {c['mzc_bytes']} | "
+                         f"{c['colour_bytes']} | {fmt(c['colour_rms'])} | {fmt(p['colour_psnr_measured'])} | "
+                         f"{'n/a (outside Draco range)' if c['draco_bytes'] is None else round(c['draco_bytes'])} | "
+                         f"{'n/a' if c['ratio'] is None else fmt(c['ratio'])} | {'yes' if c['goal_met'] else 'no'} |")
+        met = [c for c in s["comparisons"] if c["goal_met"]]
+        where = f", from {fmt(min(c['whole_rms'] for c in met))} % D" if met else ""
+        lines += ["", f"Goal (mzc / Draco <= {RATIO_GOAL} at equal shape RMS, colour RMS <= {COLOUR_RMS_GOAL:g}) "
+                  f"met at {len(met)} of {len(s['comparisons'])} points{where}."]
+        lines += ["", "Draco's points:", "", "| bits | bytes | shape RMS % D | colour RMS | colour PSNR |",
+                  "|---|---|---|---|---|"]
+        lines += [f"| {p['setting']} | {p['bytes']} | {fmt(p['whole']['rms'])} | {fmt(p['colour_rms'])} | "
+                  f"{fmt(p['colour_psnr_measured'])} |" for p in s["points"] if p["contender"] == "Draco"]
+        if s["warnings"]:
+            lines += ["", "Warnings while reading and slicing: " + "; ".join(s["warnings"])]
+    if document["missing"]:
+        lines += ["", "Missing: " + "; ".join(f"{k} ({v})" for k, v in document["missing"].items())]
+    return "\n".join(lines) + "\n"
+
+
+def main():
+    args = benchmark_parser(__doc__, "two rmse targets, every other Draco setting, fewer samples").parse_args()
+    started = time.perf_counter()
+    samples = QUICK_SAMPLES if args.quick else SAMPLES
+    missing = {}
+    scans = [run_scan(name, path, samples, args.quick, missing) for name, path in SCANS.items() if path.is_file()]
+    document = {"commit": git_commit(), "date": datetime.datetime.now(datetime.UTC).strftime("%Y-%m-%d %H:%M UTC"),
+                "machine": machine(), "versions": versions(PACKAGES), "quick": args.quick, "samples": samples,
+                "missing": missing, "scans": scans, "seconds": time.perf_counter() - started}
+    args.out.mkdir(parents=True, exist_ok=True)
+    (args.out / "coloured-scans-results.json").write_text(json.dumps(document, indent=1) + "\n")
+    (args.out / "coloured-scans-results.md").write_text(markdown(document))
+    print(markdown(document))
+
+
+if __name__ == "__main__":
+    main()
