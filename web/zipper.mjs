@@ -62,12 +62,11 @@ function joined(Type, first, second) {
  * CREASE_REACH of its length and a `spacing` of the middle; the edges of a stitch a piece of
  * which would turn over are moved back to their middles, round by round. */
 function creased(points, stitches, boundary, vertex, normal, spacing) {
-  const size = points.length / 3, count = stitches.length / 3;
+  const size = points.length / 3;
   const keyOf = (a, b) => Math.min(a, b) * size + Math.max(a, b);
   const keys = Float64Array.from(stitches, (v, i) => keyOf(v, stitches[i % 3 === 2 ? i - 2 : i + 1]));
-  const edges = Float64Array.from(new Set(keys)).sort(), number = new Map();
-  edges.forEach((e, i) => number.set(e, i));
-  const which = Int32Array.from(keys, (e) => number.get(e));
+  const edges = ascendingOnce(keys);
+  const which = Int32Array.from(keys, (key) => lowerBound(edges, key));
   const unit = new Float64Array(3 * size);   // zero where the filling added a point, or the normals cancel
   vertex.forEach((v, r) => {
     const x = normal[3 * r], y = normal[3 * r + 1], z = normal[3 * r + 2], length = Math.sqrt(x * x + y * y + z * z);
@@ -95,26 +94,56 @@ function creased(points, stitches, boundary, vertex, normal, spacing) {
     if (sharp) fresh[e] = size + bent.push(e) - 1;
   });
   const { pieces, parent } = split(stitches, Int32Array.from(which, (e) => fresh[e]));
-  const at = (v) => (v < size ? points.subarray(3 * v, 3 * v + 3) : crease.subarray(3 * bent[v - size], 3 * bent[v - size] + 3));
-  const facing = [];
-  for (const f of new Set(parent)) facing[f] = normalOf(points, stitches[3 * f], stitches[3 * f + 1], stitches[3 * f + 2]);
-  const tested = [];   // the pieces of the stitches split
-  parent.forEach((f, i) => { if (pieces[3 * i] >= size || pieces[3 * i + 1] >= size || pieces[3 * i + 2] >= size) tested.push(i); });
-  for (;;) {
-    const back = new Set();
-    for (const i of tested) {
-      const f = parent[i], n = facing[f], [a, b, c] = [at(pieces[3 * i]), at(pieces[3 * i + 1]), at(pieces[3 * i + 2])];
-      const ab = [b[0] - a[0], b[1] - a[1], b[2] - a[2]], ac = [c[0] - a[0], c[1] - a[1], c[2] - a[2]];
-      const own = [ab[1] * ac[2] - ab[2] * ac[1], ab[2] * ac[0] - ab[0] * ac[2], ab[0] * ac[1] - ab[1] * ac[0]];
-      if (!(dot3(n, n) > 0 && dot3(own, n) <= 0)) continue;
-      for (let k = 0; k < 3; k++) {
-        const e = which[3 * f + k];
-        if ([0, 1, 2].some((d) => crease[3 * e + d] !== middle[3 * e + d])) back.add(e);   // at its middle, a sliver may still turn
+  while (movedBack(points, stitches, which, pieces, parent, bent, crease, middle));
+  const creases = new Float64Array(3 * bent.length);
+  bent.forEach((e, i) => creases.set(crease.subarray(3 * e, 3 * e + 3), 3 * i));
+  return { creases, pieces };
+}
+
+/** Whether a round (spec/zgrid.md, step 10) moved crease points back: each edge (its `crease`
+ * and `middle`, 3 per edge) of a stitch (its edges `which`, 3 per stitch) with one of its
+ * `pieces` (from stitch `parent`) turned over, its normal not within 90 degrees of the
+ * stitch's own, whose crease is not at its middle, moves there, all after the test. A piece's
+ * corner v is a point (v < the point count) or split edge `bent`[v - count]'s crease. */
+function movedBack(points, stitches, which, pieces, parent, bent, crease, middle) {
+  const size = points.length / 3, back = new Set(), corner = new Float64Array(9);
+  for (let i = 0; i < parent.length; i++) {
+    if (pieces[3 * i] < size && pieces[3 * i + 1] < size && pieces[3 * i + 2] < size) continue;   // not split
+    for (let j = 0; j < 3; j++) {
+      const v = pieces[3 * i + j], from = v < size ? points : crease, at = 3 * (v < size ? v : bent[v - size]);
+      for (let d = 0; d < 3; d++) corner[3 * j + d] = from[at + d];
+    }
+    const f = parent[i], [n0, n1, n2] = normalOf(points, stitches[3 * f], stitches[3 * f + 1], stitches[3 * f + 2]);
+    const [p0, p1, p2] = normalOf(corner, 0, 1, 2);
+    if (!((n0 * n0 + n1 * n1) + n2 * n2 > 0 && (p0 * n0 + p1 * n1) + p2 * n2 <= 0)) continue;
+    for (let k = 0; k < 3; k++) {
+      const e = which[3 * f + k];
+      if (crease[3 * e] !== middle[3 * e] || crease[3 * e + 1] !== middle[3 * e + 1] || crease[3 * e + 2] !== middle[3 * e + 2]) {
+        back.add(e);   // at its middle, a sliver may still turn
       }
     }
-    if (!back.size) return { creases: Float64Array.from(bent.flatMap((e) => [...crease.subarray(3 * e, 3 * e + 3)])), pieces };
-    for (const e of back) crease.set(middle.subarray(3 * e, 3 * e + 3), 3 * e);
   }
+  for (const e of back) crease.set(middle.subarray(3 * e, 3 * e + 3), 3 * e);
+  return back.size > 0;
+}
+
+/** The values of `keys` (a Float64Array), each once, ascending. */
+function ascendingOnce(keys) {
+  const sorted = keys.slice().sort();
+  let count = 0;
+  sorted.forEach((key, i) => { if (i === 0 || key !== sorted[i - 1]) sorted[count++] = key; });
+  return sorted.subarray(0, count);
+}
+
+/** The first index of ascending `values` whose value is not below `value`. */
+function lowerBound(values, value) {
+  let low = 0, high = values.length;
+  while (low < high) {
+    const mid = (low + high) >> 1;
+    if (values[mid] < value) low = mid + 1;
+    else high = mid;
+  }
+  return low;
 }
 
 /** {pieces, parent}: `triangles` with each edge k (corners k, k + 1) whose `middle` (3 per
