@@ -5,7 +5,8 @@ turns, poles and depth jumps at several angles, geographic grids (placed in metr
 their centre as mzc places them), and multi-chart grids, their seams zipped by web/zipper.mjs
 as mzc's zipper zips them (spec/zgrid.md, Zipping the charts): the fixtures, the sample blob,
 a shared object, and web/zipper.mjs's zipCharts against mzc.ops.zipper.zip_charts on the
-zipper tests' closed surfaces and on triangle soups. Skipped when node is not installed."""
+zipper tests' closed surfaces (the boxes' creases put back) and on triangle soups. Skipped when
+node is not installed."""
 
 import shutil
 import subprocess
@@ -224,14 +225,16 @@ def test_zip_charts_gives_mzc_zippers_points_and_triangles(tmp_path):
     run = subprocess.run([NODE, "--input-type=module", "-e", ZIP_SCRIPT, str(tmp_path / "cases.json")],
                          capture_output=True, cwd=WEB, timeout=300)
     assert run.returncode == 0, run.stderr.decode()
-    stitched = []
+    stitched, pointed = [], []
     for (name, points, triangles, chart, spacing), made in zip(cases, json.loads(run.stdout), strict=True):
         zipped_points, zipped_triangles = zip_charts(points, triangles, chart, spacing)
         assert np.array_equal(np.reshape(made["points"], (-1, 3)), zipped_points), name
         assert np.array_equal(np.reshape(made["triangles"], (-1, 3)), zipped_triangles), name
         stitched += [name] if len(zipped_triangles) > len(triangles) else []
+        pointed += [name] if len(zipped_points) > len(points) else []
     assert not SURFACES.difference(stitched)   # not meshes the zipper leaves alone
     assert len(stitched) > len(SURFACES) + 20   # nor soups
+    assert {"cube", "bored_box"} <= set(pointed)   # the creases of the boxes' edges put back (step 10)
 
 
 NEAREST_SCRIPT = """

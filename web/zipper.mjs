@@ -8,7 +8,7 @@
 // The steps, each a function below: the boundary edges (boundaryEdges); each boundary
 // vertex's nearest boundary vertices (neighbours); coincident vertices of two charts welded
 // (welded); the gap's half-edges, wedges and rungs threaded into faces (Gap); each face filled
-// by ear clipping (fill).
+// by ear clipping (fill); the creases of the seams put back (creased).
 
 const REACH = 3.0;        // spacings: the longest rung
 const CANDIDATES = 8;     // the nearest boundary vertices looked at for a partner
@@ -18,10 +18,13 @@ const WELD = 1e-9;        // spacings: boundary vertices of two charts this clos
 const LONGEST = 6.0;      // spacings: the longest edge a filling may add to a face on a rim
 const RIM_SHARE = 0.25;   // a face more of whose vertices have no other chart near lies on a rim
 const QUALITY = 0.05;     // the least quality an ear's cost divides by
+const SHARP = 0.94;       // cosine of 20 degrees: ends whose tangent planes bend by 20-160 degrees meet in a crease
+const CREASE_REACH = 0.5; // the crease point lies at most this share of its edge's length from the edge's middle
 
 /** {positions, indices}: the chart meshes (`positions` Float64Array n * 3, `indices` m * 3,
  * `charts` the chart of each vertex, sampled at `spacing`) with their seams closed: the
- * points, then any added; the triangles (over welded vertices), then the stitches. */
+ * points, then any the filling added, then the creases'; the triangles (over welded
+ * vertices), then the stitches split at the creases. */
 export function zipCharts(positions, indices, charts, spacing) {
   const n = positions.length / 3;
   let triangles = new Int32Array(indices);
@@ -34,14 +37,139 @@ export function zipCharts(positions, indices, charts, spacing) {
     if (!boundary.tail.length) return { positions, indices: new Uint32Array(triangles) };
     near = neighbours(positions, boundary, spacing);
   }
-  const { added, stitches } = new Gap(positions, triangles, charts, boundary, near, spacing).filled();
+  const gap = new Gap(positions, triangles, charts, boundary, near, spacing);
+  const { added, stitches } = gap.filled();
   const points = new Float64Array(positions.length + added.length);
   points.set(positions);
   points.set(added, positions.length);
-  const out = new Uint32Array(triangles.length + stitches.length);
-  out.set(triangles);
-  out.set(stitches, triangles.length);
-  return { positions: points, indices: out };
+  const { creases, pieces } = creased(points, stitches, boundary, gap.vertex, gap.normal, spacing);
+  return { positions: joined(Float64Array, points, creases), indices: joined(Uint32Array, triangles, pieces) };
+}
+
+/** A `Type` array of the values of `first`, then those of `second`. */
+function joined(Type, first, second) {
+  const out = new Type(first.length + second.length);
+  out.set(first);
+  out.set(second, first.length);
+  return out;
+}
+
+/** {creases, pieces}: the points put on the seams' creases (x y z each, numbered after `points`)
+ * and the `stitches` split at them (spec/zgrid.md, Zipping the charts, step 10): each edge of
+ * the stitches that is not a chart's (`boundary`) and whose ends' unit normals (`normal`, the
+ * sums at the boundary vertices `vertex`; none elsewhere) bend by 20 to 160 degrees is split
+ * at the point of their tangent planes' crease nearest its middle, when that lies within
+ * CREASE_REACH of its length and a `spacing` of the middle; the edges of a stitch a piece of
+ * which would turn over are moved back to their middles, round by round. */
+function creased(points, stitches, boundary, vertex, normal, spacing) {
+  const size = points.length / 3;
+  const keyOf = (a, b) => Math.min(a, b) * size + Math.max(a, b);
+  const keys = Float64Array.from(stitches, (v, i) => keyOf(v, stitches[i % 3 === 2 ? i - 2 : i + 1]));
+  const edges = ascendingOnce(keys);
+  const which = Int32Array.from(keys, (key) => lowerBound(edges, key));
+  const unit = new Float64Array(3 * size);   // zero where the filling added a point, or the normals cancel
+  vertex.forEach((v, r) => {
+    const x = normal[3 * r], y = normal[3 * r + 1], z = normal[3 * r + 2], length = Math.sqrt(x * x + y * y + z * z);
+    for (let d = 0; d < 3; d++) unit[3 * v + d] = normal[3 * r + d] / (length > 0 ? length : Infinity);
+  });
+  const chartEdges = new Set(Array.from(boundary.tail, (a, e) => keyOf(a, boundary.head[e])));
+  const middle = new Float64Array(3 * edges.length), crease = new Float64Array(3 * edges.length);
+  const fresh = new Int32Array(edges.length).fill(-1), bent = [];
+  edges.forEach((key, e) => {
+    const a = Math.floor(key / size), b = key - a * size;
+    const pa = points.subarray(3 * a, 3 * a + 3), pb = points.subarray(3 * b, 3 * b + 3);
+    const na = unit.subarray(3 * a, 3 * a + 3), nb = unit.subarray(3 * b, 3 * b + 3);
+    const m = [(pa[0] + pb[0]) / 2, (pa[1] + pb[1]) / 2, (pa[2] + pb[2]) / 2];
+    const cosine = dot3(na, nb), across = 1.0 - cosine * cosine;
+    const alongA = dot3(na, [pa[0] - m[0], pa[1] - m[1], pa[2] - m[2]]);
+    const alongB = dot3(nb, [pb[0] - m[0], pb[1] - m[1], pb[2] - m[2]]);
+    let sharp = across > 1.0 - SHARP * SHARP && dot3(na, na) > 0 && dot3(nb, nb) > 0;
+    const divisor = sharp ? across : 1.0;
+    const alpha = (alongA - cosine * alongB) / divisor, beta = (alongB - cosine * alongA) / divisor;
+    const c = [0, 1, 2].map((d) => m[d] + alpha * na[d] + beta * nb[d]);
+    const off = [c[0] - m[0], c[1] - m[1], c[2] - m[2]], side = [pb[0] - pa[0], pb[1] - pa[1], pb[2] - pa[2]];
+    sharp &&= Math.sqrt(dot3(off, off)) <= Math.min(CREASE_REACH * Math.sqrt(dot3(side, side)), spacing) && !chartEdges.has(key);
+    middle.set(m, 3 * e);
+    crease.set(c, 3 * e);
+    if (sharp) fresh[e] = size + bent.push(e) - 1;
+  });
+  const { pieces, parent } = split(stitches, Int32Array.from(which, (e) => fresh[e]));
+  while (movedBack(points, stitches, which, pieces, parent, bent, crease, middle));
+  const creases = new Float64Array(3 * bent.length);
+  bent.forEach((e, i) => creases.set(crease.subarray(3 * e, 3 * e + 3), 3 * i));
+  return { creases, pieces };
+}
+
+/** Whether a round (spec/zgrid.md, step 10) moved crease points back: each edge (its `crease`
+ * and `middle`, 3 per edge) of a stitch (its edges `which`, 3 per stitch) with one of its
+ * `pieces` (from stitch `parent`) turned over, its normal not within 90 degrees of the
+ * stitch's own, whose crease is not at its middle, moves there, all after the test. A piece's
+ * corner v is a point (v < the point count) or split edge `bent`[v - count]'s crease. */
+function movedBack(points, stitches, which, pieces, parent, bent, crease, middle) {
+  const size = points.length / 3, back = new Set(), corner = new Float64Array(9);
+  for (let i = 0; i < parent.length; i++) {
+    if (pieces[3 * i] < size && pieces[3 * i + 1] < size && pieces[3 * i + 2] < size) continue;   // not split
+    for (let j = 0; j < 3; j++) {
+      const v = pieces[3 * i + j], from = v < size ? points : crease, at = 3 * (v < size ? v : bent[v - size]);
+      for (let d = 0; d < 3; d++) corner[3 * j + d] = from[at + d];
+    }
+    const f = parent[i], [n0, n1, n2] = normalOf(points, stitches[3 * f], stitches[3 * f + 1], stitches[3 * f + 2]);
+    const [p0, p1, p2] = normalOf(corner, 0, 1, 2);
+    if (!((n0 * n0 + n1 * n1) + n2 * n2 > 0 && (p0 * n0 + p1 * n1) + p2 * n2 <= 0)) continue;
+    for (let k = 0; k < 3; k++) {
+      const e = which[3 * f + k];
+      if (crease[3 * e] !== middle[3 * e] || crease[3 * e + 1] !== middle[3 * e + 1] || crease[3 * e + 2] !== middle[3 * e + 2]) {
+        back.add(e);   // at its middle, a sliver may still turn
+      }
+    }
+  }
+  for (const e of back) crease.set(middle.subarray(3 * e, 3 * e + 3), 3 * e);
+  return back.size > 0;
+}
+
+/** The values of `keys` (a Float64Array), each once, ascending. */
+function ascendingOnce(keys) {
+  const sorted = keys.slice().sort();
+  let count = 0;
+  sorted.forEach((key, i) => { if (i === 0 || key !== sorted[i - 1]) sorted[count++] = key; });
+  return sorted.subarray(0, count);
+}
+
+/** The first index of ascending `values` whose value is not below `value`. */
+function lowerBound(values, value) {
+  let low = 0, high = values.length;
+  while (low < high) {
+    const mid = (low + high) >> 1;
+    if (values[mid] < value) low = mid + 1;
+    else high = mid;
+  }
+  return low;
+}
+
+/** {pieces, parent}: `triangles` with each edge k (corners k, k + 1) whose `middle` (3 per
+ * triangle) is not -1 split there, in mzc's order (spec/zgrid.md, step 10): the triangles
+ * with none as they were; then for k = 0, 1, 2 those with one split edge k, each in two, and
+ * those with two, k and k + 1, each in three; then those with three, each in four; and the
+ * triangle each piece comes from. */
+function split(triangles, middle) {
+  const count = triangles.length / 3, out = [], parent = [];
+  const cuts = (f) => (middle[3 * f] >= 0) + (middle[3 * f + 1] >= 0) + (middle[3 * f + 2] >= 0);
+  const pieces = (test, ...shapes) => {
+    const chosen = [];
+    for (let f = 0; f < count; f++) if (test(f)) chosen.push(f);
+    for (const shape of shapes) for (const f of chosen) { out.push(...shape(f)); parent.push(f); }
+  };
+  const corner = (f, k) => triangles[3 * f + k % 3], cut = (f, k) => middle[3 * f + k % 3];
+  pieces((f) => cuts(f) === 0, (f) => [corner(f, 0), corner(f, 1), corner(f, 2)]);
+  for (let k = 0; k < 3; k++) {
+    const t = (f, i) => corner(f, k + i), m = (f, i) => cut(f, k + i);
+    pieces((f) => cuts(f) === 1 && m(f, 0) >= 0, (f) => [t(f, 0), m(f, 0), t(f, 2)], (f) => [m(f, 0), t(f, 1), t(f, 2)]);
+    pieces((f) => cuts(f) === 2 && m(f, 2) < 0, (f) => [m(f, 0), t(f, 1), m(f, 1)], (f) => [t(f, 0), m(f, 0), m(f, 1)],
+      (f) => [t(f, 0), m(f, 1), t(f, 2)]);
+  }
+  pieces((f) => cuts(f) === 3, (f) => [corner(f, 0), cut(f, 0), cut(f, 2)], (f) => [cut(f, 0), corner(f, 1), cut(f, 1)],
+    (f) => [cut(f, 2), cut(f, 1), corner(f, 2)], (f) => [cut(f, 0), cut(f, 1), cut(f, 2)]);
+  return { pieces: Uint32Array.from(out), parent };
 }
 
 /** The colours (n * 3 bytes) of the zipped mesh's points: the charts' own (the first `count`), then
@@ -290,6 +418,7 @@ class Gap {
       for (let d = 0; d < 3; d++) for (const c of r) if (c >= 0) normal[3 * c + d] += m[d];
       for (let i = 0; i < 3; i++) if (r[i] >= 0 && r[(i + 1) % 3] >= 0) this.edges.add(this.key(r[i], r[(i + 1) % 3]));
     }
+    this.normal = normal;
     this.frame = new Float64Array(9 * size);
     for (let r = 0; r < size; r++) this.frame.set(tangentFrame(normal[3 * r], normal[3 * r + 1], normal[3 * r + 2]), 9 * r);
     this.chart = Int32Array.from(this.vertex, (v) => chart[v]);

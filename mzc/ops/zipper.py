@@ -104,7 +104,8 @@ def creased(points, charted, stitches, boundary, normals, spacing):
     triangles split with it (``split``). The edges of a stitch that this would turn over (a
     crease past a third plane where three charts meet) are split at their middles instead,
     round by round until none is (a stitch split at its edges' middles stays as it was). The
-    new points come after the given ones; the charts' triangles stay first."""
+    new points come after the given ones; the charts' triangles stay first (spec/zgrid.md,
+    Zipping the charts, step 10, the rule web/zipper.mjs follows to the same bits)."""
     size = len(points)
     key = edge_keys(stitches, stitches[:, [1, 2, 0]], size).ravel()   # edge k of a stitch: corners k, k + 1
     edges, which = np.unique(key, return_inverse=True)
