@@ -14,10 +14,12 @@ const FIELDS = {
   7: ["radius", "d"], 8: ["transform", "d"], 9: ["units", "t"], 10: ["nodata", "t"], 11: ["crs", "t"],
   12: ["raster", "t"], 13: ["chart_count", "u"], 14: ["wavelet", "e"], 15: ["levels", "u"], 16: ["steps", "d"],
   17: ["slope_limit", "d"], 18: ["correction", "d"], 19: ["rounding", "e"], 20: ["max_error", "d"],
+  21: ["colour_psnr", "d"], 22: ["colour_max_error", "d"],
 };
 const WORDS = ["planar", "cylindrical", "spherical", "bior4.4", "bior2.2", "integer"];
 export const HEADER = 1;
 export const PAYLOAD = 2;
+export const COLOUR = 3;
 
 /** A front-to-back reader of a byte range whose every failure is a one-line MzcError. */
 class Cursor {
@@ -41,13 +43,16 @@ class Cursor {
 }
 
 /** The sections of a container file after its magic line (`magicEnd` bytes, which the first
- * section's CRC-32 covers): each tag in `tags` in order, its body checked, and nothing after them.
- * Returns the bodies by tag. */
-export function sections(bytes, magicEnd, tags) {
+ * section's CRC-32 covers): each tag in `tags` in order, its body checked, then the `optional`
+ * tag when bytes remain (a grid's colours, Colours of 7.0), and nothing after them. Returns the
+ * bodies by tag. */
+export function sections(bytes, magicEnd, tags, optional) {
   if (bytes[magicEnd - 2] === 13) fail("crc32", "the magic line ends in CRLF: the file was copied as text; copy mzc files as binary");
   const cursor = new Cursor(bytes, magicEnd);
   const bodies = {};
-  tags.forEach((tag, i) => {
+  const all = optional === undefined ? tags : [...tags, optional];
+  all.forEach((tag, i) => {
+    if (i >= tags.length && cursor.at === bytes.length) return;   // no optional section
     const start = cursor.at;
     if (start >= bytes.length) fail("data", `the file ends before its section ${tag}`);
     if (bytes[start] !== tag) fail("data", `section tag ${bytes[start]} where section ${tag} belongs`);
@@ -70,7 +75,7 @@ export function headerLines(body) {
   const fields = new Map();
   while (cursor.at < body.length) {
     const id = cursor.varint();
-    const field = id <= 20n ? FIELDS[Number(id)] : undefined;
+    const field = id <= 22n ? FIELDS[Number(id)] : undefined;
     if (!field) fail("data", `unknown header field ${id}`);
     const [keyword, type] = field;
     if (fields.has(keyword)) fail("data", `header field ${keyword} given twice`);
