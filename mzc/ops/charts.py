@@ -44,7 +44,7 @@ SMALL_CHART = 64        # cells (h^2 of area): a smaller piece joins a neighbour
 JOINING = 0.17          # ...whose direction its elements face within 80 degrees
 JOIN_ROUNDS = 6         # rings of a small piece's elements joined to their neighbours, at most
 MIN_CHART_CELLS = 4     # a piece left smaller than this is dropped: the seams' zipping covers it
-MERGE_CELLS = 64        # cells: a peeled piece smaller than this joins a neighbouring piece...
+MERGE_CELLS = 256       # cells: a peeled piece smaller than this joins a neighbouring piece...
 SAME_SURFACE = 1.0      # ...whose grid, where both meet a node line, meets it within this many spacings
 LAYER_TOLERANCE = 3.0   # spacings: a triangle this far behind its chart's surface is hidden by it
 MAX_LAYERS = 8          # layers peeled off one direction's pieces
@@ -397,7 +397,7 @@ def packed(blocks, spacing, transform, units):
     invalid node apart, in a strip as wide as the widest block. The mask coder (spec/dwt2d.md)
     codes a row whose span count is the row above's as moves of its flips, any other row afresh:
     the fewer blocks share a row, the fewer rows one block's change of shape makes dear (the square
-    array packed before took 14% more bytes on the dragon, 7% on the hand, at the same error)."""
+    array packed before took 14% more bytes on the dragon, 7% on the hand, at the same rmse)."""
     heights = np.array([z.shape[0] for *_, z in blocks])
     widths = np.array([z.shape[1] for *_, z in blocks])
     width = int(widths.max())
