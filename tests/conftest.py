@@ -57,6 +57,20 @@ def small_disk(tmp_path):
     subprocess.run(["umount", str(disk)], check=True)
 
 
+def sliced_shared_object(name):
+    """(the mesh of ../shared/data/objects/NAME, the rebuild of its default grid, its bounding-box
+    diagonal D): the lossless floor the whole-object tests measure; skips when the data is absent."""
+    from mzc.meshes import read_mesh
+    from mzc.ops.slicing import slice_surface
+    from mzc.ops.triangulation import grid_to_mesh
+
+    path = REPO.parent / "shared" / "data" / "objects" / name
+    if not path.is_file():
+        pytest.skip(f"shared object data not available ({path})")
+    mesh = read_mesh(path)
+    return mesh, grid_to_mesh(slice_surface(mesh)), float(np.linalg.norm(np.ptp(mesh.points, axis=0)))
+
+
 def edge_counts(triangles):
     """(edges used by one triangle, edges used by more than two): 0 and 0 for a closed manifold."""
     edges = np.sort(np.concatenate([triangles[:, [0, 1]], triangles[:, [1, 2]], triangles[:, [2, 0]]]), axis=1)

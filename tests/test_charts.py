@@ -18,7 +18,7 @@ from mzc.projections import PLANAR_VIEWS, view_rotation
 from mzc.samples import blob, icosphere
 
 from codec_contract import header_fields
-from conftest import REPO, edge_counts
+from conftest import REPO, edge_counts, sliced_shared_object
 
 OBJECTS = REPO.parent / "shared" / "data" / "objects"
 TRANSFORM = np.array([[0.0, -1.0, 0.0, 4.5], [1.0, 0.0, 0.0, -2.0], [0.0, 0.0, 1.0, 7.25]])
@@ -338,14 +338,9 @@ def test_the_zarr_codec_refuses_a_multi_chart_chunk_in_one_line():
 def test_the_hand_comes_back_closed_and_whole(tmp_path):
     """The one clean closed scan of ../shared/data/objects: its charts' rebuild is closed, its
     whole-surface RMS within 0.02% of the box diagonal D, and 99.5% of its area within 0.1% D."""
-    path = OBJECTS / "hand.ply"
-    if not path.is_file():
-        pytest.skip(f"shared objects not available ({path})")
     from mzc.measure.metrics import distance_to_mesh, sample_surface, surface_distance
 
-    mesh = read_mesh(path)
-    diagonal = float(np.linalg.norm(np.ptp(mesh.points, axis=0)))
-    rebuilt = grid_to_mesh(slice_surface(mesh))
+    mesh, rebuilt, diagonal = sliced_shared_object("hand.ply")
     assert edge_counts(rebuilt.triangles) == (0, 0)
     assert surface_distance((mesh.points, mesh.triangles), (rebuilt.points, rebuilt.triangles),
                             samples=20_000)["rms"] <= 0.0002 * diagonal

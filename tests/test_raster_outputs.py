@@ -190,15 +190,19 @@ def large_int16_dem(path):
     return written_int16_dem(path, z)
 
 
+def coded_by_the_cli(source):
+    """(``source``, its --dwt2d --max-error 1 file beside it, coded by ``mzc encode``)."""
+    from conftest import run_mzc
+
+    coded = source.with_suffix(".mzw2")
+    run_mzc("encode", "--dwt2d", "--max-error", "1", source, "-o", coded, check=True)
+    return source, coded
+
+
 @pytest.fixture(scope="module")
 def coded_dem(tmp_path_factory):
     """(the large DEM, its --dwt2d --max-error 1 file)."""
-    from conftest import run_mzc
-
-    folder = tmp_path_factory.mktemp("cog")
-    source, coded = large_int16_dem(folder / "dem.tif"), folder / "dem.mzw2"
-    run_mzc("encode", "--dwt2d", "--max-error", "1", source, "-o", coded, check=True)
-    return source, coded
+    return coded_by_the_cli(large_int16_dem(tmp_path_factory.mktemp("cog") / "dem.tif"))
 
 
 def structure(path):
@@ -330,12 +334,7 @@ def tiled_int16_dem(path):
 @pytest.fixture(scope="module")
 def tiled_dem(tmp_path_factory):
     """(the tiled DEM, its --dwt2d --max-error 1 file coded window by window by the CLI)."""
-    from conftest import run_mzc
-
-    folder = tmp_path_factory.mktemp("tiled")
-    source, coded = tiled_int16_dem(folder / "dem.tif"), folder / "dem.mzw2"
-    run_mzc("encode", "--dwt2d", "--max-error", "1", source, "-o", coded, check=True)
-    return source, coded
+    return coded_by_the_cli(tiled_int16_dem(tmp_path_factory.mktemp("tiled") / "dem.tif"))
 
 
 def test_a_tiled_int16_dem_decodes_tile_by_tile_to_int16_with_its_no_data(mzc, tiled_dem, tmp_path):

@@ -21,7 +21,7 @@ from mzc.ops.zipper import CANDIDATES, Neighbours, boundary_edges, zip_charts
 from mzc.samples import icosphere
 
 from charts import chart_meshes
-from conftest import REPO, edge_counts
+from conftest import REPO, edge_counts, sliced_shared_object
 from test_unchanged_outputs import OTHER_MACHINES, switched_off_environment
 
 OBJECTS = REPO.parent / "shared" / "data" / "objects"
@@ -361,15 +361,8 @@ def test_the_dragons_seams_keep_its_creases():
     of its area within 0.1% of D and a whole-surface RMS under 0.026% D (97.9% and 0.0269% D
     with straight stitches; 20,000 samples each way)."""
     from mzc.measure.metrics import distance_to_mesh, sample_surface, surface_distance
-    from mzc.ops.slicing import slice_surface
-    from mzc.ops.triangulation import grid_to_mesh
 
-    path = OBJECTS / "dragon.ply"
-    if not path.is_file():
-        pytest.skip(f"shared object data not available ({path})")
-    mesh = read_mesh(path)
-    diagonal = float(np.linalg.norm(np.ptp(mesh.points, axis=0)))
-    rebuilt = grid_to_mesh(slice_surface(mesh))
+    mesh, rebuilt, diagonal = sliced_shared_object("dragon.ply")
     samples = sample_surface(mesh.points, mesh.triangles, 20_000, np.random.default_rng(0))[0]
     near = np.mean(distance_to_mesh(samples, rebuilt.points, rebuilt.triangles) <= 0.001 * diagonal)
     rms = surface_distance((mesh.points, mesh.triangles), (rebuilt.points, rebuilt.triangles), samples=20_000)["rms"]
