@@ -320,7 +320,8 @@ def test_a_chunk_that_kills_its_workers_is_split_and_only_the_culprit_fails(tmp_
     import dask
     from distributed import Client, LocalCluster
 
-    from mzc.batch.engine import SATURATION, finished_chunks
+    from mzc.batch.engine import finished_chunks
+    from mzc.cluster import SATURATION
 
     cloudpickle.register_pickle_by_value(sys.modules[__name__])   # the workers cannot import this module
     job = Job("encode", str(tmp_path), ENCODE)

@@ -17,6 +17,14 @@ const WAVELETS = ["bior2.2", "bior4.4"];  // the relevance of transform 0 and 1
 const STEP_FACTORS = [[177, 116, 63], [177, 116, 63], [256, 199, 116]];   // H, V, D in 256ths, levels 1..3
 const BAND0_FACTOR = 248;
 
+/** A grid decoded by `decodeCompact` with its colours: its `colourSection` decoded over its valid
+ * nodes into `colors` (spec/dwt2d.md, Colours of 7.0); a grid without one as it is. */
+export function withColours({ colourSection, ...grid }) {
+  if (!colourSection) return grid;
+  const valid = Uint8Array.from(grid.z, (v) => (Number.isNaN(v) ? 0 : 1));
+  return { ...grid, colors: decodeColour(colourSection, { rows: grid.rows, cols: grid.cols, valid }) };
+}
+
 /** The image (Uint8Array, rows * cols * 3: red, green, blue a node, 0 at invalid nodes) of a colour
  * section that spans `bytes`, decoded with `mask` ({rows, cols, valid: rows * cols 0/1}); any damage
  * or a mask of another shape throws an MzcError. */

@@ -6,7 +6,6 @@
 import { fail, headerFields, fieldReader, gridFields, checkChecksum, checkCharts, VIEWS, crc32, splitHeader, parseMagic } from "./header.mjs";
 import { cos } from "./elementary.mjs";
 import { sections, headerLines, HEADER, PAYLOAD, COLOUR } from "./compact.mjs";
-import { decodeColour } from "./colour.mjs";
 import { inversePeriodized2d, relevantPeriodized2d } from "./pywt.mjs";
 
 const WAVELETS_3 = ["bior4.4", "bior2.2"];
@@ -21,14 +20,13 @@ export function decodeDwt2d(bytes, lines, body, magic) {
 }
 
 /** Decodes a 7.0 file (bytes; the end of its magic line; its magic): its sections, the header's
- * fields read as the lines they stand for, the payload with 7.0's table records, and the grid's
- * colours from section 3 where the file has one (Colours of 7.0), decoded over its valid nodes. */
+ * fields read as the lines they stand for, the payload with 7.0's table records; section 3, a
+ * grid's colours (Colours of 7.0), comes back undecoded as `colourSection` (colour.mjs's
+ * `withColours` decodes it over the grid's valid nodes). */
 export function decodeCompact(bytes, magicEnd, magic) {
   const bodies = sections(bytes, magicEnd, [HEADER, PAYLOAD], COLOUR);
   const grid = decodeWhole(headerLines(bodies[HEADER]), bodies[PAYLOAD], magic);
-  if (!bodies[COLOUR]) return grid;
-  const valid = Uint8Array.from(grid.z, (v) => (Number.isNaN(v) ? 0 : 1));
-  return { ...grid, colors: decodeColour(bodies[COLOUR], { rows: grid.rows, cols: grid.cols, valid }) };
+  return bodies[COLOUR] ? { ...grid, colourSection: bodies[COLOUR] } : grid;
 }
 
 /** Decodes a grid coded whole from its header lines (keyword -> words) and its payload. */

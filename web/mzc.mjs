@@ -10,6 +10,7 @@
 
 import { MzcError, fail, parseMagic, splitHeader, writeZgrid, formatNumber, checkMajor } from "./header.mjs";
 import { decodeDwt2d, decodeCompact } from "./dwt2d.mjs";
+import { withColours } from "./colour.mjs";
 import { ROW_CODECS } from "./rows.mjs";
 import { decodeZgrid } from "./zgrid.mjs";
 
@@ -30,7 +31,7 @@ export function decode(bytes) {
   const decoder = DECODERS[magic.kind];
   if (!decoder) fail(null, `mzc-${magic.kind} is not a format this decoder reads`);
   checkMajor(magic, ...READS[magic.kind]);
-  const grid = compact ? decodeCompact(bytes, compact.end, magic) : decoder(bytes, lines, body, magic);
+  const grid = compact ? withColours(decodeCompact(bytes, compact.end, magic)) : decoder(bytes, lines, body, magic);
   checkMagnitudes(grid);
   return { kind: magic.kind, version: `${magic.major}.${magic.minor}`, ...grid };
 }

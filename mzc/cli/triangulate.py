@@ -68,13 +68,13 @@ def check_texture_request(input, output, file_format, vertices, texture):
 
 def write_textured(grid, jump_angle, output, texture):
     """Write the grid's mesh as an OBJ with texture coordinates, its material file and the PNG of
-    its colours (``mzc.meshes.texture.textured_obj``), all or none of them."""
+    its colours (``mzc.meshes.obj.textured``), all or none of them."""
     from mzc.errors import MzcError
-    from mzc.meshes.texture import textured_obj
+    from mzc.meshes.obj import textured
     from mzc.ops.triangulation import GridMesh
     from mzc.streams import write_outputs
 
     if grid.charts is not None:
         raise MzcError("--texture writes one grid's colour image; a multi-chart grid's mesh carries vertex colours "
                        "(leave out --texture)", field="texture")
-    write_outputs(*textured_obj(GridMesh(grid, jump_angle), output, texture))
+    write_outputs(*textured(GridMesh(grid, jump_angle), output, texture))

@@ -13,6 +13,7 @@ sampled at the vertices. Exporters' other statements (``usemtl``, ``g``, ``o``, 
 ``vn``, ``l``) and comments holding any bytes are read past.
 """
 
+import os
 import re
 import warnings
 
@@ -309,3 +310,30 @@ def write(mesh: Mesh) -> bytes:
         vertices = ("v %r %r %r\n" * len(mesh.points)) % tuple(mesh.points.ravel().tolist())
     faces = ("f %d %d %d\n" * len(mesh.triangles)) % tuple((mesh.triangles.ravel() + 1).tolist())
     return (vertices + faces).encode("ascii")
+
+
+def textured(grid_mesh, obj_path, png_path):
+    """[(path, bytes)] of a grid's mesh (a ``triangulation.GridMesh`` of a grid with colours) as
+    an OBJ at ``obj_path`` whose vertex k has the texture coordinate of its node (r, c), the
+    centre of pixel (rows - 1 - r, c) of the grid's colours written as the PNG at ``png_path``
+    (its first row the grid's last: v runs up), and the material file beside the OBJ (its name
+    with .mtl) that names the PNG by its path from the OBJ's folder."""
+    from mzc.meshes.texture import png_bytes
+
+    grid = grid_mesh.grid
+    if grid.colors is None:
+        raise MzcError("the grid has no colours to write as a texture", field="texture")
+    rows, cols = grid.shape
+    row, col = np.divmod(np.flatnonzero(grid_mesh.used), cols)
+    uv = np.column_stack([(col + 0.5) / cols, (row + 0.5) / rows])
+    folder = os.path.dirname(os.path.abspath(obj_path))
+    material = os.path.splitext(os.path.basename(obj_path))[0] + ".mtl"
+    image = os.path.relpath(os.path.abspath(png_path), folder).replace(os.sep, "/")
+    vertices = write(Mesh(grid_mesh.points)).decode("ascii")   # the v lines alone
+    texture = ("vt %r %r\n" * len(uv)) % tuple(uv.ravel().tolist())
+    faces = np.concatenate(list(grid_mesh.triangle_chunks()) or [np.empty((0, 3), dtype=np.int64)]) + 1
+    corners = ("f %d/%d %d/%d %d/%d\n" * len(faces)) % tuple(np.repeat(faces.ravel(), 2).tolist())
+    obj = f"mtllib {material}\nusemtl grid_colours\n{vertices}{texture}{corners}"
+    mtl = f"newmtl grid_colours\nKa 1 1 1\nKd 1 1 1\nmap_Kd {image}\n"
+    return [(obj_path, obj.encode("ascii")), (os.path.join(os.path.dirname(obj_path), material), mtl.encode("utf-8")),
+            (png_path, png_bytes(grid.colors[::-1]))]

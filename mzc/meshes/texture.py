@@ -6,8 +6,9 @@ material file's), never outside it (a name such as ``../../secret.png`` is refus
 that is missing, outside or not an image is named in one warning, never a crash: the mesh is
 read without its colours. PNG and JPEG (and whatever else Pillow reads) are decoded by Pillow.
 
-``textured_obj`` writes the other way: a grid's colours as a PNG, an OBJ whose vertices carry
-texture coordinates into it, and the material file that names it (``triangulate --texture``).
+``mzc.meshes.obj.textured`` writes the other way: a grid's colours as a PNG, an OBJ whose
+vertices carry texture coordinates into it, and the material file that names it
+(``triangulate --texture``).
 
 The image is sampled once per vertex (bilinearly, at the uv of a face corner that uses the
 vertex; u to the right, v up from the image's bottom row, repeating outside 0..1), so detail
@@ -139,31 +140,3 @@ def png_bytes(pixels):
     buffer = io.BytesIO()
     Image.fromarray(np.ascontiguousarray(pixels), "RGB").save(buffer, format="PNG")
     return buffer.getvalue()
-
-
-def textured_obj(grid_mesh, obj_path, png_path):
-    """[(path, bytes)] of a grid's mesh (a ``triangulation.GridMesh`` of a grid with colours) as
-    an OBJ at ``obj_path`` whose vertex k has the texture coordinate of its node (r, c), the
-    centre of pixel (rows - 1 - r, c) of the grid's colours written as the PNG at ``png_path``
-    (its first row the grid's last: v runs up), and the material file beside the OBJ (its name
-    with .mtl) that names the PNG by its path from the OBJ's folder."""
-    from mzc.meshes import Mesh
-    from mzc.meshes.obj import write as write_obj
-
-    grid = grid_mesh.grid
-    if grid.colors is None:
-        raise MzcError("the grid has no colours to write as a texture", field="texture")
-    rows, cols = grid.shape
-    row, col = np.divmod(np.flatnonzero(grid_mesh.used), cols)
-    uv = np.column_stack([(col + 0.5) / cols, (row + 0.5) / rows])
-    folder = os.path.dirname(os.path.abspath(obj_path))
-    material = os.path.splitext(os.path.basename(obj_path))[0] + ".mtl"
-    image = os.path.relpath(os.path.abspath(png_path), folder).replace(os.sep, "/")
-    vertices = write_obj(Mesh(grid_mesh.points)).decode("ascii")   # the v lines alone
-    texture = ("vt %r %r\n" * len(uv)) % tuple(uv.ravel().tolist())
-    faces = np.concatenate(list(grid_mesh.triangle_chunks()) or [np.empty((0, 3), dtype=np.int64)]) + 1
-    corners = ("f %d/%d %d/%d %d/%d\n" * len(faces)) % tuple(np.repeat(faces.ravel(), 2).tolist())
-    obj = f"mtllib {material}\nusemtl grid_colours\n{vertices}{texture}{corners}"
-    mtl = f"newmtl grid_colours\nKa 1 1 1\nKd 1 1 1\nmap_Kd {image}\n"
-    return [(obj_path, obj.encode("ascii")), (os.path.join(os.path.dirname(obj_path), material), mtl.encode("utf-8")),
-            (png_path, png_bytes(grid.colors[::-1]))]

@@ -231,7 +231,7 @@ def file_chunks(source, tile, options, spill_dir=None, scheduler=None) -> Iterat
     check_targets(source.frame, options)
     rounded = rounds(source, options)
     if scheduler is not None:
-        from mzc.batch.engine import dask_client
+        from mzc.cluster import dask_client
     with tempfile.TemporaryFile(dir=spill_dir) as spill, \
             (nullcontext() if scheduler is None else dask_client(scheduler)) as client:
         lengths = []
