@@ -12,7 +12,7 @@ import struct
 import zlib
 from decimal import Decimal
 
-from mzc.codecs.dwt2d.entropy import varint
+from mzc.codecs.dwt2d.entropy import read_varint, varint
 from mzc.errors import MzcError
 from mzc.formats.header import CHECKSUM, Header, format_number
 
@@ -102,17 +102,15 @@ class Reader:
     def varint(self, end=None):
         """One unsigned LEB128 integer (at most MAX_VARINT_BYTES bytes) that ends before ``end``."""
         end = len(self.data) if end is None else end
-        value = 0
-        for shift in range(0, 7 * MAX_VARINT_BYTES, 7):
-            if self.position >= end:
-                raise self.error("the file ends inside a number" if end == len(self.data)
-                                 else "a header field runs past its section")
-            byte = self.data[self.position]
-            self.position += 1
-            value |= (byte & 0x7F) << shift
-            if not byte & 0x80:
-                return value
-        raise self.error(f"a number longer than {MAX_VARINT_BYTES} bytes")
+
+        def fault(kind):
+            if kind == "long":
+                return self.error(f"a number longer than {MAX_VARINT_BYTES} bytes")
+            return self.error("the file ends inside a number" if end == len(self.data)
+                              else "a header field runs past its section")
+
+        value, self.position = read_varint(self.data, self.position, end, MAX_VARINT_BYTES, fault)
+        return value
 
     def section(self, tag, before=b""):
         """The body of the next section, which must be ``tag``'s, its CRC-32 checked."""

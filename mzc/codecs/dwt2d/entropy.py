@@ -168,6 +168,23 @@ def varint(value):
             return bytes(out)
 
 
+def read_varint(data, position, end, max_bytes, fault):
+    """(value, the position after it) of the LEB128 integer at ``position`` of ``data``, of at most
+    ``max_bytes`` bytes before ``end``: the one reader of the payload's varints (5 bytes) and 7.0's
+    header fields (10). ``fault("cut")`` or ``fault("long")`` is the exception raised when it runs
+    to ``end`` or past ``max_bytes``, each caller naming where."""
+    value = 0
+    for shift in range(0, 7 * max_bytes, 7):
+        if position >= end:
+            raise fault("cut")
+        byte = data[position]
+        position += 1
+        value |= (byte & 0x7F) << shift
+        if not byte & 0x80:
+            return value, position
+    raise fault("long")
+
+
 def family_weights(freq):
     """A table as weights for constriction's per-symbol categorical model: F - 1 per class.
 
@@ -380,16 +397,9 @@ class Decoder:
 
     def read_varint(self):
         """One LEB128 integer (at most 5 bytes)."""
-        value = 0
-        for shift in range(0, 35, 7):
-            if self.position >= len(self.data):
-                raise self.error("payload ends inside a varint")
-            byte = self.data[self.position]
-            self.position += 1
-            value |= (byte & 0x7F) << shift
-            if not byte & 0x80:
-                return value
-        raise self.error("varint longer than 5 bytes")
+        value, self.position = read_varint(self.data, self.position, len(self.data), 5, lambda kind: self.error(
+            "payload ends inside a varint" if kind == "cut" else "varint longer than 5 bytes"))
+        return value
 
     def read_tables(self, parametric=False):
         """The model tables; a 0 class count repeats the previous table. ``parametric`` (7.0): a record's
