@@ -14,6 +14,8 @@ IEEE arithmetic only (no BLAS, no SIMD-dependent loops): the same bytes on every
 
 import numpy as np
 
+from mzc.vectors import dotted
+
 
 def coloured(mesh, grid):
     """``grid`` with its nodes' colours sampled from ``mesh`` (``sampled_colours``), or as it is
@@ -56,11 +58,8 @@ def barycentric(points, a, b, c):
     """(n, 3) weights of the corners a, b, c (each (n, 3)) at the foot of each point on its
     triangle's plane, clamped into the triangle (none negative, summing to 1); a triangle of no
     area gives its first corner all the weight."""
-    def dot(u, v):
-        return u[:, 0] * v[:, 0] + u[:, 1] * v[:, 1] + u[:, 2] * v[:, 2]
-
     e1, e2, p = b - a, c - a, points - a
-    d11, d12, d22, p1, p2 = dot(e1, e1), dot(e1, e2), dot(e2, e2), dot(p, e1), dot(p, e2)
+    d11, d12, d22, p1, p2 = dotted(e1, e1), dotted(e1, e2), dotted(e2, e2), dotted(p, e1), dotted(p, e2)
     area = d11 * d22 - d12 * d12
     flat = ~(area > 1e-12 * (d11 * d22))
     area = np.where(flat, 1.0, area)
