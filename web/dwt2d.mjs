@@ -580,31 +580,39 @@ const LIFTING = {
 
 /** Marks along every row of an r x c array of 0/1: the low coefficients within reach[0]
  * of a valid sample, the high ones within reach[1] (samples outside the row ignored, or
- * wrapping round when `wrap`): the row-low (r x ceil(c/2)) and row-high (r x floor(c/2)) marks. */
+ * wrapping round when `wrap`): the row-low (r x ceil(c/2)) and row-high (r x floor(c/2)) marks.
+ * Each run of valid samples marks the coefficients within reach of it. */
 function markRows(a, r, c, reach, wrap) {
   const lc = (c + 1) >> 1;
   const hc = c >> 1;
   const low = new Uint8Array(r * lc);
   const high = new Uint8Array(r * hc);
-  const count = new Int32Array(c + 1);
   for (let i = 0; i < r; i++) {
-    for (let j = 0; j < c; j++) count[j + 1] = count[j] + (a[i * c + j] ? 1 : 0);
-    for (let k = 0; k < lc; k++) low[i * lc + k] = anyWithin(count, c, 2 * k, reach[0], wrap);
-    for (let k = 0; k < hc; k++) high[i * hc + k] = anyWithin(count, c, 2 * k + 1, reach[1], wrap);
+    for (let j = 0; j < c; j++) {
+      if (!a[i * c + j]) continue;
+      const start = j;
+      while (j + 1 < c && a[i * c + j + 1]) j++;
+      markWithin(low.subarray(i * lc, (i + 1) * lc), 0, start - reach[0], j + reach[0], c, wrap);
+      markWithin(high.subarray(i * hc, (i + 1) * hc), 1, start - reach[1], j + reach[1], c, wrap);
+    }
   }
   return [low, high];
 }
 
-/** 1 when a row of c samples (count[t]: its valid samples before t) has a valid sample within
- * d of `centre` (wrapping round when `wrap`), else 0. */
-function anyWithin(count, c, centre, d, wrap) {
-  const from = centre - d;
-  const to = centre + d + 1;
-  if (!wrap) return count[Math.min(to, c)] - count[Math.max(from, 0)] > 0 ? 1 : 0;
-  if (to - from >= c) return count[c] > 0 ? 1 : 0;
-  if (from < 0) return count[to] + count[c] - count[c + from] > 0 ? 1 : 0;
-  if (to > c) return count[c] - count[from] + count[to - c] > 0 ? 1 : 0;
-  return count[to] - count[from] > 0 ? 1 : 0;
+/** Marks the coefficients k of a row of c samples (k at sample 2k + parity) whose sample is
+ * from..to, taken round the row when `wrap` (else the part within the row). */
+function markWithin(marks, parity, from, to, c, wrap) {
+  if (wrap && to - from + 1 >= c) marks.fill(1);
+  else if (wrap && from < 0) {
+    markWithin(marks, parity, from + c, c - 1, c, false);
+    markWithin(marks, parity, 0, to, c, false);
+  } else if (wrap && to >= c) {
+    markWithin(marks, parity, 0, to - c, c, false);
+    markWithin(marks, parity, from, c - 1, c, false);
+  } else {
+    const first = Math.max(0, Math.ceil((from - parity) / 2));
+    marks.fill(1, first, Math.max(first, Math.floor((to - parity) / 2) + 1));
+  }
 }
 
 /** The c x r transpose of an r x c array. */
