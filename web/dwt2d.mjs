@@ -477,6 +477,9 @@ export function decodeDetail(payload, q, b, shapes, relevant, p) {
   const parentOf = parent > 0 ? parentIndices(shapes[parent], rows, cols) : null;
   const parentBand = parent > 0 ? q[parent] : null;
   const earlier = Array.from({ length: shape.orient - 1 }, (_, i) => b - shape.orient + 1 + i);
+  const earlierBands = earlier.map((e) => q[e]);
+  const earlierRows = earlier.map((e) => shapes[e].rows);
+  const earlierCols = earlier.map((e) => shapes[e].cols);
   const [wa, wp, wt] = SIGN_WEIGHTS[shape.orient];
   const mask = relevant[b];
   const context = new Int8Array(cols);   // each column's context in the pass
@@ -489,7 +492,9 @@ export function decodeDetail(payload, q, b, shapes, relevant, p) {
       for (let c = odd; c < cols; c += 2) {
         if (!mask[row + c]) continue;
         let a = parent > 0 ? Math.abs(parentBand[parentOf[row + c]]) * ratio : 0;
-        for (const e of earlier) a += at(q[e], shapes[e], r, c);
+        for (let e = 0; e < earlier.length; e++) {
+          if (r < earlierRows[e] && c < earlierCols[e]) a += Math.abs(earlierBands[e][r * earlierCols[e] + c]);
+        }
         const up = r > 0 ? Math.abs(out[row - cols + c]) : 0;
         const upLeft = r > 0 && c > 0 ? Math.abs(out[row - cols + c - 1]) : 0;
         const upRight = r > 0 && c + 1 < cols ? Math.abs(out[row - cols + c + 1]) : 0;
