@@ -605,10 +605,10 @@ function markRows(a, r, c, reach, wrap) {
 }
 
 /** Marks the coefficients k of a row of c samples (k at sample 2k + parity) whose sample is
- * from..to, taken round the row when `wrap` (else the part within the row). */
+ * from..to, taken round the row when `wrap` (else the part within the row; from > -c and
+ * to < 2c - 1: a reach is less than a wrapping row's width). */
 function markWithin(marks, parity, from, to, c, wrap) {
-  if (wrap && to - from + 1 >= c) marks.fill(1);
-  else if (wrap && from < 0) {
+  if (wrap && from < 0) {
     markWithin(marks, parity, from + c, c - 1, c, false);
     markWithin(marks, parity, 0, to, c, false);
   } else if (wrap && to >= c) {
