@@ -474,7 +474,8 @@ export function decodeDetail(payload, q, b, shapes, relevant, p) {
   const parentIndex = shape.level < p.levels ? b - 3 : -1;
   const parent = parentIndex > 0 && shapes[parentIndex].rows * shapes[parentIndex].cols ? parentIndex : -1;
   const ratio = parent > 0 ? p.steps[parent] / p.steps[b] : 0;
-  const parentOf = parent > 0 ? parentIndices(shapes[parent], rows, cols) : null;
+  const ps = parent > 0 ? shapes[parent] : null;
+  const parentCol = Int32Array.from({ length: cols }, (_, c) => (ps ? Math.min(c >> 1, ps.cols - 1) : 0));
   const parentBand = parent > 0 ? q[parent] : null;
   const earlier = Array.from({ length: shape.orient - 1 }, (_, i) => b - shape.orient + 1 + i);
   const earlierBands = earlier.map((e) => q[e]);
@@ -487,11 +488,12 @@ export function decodeDetail(payload, q, b, shapes, relevant, p) {
   const starts = new Int32Array(12);
   for (let r = 0; r < rows; r++) {
     const row = r * cols;
+    const parentRow = ps ? Math.min(r >> 1, ps.rows - 1) * ps.cols : 0;   // (r >> 1, c >> 1), held to the parent band
     for (let odd = 0; odd < 2; odd++) {
       starts.fill(0);
       for (let c = odd; c < cols; c += 2) {
         if (!mask[row + c]) continue;
-        let a = parent > 0 ? Math.abs(parentBand[parentOf[row + c]]) * ratio : 0;
+        let a = parent > 0 ? Math.abs(parentBand[parentRow + parentCol[c]]) * ratio : 0;
         for (let e = 0; e < earlier.length; e++) {
           if (r < earlierRows[e] && c < earlierCols[e]) a += Math.abs(earlierBands[e][r * earlierCols[e] + c]);
         }
@@ -516,7 +518,7 @@ export function decodeDetail(payload, q, b, shapes, relevant, p) {
         const i = row + c;
         if (!out[i]) continue;
         const above = r ? Math.sign(out[i - cols]) : 0;
-        const par = parent > 0 ? Math.sign(parentBand[parentOf[i]]) : 0;
+        const par = parent > 0 ? Math.sign(parentBand[parentRow + parentCol[c]]) : 0;
         const t = odd ? (c > 0 ? Math.sign(out[i - 1]) : 0) + (c + 1 < cols ? Math.sign(out[i + 1]) : 0) : 0;
         const score = wa * above + wp * par + wt * t;
         const flip = payload.symbol(15 + (odd ? 4 : 0) + Math.min(Math.abs(score), 3));
@@ -527,17 +529,6 @@ export function decodeDetail(payload, q, b, shapes, relevant, p) {
     }
   }
   return out;
-}
-
-/** For each node (r, c) of a rows x cols band, the index of its parent (r >> 1, c >> 1), held to
- * the parent band's last row and column. */
-function parentIndices(ps, rows, cols) {
-  const index = new Int32Array(rows * cols);
-  for (let r = 0; r < rows; r++) {
-    const base = Math.min(r >> 1, ps.rows - 1) * ps.cols;
-    for (let c = 0; c < cols; c++) index[r * cols + c] = base + Math.min(c >> 1, ps.cols - 1);
-  }
-  return index;
 }
 
 /** The correction integers k at the valid nodes, row by row in two passes, by context
