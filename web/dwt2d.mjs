@@ -819,20 +819,18 @@ function inverseLevel(s, d, n, w, lift, wrap) {
   const nd = n >> 1;
   for (let i = 0; i < ns * w; i++) s[i] /= lowScale;
   for (let i = 0; i < nd * w; i++) d[i] /= highScale;
-  const dBefore = wrap ? nd - 1 : 0;       // the row of d_(-1)
+  const dBefore = (wrap ? nd - 1 : 0) * w;   // where d_(-1) is
+  const sLast = (wrap ? 0 : ns - 1) * w;      // where s_(ns) is
   for (let step = lift.steps.length - 1; step >= 0; step--) {
     const a = lift.steps[step];
-    if (step % 2 === 0) {
-      for (let k = 0; k < nd; k++) {
-        const next = (k + 1 < ns ? k + 1 : wrap ? 0 : ns - 1) * w;
-        for (let j = 0; j < w; j++) d[k * w + j] -= a * (s[k * w + j] + s[next + j]);
-      }
-    } else {
-      for (let k = 0; k < ns; k++) {
-        const before = (k > 0 ? k - 1 : dBefore) * w;
-        const after = (k < nd ? k : nd - 1) * w;
-        for (let j = 0; j < w; j++) s[k * w + j] -= a * (d[before + j] + d[after + j]);
-      }
+    if (step % 2 === 0) {   // d_k -= a (s_k + s_(k+1)); one flat loop up to the d without s_(k+1)
+      const inner = Math.min(nd, ns - 1) * w;
+      for (let i = 0; i < inner; i++) d[i] -= a * (s[i] + s[i + w]);
+      for (let i = inner; i < nd * w; i++) d[i] -= a * (s[i] + s[sLast + i - inner]);
+    } else {                // s_k -= a (d_(k-1) + d_k): s_0 with d_(-1), then flat, then s_(nd) with d_(nd-1) twice
+      for (let j = 0; j < w; j++) s[j] -= a * (d[dBefore + j] + d[j]);
+      for (let i = w; i < nd * w; i++) s[i] -= a * (d[i - w] + d[i]);
+      for (let i = nd * w; i < ns * w; i++) s[i] -= a * (d[i - w] + d[i - w]);
     }
   }
 }
