@@ -777,19 +777,15 @@ function mergeColumns(lo, hi, r, w, merge) {
 }
 
 /** The rows of r x ceil(c/2) low and r x floor(c/2) high halves merged into r x c, one row at a
- * time (each row's halves copied into the merge's s and d, then interleaved in place). */
+ * time: each row's halves merged where they lie (lo and hi are scratch, changed), then interleaved. */
 function mergeRows(lo, hi, r, c, merge, wrap) {
   const lc = (c + 1) >> 1;
   const hc = c >> 1;
-  const s = new Float64Array(lc);
-  const d = new Float64Array(hc);
   const out = new Float64Array(r * c);
   for (let i = 0; i < r; i++) {
-    for (let k = 0; k < lc; k++) s[k] = lo[i * lc + k];
-    for (let k = 0; k < hc; k++) d[k] = hi[i * hc + k];
-    merge(s, d, c, 1, wrap);
-    for (let k = 0; k < lc; k++) out[i * c + 2 * k] = s[k];
-    for (let k = 0; k < hc; k++) out[i * c + 2 * k + 1] = d[k];
+    merge(lo.subarray(i * lc, (i + 1) * lc), hi.subarray(i * hc, (i + 1) * hc), c, 1, wrap);
+    for (let k = 0; k < lc; k++) out[i * c + 2 * k] = lo[i * lc + k];
+    for (let k = 0; k < hc; k++) out[i * c + 2 * k + 1] = hi[i * hc + k];
   }
   return out;
 }
