@@ -24,6 +24,7 @@ import datetime
 import gzip
 import json
 import os
+import re
 import shutil
 import statistics
 import subprocess
@@ -146,7 +147,7 @@ def summary(timing):
 def sizes(modules, web):
     """Bytes of the decoder as written, bundled and minified (esbuild), and gzip -9, beside
     Draco's decoder gzip -9; the bundle's entries None without esbuild."""
-    written = sum(path.stat().st_size for path in web.glob("*.mjs") if path.name in DECODER_MODULES)
+    written = sum((web / name).stat().st_size for name in imported_modules(web, "mzc.mjs"))
     draco = modules / "draco3d"
     out = {"written": written, "minified": None, "gzip": None, "esbuild": None,
            "draco_wasm_gzip": gzipped((draco / "draco_decoder.wasm").read_bytes()),
@@ -161,9 +162,14 @@ def sizes(modules, web):
     return out
 
 
-# The modules `decode` imports (mzc.mjs and what it reaches), as web/README.md counts them.
-DECODER_MODULES = {"mzc.mjs", "header.mjs", "dwt2d.mjs", "compact.mjs", "colour.mjs", "pywt.mjs",
-                   "elementary.mjs", "rows.mjs", "transforms.mjs", "zgrid.mjs"}
+def imported_modules(web, name, seen=None):
+    """The module ``name`` of ``web`` and every module of ``web`` it imports, directly or not."""
+    seen = set() if seen is None else seen
+    seen.add(name)
+    for imported in re.findall(r'from "\./([\w.]+\.mjs)"', (web / name).read_text()):
+        if imported not in seen:
+            imported_modules(web, imported, seen)
+    return seen
 
 
 def gzipped(data):
@@ -189,7 +195,8 @@ def markdown(r):
         "# web/'s decoder beside Draco's WebAssembly decoder (issue 34)", "",
         f"{r['date']}, commit {r['commit']}, node {r['node']}, {r['machine']}; load average "
         f"{fmt_load(r['load_before'])} before, {fmt_load(r['load_after'])} after. "
-        f"Written by `python benchmarks/web_decode.py --runs {r['runs']} --warmups {r['warmups']}`.", "",
+        f"Written by `python benchmarks/web_decode.py --runs {r['runs']} --warmups {r['warmups']}`"
+        + ("." if Path(r["web"]) == WEB else f", timing the web/ of `{r['web']}`."), "",
         f"**Goal (web/'s decode within {GOAL:g}x Draco's): {verdict}**: {r['ratio_wall']:.2f}x in wall time, "
         f"{r['ratio_cpu']:.2f}x in CPU time (medians).", "",
         "| f18 | file bytes | decoded to | wall median / min, ms | CPU median / min, ms |",
@@ -206,7 +213,7 @@ def markdown(r):
         "process (the order swapped every round); CPU is the process's user + system time over the call "
         "(node's garbage collector's threads included).", "",
         "| decoder | bytes |", "|---|---|",
-        f"| web/'s decoder modules as written | {s['written']:,} |",
+        f"| web/'s decoder as written (`mzc.mjs` and the modules it imports) | {s['written']:,} |",
     ]
     if s["esbuild"]:
         lines += [f"| `web/mzc.mjs` bundled and minified (esbuild {s['esbuild']}: `--bundle --minify --format=esm`) "
