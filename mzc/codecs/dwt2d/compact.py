@@ -1,5 +1,5 @@
-"""The container of ``mzc-dwt2d 7.0`` (spec/dwt2d.md, Version 7.0): the magic line, then tagged
-sections, each with its own CRC-32, the first of them the header's fields in binary.
+"""The container of ``mzc-dwt2d 7.0`` and 8.0 (spec/dwt2d.md, Version 7.0; 8.0 codes its mask otherwise):
+the magic line, then tagged sections, each with its own CRC-32, the first of them the header's fields in binary.
 
 A 3.x header of a face file took about 215 bytes of text; the same fields take about 60 here. The
 fields are the 3.x header lines (keyword and values), so one reader checks them all
@@ -17,6 +17,7 @@ from mzc.errors import MzcError
 from mzc.formats.header import CHECKSUM, Header, format_number
 
 MAGIC = b"mzc-dwt2d 7.0\n"
+MAJORS = (7, 8)                 # the majors in this container: 8.0 is 7.0 with the mask as predicted flips
 HEADER, PAYLOAD, COLOUR = 1, 2, 3   # section tags, in the order they come (COLOUR only in a file with colours)
 CRC = struct.Struct("<I")
 MAX_VARINT_BYTES = 10           # an unsigned 64-bit integer
@@ -75,12 +76,17 @@ def section(tag, body, before=b""):
     return head + CRC.pack(zlib.crc32(head, zlib.crc32(before)))
 
 
-def file_bytes(lines, payload, colour=None):
-    """The 7.0 file of the header ``lines`` (3.x's, without the magic and ``data`` lines), the payload
-    and, for a grid with colours, its colour section (mzc.codecs.dwt2d.colour's bytes)."""
+def magic(version):
+    """The magic line of ``version`` (major, minor)."""
+    return f"mzc-dwt2d {version[0]}.{version[1]}\n".encode()
+
+
+def file_bytes(lines, payload, colour=None, version=(7, 0)):
+    """The file of ``version`` (7.0 or 8.0) of the header ``lines`` (3.x's, without the magic and ``data``
+    lines), the payload and, for a grid with colours, its colour section (mzc.codecs.dwt2d.colour's bytes)."""
     fields = b"".join(field_bytes(line) for line in lines)
     coloured = b"" if colour is None else section(COLOUR, colour)
-    return MAGIC + section(HEADER, fields, MAGIC) + section(PAYLOAD, payload) + coloured
+    return magic(version) + section(HEADER, fields, magic(version)) + section(PAYLOAD, payload) + coloured
 
 
 # --------------------------------------------------------------------------- reading
@@ -142,10 +148,10 @@ class Reader:
 
     def header(self):
         """The Header of the header section (keywords and their value words, as a 3.x header's lines)."""
-        magic = bytes(self.data[:self.position])
-        body = self.section(HEADER, magic)
-        fields = Reader(magic + body, self.source)
-        header = Header(self.source, 7, projected=True, georeferenced=True, charted=True)
+        line = bytes(self.data[:self.position])
+        body = self.section(HEADER, line)
+        fields = Reader(line + body, self.source)
+        header = Header(self.source, major(line), projected=True, georeferenced=True, charted=True)
         end = len(fields.data)
         while fields.position < end:
             number = fields.varint(end)
@@ -189,13 +195,19 @@ def unsigned(value):
     return -(value // 2) if value % 2 else value // 2
 
 
+def major(data):
+    """The major version of a file of this container (its magic line's), else None."""
+    head = bytes(data[:len(MAGIC) - 2])
+    return next((m for m in MAJORS if head == magic((m, 0))[:-2]), None)
+
+
 def is_compact(data):
-    """True when ``data`` starts as a 7.x file."""
-    return bytes(data[:len(MAGIC) - 2]) == MAGIC[:-2]
+    """True when ``data`` starts as a 7.x or 8.x file."""
+    return major(data) is not None
 
 
 def read(data, source):
-    """(Header, payload bytes, colour section bytes or None) of a 7.0 file."""
+    """(Header, payload bytes, colour section bytes or None) of a 7.0 or 8.0 file."""
     reader = Reader(data, source)
     header = reader.header()
     payload = reader.section(PAYLOAD)
