@@ -122,3 +122,20 @@ def test_the_c_decoder_refuses_a_mask_buffer_of_the_wrong_size():
     decoder = en.Decoder(payload_of(np.ones((3, 4), dtype=bool)), "<test>")
     with pytest.raises(ValueError):
         _rows.decode_flips(*decoder.stream, 3, 4, np.zeros(11, dtype=bool))
+
+
+def test_the_spec_example_of_8_0_is_7_0s_grid_and_its_mask_rows_are_as_stated():
+    """spec/dwt2d.md, Worked example of version 8.0: the 7.0 example's values, its rows' flips and
+    the first decisions' probabilities as the text reads them."""
+    from codec_contract import spec_examples
+
+    examples = [data for data, _values, _id in spec_examples("dwt2d")]
+    seven, eight = (mzc.decode(next(d for d in examples if d.startswith(f"mzc-dwt2d {v}\n".encode())))
+                    for v in ("7.0", "8.0"))   # the first 7.0 example: the one without colours
+    np.testing.assert_array_equal(eight.z, seven.z)
+    assert [f.tolist() for f in flips.row_flips(eight.valid)] == [[0, 6], [0, 6], [0, 2, 3, 6], [0, 6]]
+    values, sets, signed = flips.integers(eight.valid)
+    assert values.tolist() == [1, 0, 5, 0, 0, 0, 1, 0, -4, 0, 0, -1, 0, 4]
+    assert sets.tolist() == [0, 21, 22, 0, 9, 10, 0, 19, 20, 22, 20, 0, 19, 20]
+    bits, models = flips.binarised(values, sets, signed)
+    assert flips.probabilities(bits, models)[10] == 12582912   # row 1's count change: set 0's Z at (0, 1)
