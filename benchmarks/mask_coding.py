@@ -22,8 +22,8 @@ probability, plus raw bits and table records where the scheme has them), in byte
 - **predicted flips**: mzc.codecs.dwt2d.flips (the chosen scheme): each row's span count change,
   then its flips as second-order moves by context (side, the residual above, the predicted move's
   size) or, where the count changed, from the nearest flip above on the same side, every integer
-  binarised through adaptive binary models (no tables, no raw bits). Its real bytes (its rANS words
-  alone) and the C decoder's time are measured too.
+  binarised through adaptive binary models (no tables, no raw bits). Its real bytes (a payload of
+  it alone) and the C decoder's time are measured too.
 
 The whole-file effect on f18 (at RMS 0.05, 0.1, 0.2 mm) is estimated from the 7.0 file's anatomy
 (mzc.codecs.dwt2d.anatomy.parts): its size minus its mask's share and the mask's three table
@@ -145,13 +145,12 @@ SCHEMES = {
 
 
 def real_and_time(valid, repeats=5):
-    """(bytes of the chosen scheme's rANS words alone, best decode time in ms of the chosen scheme,
-    of 7.0's decode_mask), each decoder reading a payload holding the mask alone."""
+    """(bytes of the chosen scheme's payload alone (2 bytes of varints and its rANS words), best decode
+    time in ms of the chosen scheme, of 7.0's decode_mask), each decoder reading a payload of the mask alone."""
     from mzc.codecs.dwt2d import decode_mask, encode_mask, flips
     from mzc.codecs.dwt2d import entropy as en
 
-    words = flips.words(valid)
-    payload = en.varint(0) + en.varint(len(words)) + words.astype("<u4").tobytes()
+    payload = flips.alone(valid)
     encoder = en.Encoder(parametric=True)
     encode_mask(encoder, valid)
     old = encoder.finish()
@@ -167,7 +166,7 @@ def real_and_time(valid, repeats=5):
     new_ms = best(lambda: flips.decode(en.Decoder(payload, "<mask>"), *valid.shape))
     old_ms = best(lambda: decode_mask(en.Decoder(old, "<mask>", parametric=True), *valid.shape))
     assert (flips.decode(en.Decoder(payload, "<mask>"), *valid.shape) == valid).all()
-    return 4 * len(words), new_ms, old_ms
+    return len(payload), new_ms, old_ms
 
 
 def masks(quick):
@@ -246,7 +245,8 @@ def markdown(document):
              f"Generated {settings['started']} UTC by `benchmarks/mask_coding.py` at commit {settings['commit']}"
              f"{' (--quick)' if settings['quick'] else ''}, {settings['wall_s']:.0f} s on {document['machine']}.", "",
              "Bytes of each mask (ideal cost in the payload's rANS, tables and raw bits included; see the "
-             "script's docstring). *real*: the predicted flips' rANS words alone (whole 32-bit words); "
+             "script's docstring). *real*: the predicted flips alone in a payload (2 bytes of varints, then "
+             "whole 32-bit words); "
              "*decode*: best of 5, the C decoder of the predicted flips and 7.0's decode_mask, each from a "
              "payload holding the mask alone.", "",
              "## Summary (median [min-max] bytes; ratio: median of each mask's bytes over 7.0's)", "",

@@ -13,12 +13,6 @@ from mzc.errors import MzcError
 from tests.conftest import REPO, face_path
 
 
-def payload_of(valid):
-    """A payload holding the mask alone: no tables, its rANS words, no raw bits."""
-    words = flips.words(valid)
-    return en.varint(0) + en.varint(len(words)) + words.astype("<u4").tobytes()
-
-
 def decoded(payload, rows, cols):
     """The mask a payload decodes to, after checking nothing is left over."""
     decoder = en.Decoder(payload, "<test>")
@@ -37,7 +31,7 @@ def spans_7_bytes(valid):
 @pytest.mark.parametrize("name", ["f18.ply", "m56.ply", "f66.ply"])
 def test_a_face_mask_round_trips_in_under_four_fifths_of_7_0s_bytes(name):
     valid = mzc.slice(str(face_path(name))).valid
-    payload = payload_of(valid)
+    payload = flips.alone(valid)
     assert np.array_equal(decoded(payload, *valid.shape), valid)
     assert len(payload) <= 0.8 * spans_7_bytes(valid)
 
@@ -48,7 +42,7 @@ def test_an_objects_multi_chart_mask_round_trips_and_is_smaller():
         pytest.skip(f"shared object data not available ({path})")
     grid = mzc.slice(str(path))
     assert len(grid.charts) > 1
-    payload = payload_of(grid.valid)
+    payload = flips.alone(grid.valid)
     assert np.array_equal(decoded(payload, *grid.valid.shape), grid.valid)
     assert len(payload) < spans_7_bytes(grid.valid)
 
@@ -67,10 +61,10 @@ def blob(rows, cols, seed):
 @pytest.mark.parametrize("shape", [(1, 1), (1, 40), (40, 1), (60, 90), (257, 31)])
 def test_generated_blobs_round_trip_and_an_all_valid_grid_costs_a_few_bytes(shape):
     valid = blob(*shape, seed=sum(shape))
-    assert np.array_equal(decoded(payload_of(valid), *shape), valid)
+    assert np.array_equal(decoded(flips.alone(valid), *shape), valid)
     full = np.ones(shape, dtype=bool)
-    assert np.array_equal(decoded(payload_of(full), *shape), full)
-    assert len(payload_of(full)) <= 12
+    assert np.array_equal(decoded(flips.alone(full), *shape), full)
+    assert len(flips.alone(full)) <= 12
 
 
 masks = st.tuples(st.integers(0, 14), st.integers(0, 14), st.integers(0, 2 ** 32 - 1), st.floats(0, 1)).map(
@@ -80,7 +74,7 @@ masks = st.tuples(st.integers(0, 14), st.integers(0, 14), st.integers(0, 2 ** 32
 @settings(max_examples=300, deadline=None)
 @given(masks)
 def test_any_mask_round_trips_and_its_ideal_cost_is_its_size(valid):
-    payload = payload_of(valid)
+    payload = flips.alone(valid)
     assert np.array_equal(decoded(payload, *valid.shape), valid)
     words = len(payload) - 2
     assert flips.ideal_bits(valid) / 8 <= words + 1 and words <= flips.ideal_bits(valid) / 8 + 8
@@ -103,7 +97,7 @@ def test_any_words_decode_to_a_mask_or_one_error(rows, cols, words):
 
 def test_a_corrupted_mask_is_refused_with_the_row_named():
     valid = blob(60, 90, seed=1)
-    payload = bytearray(payload_of(valid))
+    payload = bytearray(flips.alone(valid))
     refused = 0
     for index in range(2, len(payload)):
         damaged = bytearray(payload)
@@ -119,7 +113,7 @@ def test_a_corrupted_mask_is_refused_with_the_row_named():
 
 
 def test_the_c_decoder_refuses_a_mask_buffer_of_the_wrong_size():
-    decoder = en.Decoder(payload_of(np.ones((3, 4), dtype=bool)), "<test>")
+    decoder = en.Decoder(flips.alone(np.ones((3, 4), dtype=bool)), "<test>")
     with pytest.raises(ValueError):
         _rows.decode_flips(*decoder.stream, 3, 4, np.zeros(11, dtype=bool))
 

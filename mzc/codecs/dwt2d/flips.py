@@ -155,13 +155,17 @@ def encode(coder, valid):
     coder.encode_reverse(bits.astype(np.int32), constriction.stream.model.Categorical(perfect=False), weights)
 
 
-def words(valid):
-    """The mask alone as rANS words (uint32): its real size in a stream of its own."""
+def alone(valid):
+    """A payload holding the mask alone (no tables, its rANS words, no raw bits): its real size,
+    and what the benchmarks and tests decode."""
     import constriction
+
+    from mzc.codecs.dwt2d.entropy import varint
 
     coder = constriction.stream.stack.AnsCoder()
     encode(coder, valid)
-    return coder.get_compressed()
+    words = coder.get_compressed()
+    return varint(0) + varint(len(words)) + words.astype("<u4").tobytes()
 
 
 def decode(decoder, rows, cols):
