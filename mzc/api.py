@@ -12,7 +12,7 @@ points or a path is a surface.
 from __future__ import annotations
 
 import os
-from typing import TYPE_CHECKING, Any, TypedDict
+from typing import TYPE_CHECKING, Any, Literal, TypedDict
 
 from mzc.codecs import DEFAULT_CODEC
 from mzc.errors import MzcError
@@ -58,7 +58,7 @@ def as_mesh(surface: Any) -> Mesh:
 
     item = given(surface)
     item = read_file(item) if isinstance(item, str) else item
-    return triangulate(item) if isinstance(item, ZGrid) else item
+    return triangulate(item, vertices="all") if isinstance(item, ZGrid) else item
 
 
 def as_meshes(first: Any, second: Any) -> tuple[Mesh, Mesh]:
@@ -302,20 +302,19 @@ def densify(grid: ZGrid | np.ndarray, n: int, method: str = "biharmonic", *, ite
                         tol=number(tol, "tol", float, 0, low_open=True), jump_angle=angle(jump_angle))
 
 
-def triangulate(grid: ZGrid | np.ndarray, jump_angle: float | None = None, *, vertices: int | None = None) -> Mesh:
+def triangulate(grid: ZGrid | np.ndarray, jump_angle: float | None = None, *,
+                vertices: int | Literal["all"] | None = None) -> Mesh:
     """The triangle mesh of a z-grid (or a 2D array) in its input surface's frame (``mzc triangulate``):
-    a vertex at every valid node, or about ``vertices`` of them, fewer where the surface is flat
-    (``mzc.ops.simplify``)."""
+    about ``vertices`` vertices, fewer where the surface is flat (``mzc.ops.simplify``), or with
+    ``vertices="all"`` one at every valid node; by default about the vertex count of the mesh or
+    cloud the grid was sliced from (``ZGrid.source_vertices``, which its files keep), every valid node
+    when it records none."""
     from mzc.limits import MAX_NODES
-    from mzc.ops.triangulation import grid_to_mesh
+    from mzc.ops.simplify import ALL, rebuilt
 
-    vertices = number(vertices, "vertices", int, 4, MAX_NODES)
-    mesh = grid_to_mesh(as_grid(grid), angle(jump_angle))
-    if vertices is None:
-        return mesh
-    from mzc.ops.simplify import simplified
-
-    return simplified(mesh, vertices)
+    if vertices != ALL:
+        vertices = number(vertices, "vertices", int, 4, MAX_NODES)
+    return rebuilt(as_grid(grid), angle(jump_angle), vertices)
 
 
 def angle(jump_angle: float | None) -> float | None:

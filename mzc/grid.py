@@ -33,6 +33,7 @@ CELLS = ("area", "point")  # what a raster's value stands for: its cell, or a sa
 ROW_ORDERS = ("down", "up")   # a raster's first row: the grid's last (north-up images) or its first
 SAMPLES = ("uint8", "int8", "uint16", "int16", "uint32", "int32", "float32", "float64")   # a raster's type
 MAX_CHARTS = 65536         # charts of one grid
+MAX_SOURCE_VERTICES = 2 ** 53   # a source's vertex count (any count a float64 array of points can have)
 
 
 @dataclass(frozen=True)
@@ -158,6 +159,15 @@ def check_crs(value):
         raise MzcError("the CRS holds a control character", field="crs")
 
 
+def vertex_count(value):
+    """A source's vertex count as an int in 1..MAX_SOURCE_VERTICES, or None; anything else refused."""
+    if value is None:
+        return None
+    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or not 1 <= value <= MAX_SOURCE_VERTICES:
+        raise MzcError(f"must be an integer in 1..{MAX_SOURCE_VERTICES}, not {value!r}", field="source_vertices")
+    return int(value)
+
+
 def check_token(value, name):
     """Refuse a ``units`` or ``nodata`` value that the header cannot hold as the one token it
     reads back (spaces or a newline would add header lines; bytes that are not UTF-8 would
@@ -187,7 +197,10 @@ class ZGrid:
     from the surface where it has one (``mzc.ops.colouring``), 0 at invalid nodes; None when
     the surface has none. A planar grid read from a raster (or to be written as one) has
     ``crs``, the coordinate reference system of the input frame as one line of WKT, and
-    ``raster`` (a Raster): both None otherwise.
+    ``raster`` (a Raster): both None otherwise. ``source_vertices`` is the vertex (or point)
+    count of the mesh or cloud the grid was sliced from, which the rebuild comes back near
+    (``mzc.triangulate``); None when the grid did not come from one, or no longer has its density
+    (densified, windowed).
     """
 
     z: np.ndarray
@@ -203,6 +216,7 @@ class ZGrid:
     raster: Raster | None = None
     charts: tuple[Chart, ...] | None = None
     colors: np.ndarray | None = None
+    source_vertices: int | None = None
 
     def __post_init__(self) -> None:
         self.z = real_array(self.z, "heights", check_shape)
@@ -231,6 +245,7 @@ class ZGrid:
             if problem:
                 raise MzcError(f"{problem[0]}: {problem[1]}")
         check_crs(self.crs)
+        self.source_vertices = vertex_count(self.source_vertices)
         if self.raster is not None and not isinstance(self.raster, Raster):
             raise MzcError(f"must be a mzc.grid.Raster, not a {type(self.raster).__name__}", field="raster")
         if self.projection != "planar" and self.georeferenced:

@@ -190,6 +190,7 @@ def assert_same_grid(got, want):
     assert got.charts == want.charts
     assert (got.colors is None) == (want.colors is None)
     assert got.colors is None or got.colors.tobytes() == want.colors.tobytes()
+    assert got.source_vertices == want.source_vertices
 
 
 def check_fixtures(codec):

@@ -2,6 +2,7 @@
 container and codecs on a small central grid, the summary ratios, and a --quick run."""
 
 import json
+import os
 import subprocess
 import sys
 
@@ -379,6 +380,56 @@ def test_the_terrain_is_a_seeded_grid_with_a_border_and_holes():
     assert grid.shape == (300, 400) and np.array_equal(grid.z, scaling.terrain_grid(300, 400, 3).z, equal_nan=True)
     assert 0.5 < grid.valid.mean() < 0.8 and grid.valid[150, 200] and not grid.valid[0, 0]
     assert speed.grid_shape(25.0) == (4472, 5590)
+
+
+# --------------------------------------------------------------------------- the web decode benchmark
+
+WEB_DECODE = REPO / "benchmarks" / "web_decode.py"
+
+
+def web_decode(out, *args, env=None):
+    """benchmarks/web_decode.py ARGS --out OUT as a finished process."""
+    return subprocess.run([sys.executable, str(WEB_DECODE), *args, "--out", str(out)], capture_output=True, text=True,
+                          timeout=300, env=env)
+
+
+def test_web_decode_times_web_and_draco_on_f18_in_one_node_process(tmp_path):
+    from mzc.meshes import read_mesh
+
+    pytest.importorskip("DracoPy")
+    mesh = read_mesh(face_path("f18.ply"))
+    result = web_decode(tmp_path, "--runs", "3", "--warmups", "1")
+    assert result.returncode == 0, result.stderr
+    if "skipped" in result.stderr:
+        pytest.skip(result.stderr.strip())
+    document = json.loads((tmp_path / "web-decode-results.json").read_text())
+    text = (tmp_path / "web-decode-results.md").read_text()
+    assert document["draco_mesh"] == {"vertices": len(mesh.points), "triangles": len(mesh.triangles)}
+    grid = document["grid"]
+    assert grid["version"] == "7.0" and 0 < grid["valid"] < grid["rows"] * grid["cols"]
+    for name in ("mzc", "draco"):
+        times = document[name]
+        assert 0 < times["wall_min_ms"] <= times["wall_median_ms"]
+        assert 0 <= times["cpu_min_ms"] <= times["cpu_median_ms"]
+    assert document["ratio_wall"] == document["mzc"]["wall_median_ms"] / document["draco"]["wall_median_ms"]
+    assert 0 < document["files"]["mzc"] < document["files"]["draco"]
+    sizes = document["sizes"]
+    assert sizes["draco_wasm_gzip"] > 0 and sizes["draco_js_gzip"] > 0
+    if sizes["esbuild"]:
+        assert 0 < sizes["gzip"] < sizes["minified"] < sizes["written"]
+        assert f"**{sizes['gzip']:,}**" in text
+    assert f"{document['ratio_wall']:.2f}x in wall time" in text and len(document["load_before"]) == 3
+
+
+def test_web_decode_skips_with_a_message_without_draco3d_or_node(tmp_path):
+    empty = tmp_path / "node_modules"
+    empty.mkdir()
+    out = tmp_path / "out"
+    no_draco = web_decode(out, "--modules", str(empty))
+    assert no_draco.returncode == 0 and no_draco.stderr.startswith("web_decode: skipped: draco3d is not in")
+    no_node = web_decode(out, "--modules", str(empty), env={**os.environ, "PATH": str(empty)})
+    assert no_node.returncode == 0 and no_node.stderr == "web_decode: skipped: node is not installed\n"
+    assert not out.exists()
 
 
 # --------------------------------------------------------------------------- the whole-object benchmark

@@ -160,7 +160,7 @@ def test_sample_slice_triangulate_diff_pipeline(mzc, tmp_path):
     mesh = tmp_path / "bump.obj"
     mzc("sample", "bump", "-o", mesh, check=True)
     grid = mzc("slice", mesh, "--d1", "1", "--d2", "1", check=True).stdout
-    assert grid.startswith(b"mzc-zgrid 3.0\n")   # the raw body, the pipes' default
+    assert grid.startswith(b"mzc-zgrid 3.2\n")   # the raw body, the pipes' default (3.2: the bump's vertex count)
     rebuilt = tmp_path / "rebuilt.ply"
     mzc("triangulate", "-o", rebuilt, input=grid, check=True)
     report = json.loads(mzc("diff", mesh, rebuilt, "--json", check=True).stdout)
@@ -176,7 +176,8 @@ def test_info_describes_a_grid(mzc, tmp_path):
         mzc("sample", "bump", "-o", mesh, check=True)
         grid = mzc("slice", mesh, check=True)
     text = mzc("info", "--decode", input=grid.stdout, check=True).stdout.decode()
-    assert "format    mzc-zgrid 3.0" in text and "rows x" in text and "valid" in text
+    assert "format    mzc-zgrid 3.2" in text and "rows x" in text and "valid" in text
+    assert "source    " in text and " vertices (triangulate's default size)" in text
     assert "  raw float64\n" in text
     assert f"bytes     {len(grid.stdout)}" in text
 
@@ -312,13 +313,13 @@ def bump_grid(mzc, tmp_path):
 
 def test_filters_write_raw_by_default_and_plain_text_with_plain(mzc, bump_grid):
     grid = zgrid.read(bump_grid, "-")
-    assert bump_grid.startswith(b"mzc-zgrid 3.0\n") and b"\nraw float64\ncrc32 " in bump_grid
+    assert bump_grid.startswith(b"mzc-zgrid 3.2\n") and b"\nraw float64\ncrc32 " in bump_grid
     assert len(bump_grid.split(b"\ndata\n", 1)[1]) == 8 * grid.z.size
     for command in (["decode"], ["densify", "-n", "0"]):
         assert mzc(*command, input=bump_grid, check=True).stdout == bump_grid   # exact, unchanged
         plain = mzc(*command, "--plain", input=bump_grid, check=True).stdout
         assert plain == zgrid.write(grid)   # today's text, byte for byte
-        assert plain.startswith(b"mzc-zgrid 1.0\n") and b"raw" not in plain
+        assert plain.startswith(b"mzc-zgrid 1.2\n") and b"raw" not in plain
 
 
 def test_float32_halves_the_body_and_every_reader_takes_it(mzc, bump_grid):
@@ -326,7 +327,7 @@ def test_float32_halves_the_body_and_every_reader_takes_it(mzc, bump_grid):
     z = zgrid.read(bump_grid, "-").z
     assert b"\nraw float32\n" in small and len(small.split(b"\ndata\n", 1)[1]) == 4 * z.size
     np.testing.assert_array_equal(zgrid.read(small, "-").z, z.astype(np.float32).astype(float))
-    assert b"format    mzc-zgrid 3.0" in mzc("info", input=small, check=True).stdout
+    assert b"format    mzc-zgrid 3.2" in mzc("info", input=small, check=True).stdout
     assert mzc("encode", "--dwt2d", "--max-error", "0.05", input=small, check=True).stdout.startswith(b"mzc-dwt2d")
 
 
@@ -363,12 +364,12 @@ def test_a_terminal_gets_text_and_no_compressed_bytes(sample_files):
     encode refuses to print compressed bytes, as gzip does; --float32 asked for raw still gets it."""
     status, shown, _ = run_on_terminal(["decode", sample_files["coded"]])
     text = shown.replace(b"\r\n", b"\n").decode("ascii")   # a terminal shows each newline as CR LF
-    assert status == 0 and text.startswith("mzc-zgrid 1.0\n") and "\nraw " not in text
+    assert status == 0 and text.startswith("mzc-zgrid 1.2\n") and "\nraw " not in text
     assert zgrid.read(text.encode(), "terminal").z.shape == zgrid.read(
         subprocess.run([sys.executable, "-m", "mzc", "decode", sample_files["coded"]], capture_output=True,
                        check=True).stdout, "pipe").z.shape
     status, shown, _ = run_on_terminal(["decode", sample_files["coded"], "--float32"])
-    assert status == 0 and shown.startswith(b"mzc-zgrid 3.0")
+    assert status == 0 and shown.startswith(b"mzc-zgrid 3.2")
     status, shown, error = run_on_terminal(["encode", "--dwt2d", "--rmse", "0.05", sample_files["grid"]])
     assert status == 1 and shown == b""
     assert error == "mzc: <stdout>: compressed data is not written to a terminal: redirect it or give -o FILE\n"

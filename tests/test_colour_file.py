@@ -47,7 +47,7 @@ def test_the_cli_pipeline_keeps_colours_within_the_psnr_target(tmp_path):
     decoded = run_mzc("decode", input=encoded.stdout, check=True).stdout
     coloured = read_any(decoded, "decoded.zg")
     assert decoded.startswith(b"mzc-zgrid 5.") and 36 <= psnr(coloured.colors, original.colors, original.valid) < 45
-    run_mzc("triangulate", "-o", tmp_path / "out.ply", input=decoded, check=True)
+    run_mzc("triangulate", "--vertices", "all", "-o", tmp_path / "out.ply", input=decoded, check=True)
     out = read_mesh(tmp_path / "out.ply")
     errors = out.colors - analytic_colour(out.points[:, 0], out.points[:, 1])
     assert len(out.points) == original.valid.sum() and np.sqrt(np.mean(errors ** 2)) < 4.5

@@ -58,9 +58,11 @@ def written_versions(module):
     """The versions a format's writer writes: planar and projected grids, the z-grid's raw
     body (RAW_VERSION), a third version above both, the georeferenced planar grids of rasters
     (GEOREF_SINCE: a minor version of a major), multi-chart grids (CHARTED_VERSION), grids with
-    colours (COLOURED_VERSION) and tiled rasters of integers (ROUNDED_TILED_VERSION)."""
+    colours (COLOURED_VERSION), tiled rasters of integers (ROUNDED_TILED_VERSION) and grids that
+    record their source's vertex count (COUNTED_SINCE: a minor version of a major)."""
     return {module.VERSION, module.PROJECTED_VERSION, getattr(module, "RAW_VERSION", module.VERSION),
-            *module.GEOREF_SINCE.items(), getattr(module, "CHARTED_VERSION", module.VERSION),
+            *module.GEOREF_SINCE.items(), *getattr(module, "COUNTED_SINCE", {}).items(),
+            getattr(module, "CHARTED_VERSION", module.VERSION),
             getattr(module, "COLOURED_VERSION", module.VERSION),
             getattr(module, "ROUNDED_TILED_VERSION", module.VERSION)}
 

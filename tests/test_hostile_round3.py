@@ -345,7 +345,7 @@ def compact_edited(data, keyword, words):
     header, payload, _colour = compact.read(data, "t")
     fields = {name: values for name, (values, _line) in header.fields.items()} | {keyword: words}
     return compact.file_bytes([f"{name} {' '.join(values)}" for name, values in fields.items()], payload,
-                              version=(compact.major(data), 0))
+                              major=compact.major(data))
 
 
 def beyond_the_limit():

@@ -57,7 +57,7 @@ def assert_same_mesh(grid, tmp_path, *jump_angles):
 @pytest.mark.parametrize("name", [n for n in fixture_names() if n.split("-")[0] not in TO_1E12])
 def test_fixtures_triangulate_as_mzc_triangulate_does(name, tmp_path):
     out = tmp_path / "mesh.obj"
-    run_mzc("triangulate", FIXTURES / name, "--format", "obj", "-o", out, check=True)
+    run_mzc("triangulate", FIXTURES / name, "--vertices", "all", "--format", "obj", "-o", out, check=True)
     made = node_triangulate(FIXTURES / name)
     assert made.returncode == 0, made.stderr.decode()
     assert made.stdout == out.read_bytes()
@@ -151,8 +151,8 @@ def chart_triangle_count(grid):
 
 
 def assert_zipped_as_mzc(path, tmp_path):
-    """web/'s OBJ of the multi-chart file ``path`` is `mzc triangulate`'s, stitches and all."""
-    run_mzc("triangulate", path, "--format", "obj", "-o", tmp_path / "zipped.obj", check=True)
+    """web/'s OBJ of the multi-chart file ``path`` is `mzc triangulate --vertices all`'s, stitches and all."""
+    run_mzc("triangulate", path, "--vertices", "all", "--format", "obj", "-o", tmp_path / "zipped.obj", check=True)
     made = node_triangulate(path)
     assert made.returncode == 0, made.stderr.decode()
     assert made.stdout == (tmp_path / "zipped.obj").read_bytes()

@@ -1,7 +1,7 @@
 #!/usr/bin/env node
 // node web/cli.mjs decode IN > OUT: the raw float64 z-grid of an mzc file, as `mzc decode`
 // writes it; node web/cli.mjs triangulate IN [--jump-angle A] > OUT.obj: its mesh as the OBJ
-// `mzc triangulate IN --format obj` writes. A bad file gets one line on stderr and exit
+// `mzc triangulate IN --vertices all --format obj` writes. A bad file gets one line on stderr and exit
 // status 1, and nothing on stdout.
 
 import { readFileSync } from "node:fs";

@@ -106,18 +106,20 @@ function roundHalfEven(x) {
   return r - x === 0.5 && r % 2 !== 0 ? r - 1 : r;
 }
 
-/** One inverse level of the integer LeGall 5/3 (JPEG 2000's reversible): n samples from ceil(n/2)
- * low s and floor(n/2) high d; symmetric extension (d_-1 = d_0, past the ends the last). */
-function merge53(low, high, n) {
-  if (n === 1) return Float64Array.of(low[0]);
-  const s = Float64Array.from(low), d = Float64Array.from(high);
-  const ns = s.length, nd = d.length;
-  for (let k = 0; k < ns; k++) s[k] -= Math.floor((d[k ? k - 1 : 0] + d[Math.min(k, nd - 1)] + 2) / 4);
-  for (let k = 0; k < nd; k++) d[k] += Math.floor((s[k] + s[Math.min(k + 1, ns - 1)]) / 2);
-  const x = new Float64Array(n);
-  for (let k = 0; k < ns; k++) x[2 * k] = s[k];
-  for (let k = 0; k < nd; k++) x[2 * k + 1] = d[k];
-  return x;
+/** One inverse level, in place, of the integer LeGall 5/3 (JPEG 2000's reversible): w signals of
+ * n samples from their ceil(n/2) low rows s and floor(n/2) high rows d, each w wide; symmetric
+ * extension (d_-1 = d_0, past the ends the last). */
+function merge53(s, d, n, w) {
+  if (n === 1) return;
+  const ns = (n + 1) >> 1, nd = n >> 1;
+  for (let k = 0; k < ns; k++) {
+    const before = (k ? k - 1 : 0) * w, after = Math.min(k, nd - 1) * w;
+    for (let j = 0; j < w; j++) s[k * w + j] -= Math.floor((d[before + j] + d[after + j] + 2) / 4);
+  }
+  for (let k = 0; k < nd; k++) {
+    const next = Math.min(k + 1, ns - 1) * w;
+    for (let j = 0; j < w; j++) d[k * w + j] += Math.floor((s[k * w + j] + s[next + j]) / 2);
+  }
 }
 
 /** The interleaved R, G, B of the Y, Co, Cg planes (the inverse of YCoCg-R). */

@@ -5,7 +5,7 @@
 
 import { fail, headerFields, fieldReader, gridFields, checkChecksum, checkCharts, VIEWS, crc32, splitHeader, parseMagic } from "./header.mjs";
 import { cos } from "./elementary.mjs";
-import { sections, headerLines, HEADER, PAYLOAD, COLOUR } from "./compact.mjs";
+import { sections, headerLines, HEADER, PAYLOAD, COLOUR, NEWEST_MINOR } from "./compact.mjs";
 import { inversePeriodized2d, relevantPeriodized2d } from "./pywt.mjs";
 import { decodeFlips } from "./mask.mjs";
 
@@ -25,8 +25,10 @@ export function decodeDwt2d(bytes, lines, body, magic) {
  * grid's colours (Colours of 7.0), comes back undecoded as `colourSection` (colour.mjs's
  * `withColours` decodes it over the grid's valid nodes). */
 export function decodeCompact(bytes, magicEnd, magic) {
+  const newest = magic.major === 7 ? NEWEST_MINOR : 0;   // 8.0 reads 7.1's fields
+  if (magic.minor > newest) fail(null, `mzc-dwt2d version ${magic.major}.${magic.minor} is newer than this decoder reads (${magic.major}.${newest}); upgrade`);
   const bodies = sections(bytes, magicEnd, [HEADER, PAYLOAD], COLOUR);
-  const grid = decodeWhole(headerLines(bodies[HEADER]), bodies[PAYLOAD], magic);
+  const grid = decodeWhole(headerLines(bodies[HEADER], magic.major === 7 ? magic.minor : NEWEST_MINOR), bodies[PAYLOAD], magic);
   return bodies[COLOUR] ? { ...grid, colourSection: bodies[COLOUR] } : grid;
 }
 
@@ -34,7 +36,7 @@ export function decodeCompact(bytes, magicEnd, magic) {
 function decodeWhole(fields, bytes, magic) {
   const h = fieldReader(fields);
   const georef = magic.major >= 6 || (magic.major === 3 && magic.minor >= 2);
-  const grid = gridFields(h, { projected: magic.major >= 3, georef });
+  const grid = gridFields(h, { projected: magic.major >= 3, georef, counted: magic.major >= 8 || (magic.major === 7 && magic.minor >= 1) });
   const p = codecFields(h, magic, grid);
   const payload = new Payload(bytes, magic.major >= 7);
   const z = decodeGrid(payload, grid, p);
@@ -459,8 +461,16 @@ const SIGN_WEIGHTS = { 1: [-2, 1, 2], 2: [2, 1, -2], 3: [-1, 0, 0] };
 /** |q| at (r, c) of a band, 0 outside it. */
 const at = (q, shape, r, c) => (r >= 0 && c >= 0 && r < shape.rows && c < shape.cols ? Math.abs(q[r * shape.cols + c]) : 0);
 
+/** The context (0..10) of a magnitude whose neighbourhood sums to a: the thresholds it reaches. */
+function magnitudeContext(a) {
+  let n = 0;
+  while (n < 10 && THRESHOLDS[n] <= a) n++;
+  return n;
+}
+
 /** The integers of detail band b, row by row in even and odd passes: magnitudes grouped by
- * context, then the signs of the nonzero ones (Order of the integers, 5). */
+ * context (in context order, each context's columns left to right), then the signs of the
+ * nonzero ones (Order of the integers, 5). */
 export function decodeDetail(payload, q, b, shapes, relevant, p) {
   const shape = shapes[b];
   const { rows, cols } = shape;
@@ -468,38 +478,54 @@ export function decodeDetail(payload, q, b, shapes, relevant, p) {
   const parentIndex = shape.level < p.levels ? b - 3 : -1;
   const parent = parentIndex > 0 && shapes[parentIndex].rows * shapes[parentIndex].cols ? parentIndex : -1;
   const ratio = parent > 0 ? p.steps[parent] / p.steps[b] : 0;
+  const ps = parent > 0 ? shapes[parent] : null;
+  const parentCol = Int32Array.from({ length: cols }, (_, c) => (ps ? Math.min(c >> 1, ps.cols - 1) : 0));
+  const parentBand = parent > 0 ? q[parent] : null;
   const earlier = Array.from({ length: shape.orient - 1 }, (_, i) => b - shape.orient + 1 + i);
-  const parentAt = (r, c) => {
-    const ps = shapes[parent];
-    return q[parent][Math.min(r >> 1, ps.rows - 1) * ps.cols + Math.min(c >> 1, ps.cols - 1)];
-  };
+  const earlierBands = earlier.map((e) => q[e]);
+  const earlierRows = earlier.map((e) => shapes[e].rows);
+  const earlierCols = earlier.map((e) => shapes[e].cols);
   const [wa, wp, wt] = SIGN_WEIGHTS[shape.orient];
-  const context = new Int8Array(cols);   // each column's context in the pass, -1 if not coded
+  const mask = relevant[b];
+  const context = new Int8Array(cols);   // each column's context in the pass
+  const order = new Int32Array(cols);    // the pass's coded columns by context, then column
+  const starts = new Int32Array(12);
   for (let r = 0; r < rows; r++) {
-    for (const odd of [0, 1]) {
-      context.fill(-1);
+    const row = r * cols;
+    const parentRow = ps ? Math.min(r >> 1, ps.rows - 1) * ps.cols : 0;   // (r >> 1, c >> 1), held to the parent band
+    for (let odd = 0; odd < 2; odd++) {
+      starts.fill(0);
       for (let c = odd; c < cols; c += 2) {
-        if (!relevant[b][r * cols + c]) continue;
-        let a = parent > 0 ? Math.abs(parentAt(r, c)) * ratio : 0;
-        for (const e of earlier) a += at(q[e], shapes[e], r, c);
-        a += at(out, shape, r - 1, c) + (at(out, shape, r - 1, c - 1) + at(out, shape, r - 1, c + 1) + at(out, shape, r - 2, c)) / 2;
-        if (odd) a += at(out, shape, r, c - 1) + at(out, shape, r, c + 1);
-        let n = 0;
-        while (n < 10 && THRESHOLDS[n] <= a) n++;
+        if (!mask[row + c]) continue;
+        let a = parent > 0 ? Math.abs(parentBand[parentRow + parentCol[c]]) * ratio : 0;
+        for (let e = 0; e < earlier.length; e++) {
+          if (r < earlierRows[e] && c < earlierCols[e]) a += Math.abs(earlierBands[e][r * earlierCols[e] + c]);
+        }
+        const up = r > 0 ? Math.abs(out[row - cols + c]) : 0;
+        const upLeft = r > 0 && c > 0 ? Math.abs(out[row - cols + c - 1]) : 0;
+        const upRight = r > 0 && c + 1 < cols ? Math.abs(out[row - cols + c + 1]) : 0;
+        const upUp = r > 1 ? Math.abs(out[row - 2 * cols + c]) : 0;
+        a += up + (upLeft + upRight + upUp) / 2;
+        if (odd) a += (c > 0 ? Math.abs(out[row + c - 1]) : 0) + (c + 1 < cols ? Math.abs(out[row + c + 1]) : 0);
+        const n = magnitudeContext(a);
         context[c] = n;
+        starts[n + 1]++;
       }
-      for (let n = 0; n <= 10; n++) {
-        for (let c = odd; c < cols; c += 2) if (context[c] === n) out[r * cols + c] = payload.unsigned(4 + n);
+      for (let n = 1; n < 12; n++) starts[n] += starts[n - 1];
+      const coded = starts[11];
+      for (let c = odd; c < cols; c += 2) if (mask[row + c]) order[starts[context[c]]++] = c;
+      for (let i = 0; i < coded; i++) {
+        const c = order[i];
+        out[row + c] = payload.unsigned(4 + context[c]);
       }
       for (let c = odd; c < cols; c += 2) {
-        const i = r * cols + c;
+        const i = row + c;
         if (!out[i]) continue;
         const above = r ? Math.sign(out[i - cols]) : 0;
-        const par = parent > 0 ? Math.sign(parentAt(r, c)) : 0;
+        const par = parent > 0 ? Math.sign(parentBand[parentRow + parentCol[c]]) : 0;
         const t = odd ? (c > 0 ? Math.sign(out[i - 1]) : 0) + (c + 1 < cols ? Math.sign(out[i + 1]) : 0) : 0;
         const score = wa * above + wp * par + wt * t;
-        const context = (odd ? 4 : 0) + Math.min(Math.abs(score), 3);
-        const flip = payload.symbol(15 + context);
+        const flip = payload.symbol(15 + (odd ? 4 : 0) + Math.min(Math.abs(score), 3));
         if (flip > 1) fail("data", "a sign symbol other than 0 or 1");
         const predicted = score < 0 ? -1 : 1;
         out[i] *= flip ? -predicted : predicted;
@@ -554,24 +580,39 @@ const LIFTING = {
 
 /** Marks along every row of an r x c array of 0/1: the low coefficients within reach[0]
  * of a valid sample, the high ones within reach[1] (samples outside the row ignored, or
- * wrapping round when `wrap`): the row-low (r x ceil(c/2)) and row-high (r x floor(c/2)) marks. */
+ * wrapping round when `wrap`): the row-low (r x ceil(c/2)) and row-high (r x floor(c/2)) marks.
+ * Each run of valid samples marks the coefficients within reach of it. */
 function markRows(a, r, c, reach, wrap) {
   const lc = (c + 1) >> 1;
   const hc = c >> 1;
   const low = new Uint8Array(r * lc);
   const high = new Uint8Array(r * hc);
-  const near = (base, centre, d) => {
-    for (let t = centre - d; t <= centre + d; t++) {
-      const j = wrap ? (t + c) % c : t;
-      if (j >= 0 && j < c && a[base + j]) return 1;
-    }
-    return 0;
-  };
   for (let i = 0; i < r; i++) {
-    for (let k = 0; k < lc; k++) low[i * lc + k] = near(i * c, 2 * k, reach[0]);
-    for (let k = 0; k < hc; k++) high[i * hc + k] = near(i * c, 2 * k + 1, reach[1]);
+    for (let j = 0; j < c; j++) {
+      if (!a[i * c + j]) continue;
+      const start = j;
+      while (j + 1 < c && a[i * c + j + 1]) j++;
+      markWithin(low.subarray(i * lc, (i + 1) * lc), 0, start - reach[0], j + reach[0], c, wrap);
+      markWithin(high.subarray(i * hc, (i + 1) * hc), 1, start - reach[1], j + reach[1], c, wrap);
+    }
   }
   return [low, high];
+}
+
+/** Marks the coefficients k of a row of c samples (k at sample 2k + parity) whose sample is
+ * from..to, taken round the row when `wrap` (else the part within the row; from > -c and
+ * to < 2c - 1: a reach is less than a wrapping row's width). */
+function markWithin(marks, parity, from, to, c, wrap) {
+  if (wrap && from < 0) {
+    markWithin(marks, parity, from + c, c - 1, c, false);
+    markWithin(marks, parity, 0, to, c, false);
+  } else if (wrap && to >= c) {
+    markWithin(marks, parity, 0, to - c, c, false);
+    markWithin(marks, parity, from, c - 1, c, false);
+  } else {
+    const first = Math.max(0, Math.ceil((from - parity) / 2));
+    marks.fill(1, first, Math.max(first, Math.floor((to - parity) / 2) + 1));
+  }
 }
 
 /** The c x r transpose of an r x c array. */
@@ -609,9 +650,14 @@ function dequantise(q, shapes, grid, p, periodic) {
   return q.map((band, b) => {
     const shape = shapes[b];
     const step = p.steps[b];
-    if (!factors || b === 0) return band.map((v) => v * step);
+    const out = new Float64Array(band.length);
+    if (!factors || b === 0) {
+      for (let i = 0; i < band.length; i++) out[i] = band[i] * step;
+      return out;
+    }
     const g = resample(factors, shapes[0].rows, shapes[0].cols, shape.rows, shape.cols);
-    return band.map((v, i) => v * (step * g[i]));
+    for (let i = 0; i < band.length; i++) out[i] = band[i] * (step * g[i]);
+    return out;
   });
 }
 
@@ -673,35 +719,44 @@ function metric(w, i, grid, scale) {
 
 /** g (n1 x n2) resampled linearly to m1 x m2: first along the columns, then the rows. */
 function resample(g, n1, n2, m1, m2) {
+  const down = linear(n1, m1);
   const tmp = new Float64Array(m1 * n2);
-  for (let j = 0; j < n2; j++) {
-    const col = linear((i) => g[i * n2 + j], n1, m1);
-    col.forEach((x, i) => (tmp[i * n2 + j] = x));
+  for (let i = 0; i < m1; i++) {
+    const from = down.at[i] * n2;
+    const w = down.weight[i];
+    for (let j = 0; j < n2; j++) tmp[i * n2 + j] = n1 === 1 ? g[j] : (1 - w) * g[from + j] + w * g[from + n2 + j];
   }
+  const along = linear(n2, m2);
   const out = new Float64Array(m1 * m2);
-  for (let i = 0; i < m1; i++) out.set(linear((j) => tmp[i * n2 + j], n2, m2), i * m2);
+  for (let i = 0; i < m1; i++) {
+    for (let j = 0; j < m2; j++) {
+      const from = i * n2 + along.at[j];
+      const w = along.weight[j];
+      out[i * m2 + j] = n2 === 1 ? tmp[i * n2] : (1 - w) * tmp[from] + w * tmp[from + 1];
+    }
+  }
   return out;
 }
 
-/** One axis of the resampling: n input nodes to m output cells. */
-function linear(get, n, m) {
-  const out = new Float64Array(m);
+/** One axis of the resampling, n input nodes to m output cells: each cell's node j (`at`) and
+ * the weight w of node j + 1 (`weight`), the cell (1 - w) x_j + w x_(j+1); with n = 1, x_0. */
+function linear(n, m) {
+  const at = new Int32Array(m);
+  const weight = new Float64Array(m);
+  if (n === 1) return { at, weight };
   for (let i = 0; i < m; i++) {
-    if (n === 1) {
-      out[i] = get(0);
-      continue;
-    }
     const u = Math.min(Math.max(((i + 0.5) * n) / m - 0.5, 0), n - 1);
-    const j = Math.min(Math.floor(u), n - 2);
-    const w = u - j;
-    out[i] = (1 - w) * get(j) + w * get(j + 1);
+    at[i] = Math.min(Math.floor(u), n - 2);
+    weight[i] = u - at[i];
   }
-  return out;
+  return { at, weight };
 }
 
 /** The inverse 3.0 transform of the dequantised bands: coarsest level first, each level
- * columns before rows. `merge(low, high, n, wrap)` is one inverse level of a signal: by default
- * the lifting of p.wavelet (the colour section's integer 5/3 gives its own). */
+ * columns before rows. `merge(s, d, n, w, wrap)` is one inverse level, in place, of w signals
+ * of n samples side by side: their ceil(n/2) low rows s and floor(n/2) high rows d, each w
+ * wide (interleaved afterwards); by default the lifting of p.wavelet (the colour section's
+ * integer 5/3 gives its own). */
 export function inverse3(bands, shapes, rows, cols, p, periodic, merge = liftingMerge(LIFTING[p.wavelet])) {
   let low = bands[0];
   for (let l = p.levels; l >= 1; l--) {
@@ -711,53 +766,71 @@ export function inverse3(bands, shapes, rows, cols, p, periodic, merge = lifting
     const hc = c - lc;
     const rowLow = mergeColumns(low, bands[b], r, lc, merge);
     const rowHigh = mergeColumns(bands[b + 1], bands[b + 2], r, hc, merge);
-    const wrap = periodic && c % 2 === 0 && c > 2;
-    const out = new Float64Array(r * c);
-    for (let i = 0; i < r; i++) {
-      out.set(merge(rowLow.subarray(i * lc, (i + 1) * lc), rowHigh.subarray(i * hc, (i + 1) * hc), c, wrap), i * c);
-    }
-    low = out;
+    low = mergeRows(rowLow, rowHigh, r, c, merge, periodic && c % 2 === 0 && c > 2);
   }
   return low;
 }
 
-/** Columns of a low (ceil(r/2) x w) and a high (floor(r/2) x w) half merged into r x w. */
+/** Columns of a low (ceil(r/2) x w) and a high (floor(r/2) x w) half merged into r x w: the
+ * halves' rows are the merge's s and d rows as they lie. */
 function mergeColumns(lo, hi, r, w, merge) {
-  const lr = (r + 1) >> 1;
-  const low = transpose(lo, lr, w);
-  const high = transpose(hi, r - lr, w);
-  const out = new Float64Array(w * r);
-  for (let j = 0; j < w; j++) out.set(merge(low.subarray(j * lr, (j + 1) * lr), high.subarray(j * (r - lr), (j + 1) * (r - lr)), r, false), j * r);
-  return transpose(out, w, r);
+  const s = Float64Array.from(lo);
+  const d = Float64Array.from(hi);
+  merge(s, d, r, w, false);
+  return interleave(s, d, r, w);
+}
+
+/** The rows of r x ceil(c/2) low and r x floor(c/2) high halves merged into r x c, one row at a
+ * time: each row's halves merged where they lie (lo and hi are scratch, changed), then interleaved. */
+function mergeRows(lo, hi, r, c, merge, wrap) {
+  const lc = (c + 1) >> 1;
+  const hc = c >> 1;
+  const out = new Float64Array(r * c);
+  for (let i = 0; i < r; i++) {
+    merge(lo.subarray(i * lc, (i + 1) * lc), hi.subarray(i * hc, (i + 1) * hc), c, 1, wrap);
+    for (let k = 0; k < lc; k++) out[i * c + 2 * k] = lo[i * lc + k];
+    for (let k = 0; k < hc; k++) out[i * c + 2 * k + 1] = hi[i * hc + k];
+  }
+  return out;
+}
+
+/** The n x w signal whose even rows are s's rows and odd rows d's. */
+function interleave(s, d, n, w) {
+  const out = new Float64Array(n * w);
+  for (let k = 0; 2 * k < n; k++) out.set(s.subarray(k * w, (k + 1) * w), 2 * k * w);
+  for (let k = 0; 2 * k + 1 < n; k++) out.set(d.subarray(k * w, (k + 1) * w), (2 * k + 1) * w);
+  return out;
 }
 
 /** The inverse level of a wavelet's lifting steps, as a merge of inverse3. */
-const liftingMerge = (lift) => (low, high, n, wrap) => inverseLevel(low, high, n, lift, wrap);
+const liftingMerge = (lift) => (s, d, n, w, wrap) => inverseLevel(s, d, n, w, lift, wrap);
 
-/** One inverse level of an n-sample signal from its low and high coefficients: undo the
- * scales, then the lifting steps from the last to the first (a d step reads only s and an
- * s step only d, so each updates in place as if all k at once); interleave. */
-function inverseLevel(low, high, n, lift, wrap) {
-  if (n === 1) return Float64Array.of(low[0] / Math.SQRT2);
+/** One inverse level, in place, of w n-sample signals from their low rows s and high rows d:
+ * undo the scales, then the lifting steps from the last to the first (a d step reads only s
+ * and an s step only d, so each updates in place as if all k at once). */
+function inverseLevel(s, d, n, w, lift, wrap) {
+  if (n === 1) {
+    for (let j = 0; j < w; j++) s[j] /= Math.SQRT2;
+    return;
+  }
   const lowScale = Math.SQRT2 / lift.k;
   const highScale = -lift.k / Math.SQRT2;
-  const ns = low.length;
-  const nd = high.length;
-  const s = new Float64Array(ns);
-  const d = new Float64Array(nd);
-  for (let k = 0; k < ns; k++) s[k] = low[k] / lowScale;
-  for (let k = 0; k < nd; k++) d[k] = high[k] / highScale;
-  const dBefore = wrap ? nd - 1 : 0;       // the index of d_(-1)
+  const ns = (n + 1) >> 1;
+  const nd = n >> 1;
+  for (let i = 0; i < ns * w; i++) s[i] /= lowScale;
+  for (let i = 0; i < nd * w; i++) d[i] /= highScale;
+  const dBefore = (wrap ? nd - 1 : 0) * w;   // where d_(-1) is
+  const sLast = (wrap ? 0 : ns - 1) * w;      // where s_(ns) is
   for (let step = lift.steps.length - 1; step >= 0; step--) {
     const a = lift.steps[step];
-    if (step % 2 === 0) {
-      for (let k = 0; k < nd; k++) d[k] -= a * (s[k] + (k + 1 < ns ? s[k + 1] : wrap ? s[0] : s[ns - 1]));
-    } else {
-      for (let k = 0; k < ns; k++) s[k] -= a * ((k > 0 ? d[k - 1] : d[dBefore]) + (k < nd ? d[k] : d[nd - 1]));
+    if (step % 2 === 0) {   // d_k -= a (s_k + s_(k+1)); one flat loop up to the d without s_(k+1)
+      const inner = Math.min(nd, ns - 1) * w;
+      for (let i = 0; i < inner; i++) d[i] -= a * (s[i] + s[i + w]);
+      for (let i = inner; i < nd * w; i++) d[i] -= a * (s[i] + s[sLast + i - inner]);
+    } else {                // s_k -= a (d_(k-1) + d_k): s_0 with d_(-1), then flat, then s_(nd) with d_(nd-1) twice
+      for (let j = 0; j < w; j++) s[j] -= a * (d[dBefore + j] + d[j]);
+      for (let i = w; i < nd * w; i++) s[i] -= a * (d[i - w] + d[i]);
+      for (let i = nd * w; i < ns * w; i++) s[i] -= a * (d[i - w] + d[i - w]);
     }
   }
-  const x = new Float64Array(n);
-  for (let k = 0; k < ns; k++) x[2 * k] = s[k];
-  for (let k = 0; k < nd; k++) x[2 * k + 1] = d[k];
-  return x;
 }

@@ -150,7 +150,7 @@ const TWO_PI = 2 * Math.PI;
 /** The grid fields of spec/zgrid.md common to every format, checked as the spec says:
  * `projected` says whether the version may hold a central projection, `georef` whether
  * its `crs` and `raster` lines are read (older minors ignore them). */
-export function gridFields(h, { projected, georef }) {
+export function gridFields(h, { projected, georef, counted }) {
   const rows = h.integer("rows", 1, 1_000_000);
   const cols = h.integer("cols", 1, 1_000_000);
   if (rows * cols > MAX_NODES) fail("rows", `${rows} x ${cols} is more than ${MAX_NODES} nodes`);
@@ -181,6 +181,7 @@ export function gridFields(h, { projected, georef }) {
     nodata: token(h, "nodata", "nan"),
   };
   if (georef) Object.assign(grid, georeference(h, projection));
+  if (counted && h.has("source_vertices")) grid.sourceVertices = sourceVertices(h);
   return grid;
 }
 
@@ -323,15 +324,30 @@ function zgridHeaderLines(grid) {
   if (grid.crs !== undefined) lines.push(`crs ${grid.crs}`);
   if (grid.raster !== undefined) lines.push(`raster ${grid.raster.join(" ")}`);
   if (grid.charts) lines.push(`charts ${grid.charts.map((c) => [c.view, c.row0, c.col0, c.rows, c.cols, c.i0, c.j0].join(" ")).join(" ")}`);
+  if (grid.sourceVertices !== undefined) lines.push(`source_vertices ${grid.sourceVertices}`);
   return lines;
 }
 
 /** The version of z-grid `mzc decode` writes for a grid: 5.0 with colours (5.1 with `crs` or
- * `raster` too), 4.0 for a multi-chart grid, 3.1 with `crs` or `raster`, else 3.0. */
+ * `raster` too), 4.0 for a multi-chart grid, 3.1 with `crs` or `raster`, else 3.0; with
+ * `source_vertices`, the minor that reads it (COUNTED_SINCE: 3.2, 4.1, 5.2). */
 function zgridVersion(grid) {
   const georeferenced = grid.crs !== undefined || grid.raster !== undefined;
-  if (grid.colors) return georeferenced ? "5.1" : "5.0";
-  return grid.charts ? "4.0" : georeferenced ? "3.1" : "3.0";
+  const [major, minor] = grid.colors ? [5, georeferenced ? 1 : 0] : grid.charts ? [4, 0] : [3, georeferenced ? 1 : 0];
+  return `${major}.${grid.sourceVertices === undefined ? minor : COUNTED_SINCE[major]}`;
+}
+
+/** Major -> the minor of a z-grid that adds the `source_vertices` line (Header lines). */
+export const COUNTED_SINCE = { 1: 2, 2: 1, 3: 2, 4: 1, 5: 2 };
+const MAX_SOURCE_VERTICES = 2n ** 53n;
+
+/** The `source_vertices` line of a version that reads it: an integer 1 .. 2^53, compared exactly. */
+function sourceVertices(h) {
+  const [word] = h.words("source_vertices", 1);
+  if (!/^[+-]?\d{1,18}$/.test(word ?? "")) fail("source_vertices", `not an integer: ${word}`);
+  const n = BigInt(word);
+  if (n < 1n || n > MAX_SOURCE_VERTICES) fail("source_vertices", `${word} is outside 1 .. ${MAX_SOURCE_VERTICES}`);
+  return Number(n);
 }
 
 /** The grid as the raw float64 z-grid `mzc decode` writes by default (zgridVersion), every

@@ -54,10 +54,15 @@ const MAX_MAGNITUDE = 1e100;
  * mzc's readers do (mzc.limits; spec/zgrid.md says only "finite"). */
 function checkMagnitudes(grid) {
   const t = grid.transform ?? [];
-  const largest = (values, field) => {
-    for (const v of values) if (Math.abs(v) > MAX_MAGNITUDE) fail(field, `${Math.abs(v).toPrecision(3)} is beyond ${MAX_MAGNITUDE} in magnitude`);
-  };
   largest(grid.origin, "origin");
   largest([t[3], t[7], t[11]].filter((v) => v !== undefined), "transform");
   largest(grid.z, "data");
+}
+
+/** Refuses values (an array or a typed array) of which one exceeds 10^100 in magnitude. */
+function largest(values, field) {
+  for (let i = 0; i < values.length; i++) {
+    const v = Math.abs(values[i]);
+    if (v > MAX_MAGNITUDE) fail(field, `${v.toPrecision(3)} is beyond ${MAX_MAGNITUDE} in magnitude`);
+  }
 }

@@ -1,4 +1,4 @@
-// The mesh of a decoded grid, as `mzc triangulate` makes it (spec/zgrid.md, Connectivity;
+// The mesh of a decoded grid, as `mzc triangulate --vertices all` makes it (spec/zgrid.md, Connectivity;
 // mzc/ops/triangulation.py): its valid nodes' points in the input frame, unused nodes
 // dropped, the triangles 1-2-3 of every cell, row by row, then every 2-4-3; the cells
 // between the last column and the first of a full turn; a pole row's valid nodes one vertex

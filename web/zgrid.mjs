@@ -1,7 +1,7 @@
 // The z-grid itself (spec/zgrid.md): `mzc decode` reads it as any grid and writes it again,
 // so decode() reads its plain (1.x, 2.x) and raw (3.x, 4.0, 5.x with colours) bodies too.
 
-import { fail, headerFields, fieldReader, gridFields, checkChecksum, checkCharts, VIEWS, words, bodyLines } from "./header.mjs";
+import { fail, headerFields, fieldReader, gridFields, checkChecksum, checkCharts, VIEWS, words, bodyLines, COUNTED_SINCE } from "./header.mjs";
 
 const NUMBER = /^[+-]?(\d+\.?\d*|\.\d+)([eE][+-]?\d+)?$/;
 const SAMPLES = { float64: 8, float32: 4 };
@@ -12,7 +12,8 @@ export function decodeZgrid(bytes, lines, body, magic) {
   const fields = headerFields(lines, !raw);
   const h = fieldReader(fields);
   checkChecksum(bytes, lines, fields, raw);
-  const grid = gridFields(h, { projected: magic.major >= 2, georef: magic.minor >= 1 && [1, 3, 5].includes(magic.major) });
+  const grid = gridFields(h, { projected: magic.major >= 2, georef: magic.minor >= 1 && [1, 3, 5].includes(magic.major),
+    counted: magic.minor >= (COUNTED_SINCE[magic.major] ?? Infinity) });
   const charts = h.has("charts") ? chartsLine(h, magic) : undefined;
   let data = bytes.subarray(body);
   let colors;

@@ -39,6 +39,7 @@ def command(input, decode):
         *metric_lines(grid),
         f"cut by    {cutting_surfaces(grid, chart_count is not None)}",
         *chart_lines(grid, chart_count),
+        *source_lines(grid),
         *tiles,
     ]
     if decode:
@@ -46,6 +47,14 @@ def command(input, decode):
     lines.append("header")
     lines += [f"  {line}" for line in header]
     click.echo("\n".join(lines))
+
+
+def source_lines(grid):
+    """The size of the mesh or cloud the grid was sliced from, which ``triangulate`` rebuilds near by
+    default, when the file records it."""
+    if grid.source_vertices is None:
+        return []
+    return [f"source    {grid.source_vertices:,} vertices (triangulate's default size)"]
 
 
 def metric_lines(grid):

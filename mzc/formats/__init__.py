@@ -275,15 +275,17 @@ def sidecar_crs(path: str | os.PathLike | None, extension: str) -> str | None:
 
 
 def header_versions(row: Format) -> dict[str, int | None]:
-    """{projected_major, charted_major, georef_since}: the first major versions of an mzc format whose
-    files may hold a central projection and charts, and the first minor of each major that holds
-    the crs and raster lines (a built-in format's module names them; for a codec from elsewhere,
-    its newest version holds projections and none charts or georeferencing)."""
+    """{projected_major, charted_major, georef_since, counted_since}: the first major versions of an mzc
+    format whose files may hold a central projection and charts, and the first minor of each major
+    that holds the crs and raster lines, and the source_vertices line (a built-in format's module
+    names them; for a codec from elsewhere, its newest version holds projections and none charts,
+    georeferencing or a source's count)."""
     module = row.load()
     if hasattr(module, "PROJECTED_VERSION"):
         return {"projected_major": module.PROJECTED_VERSION[0],
                 "charted_major": getattr(module, "CHARTED_VERSION", (None,))[0],
-                "georef_since": getattr(module, "GEOREF_SINCE", None)}
+                "georef_since": getattr(module, "GEOREF_SINCE", None),
+                "counted_since": getattr(module, "COUNTED_SINCE", None)}
     return {"projected_major": module.version[0], "charted_major": None}
 
 

@@ -24,6 +24,12 @@ the same nodes, so they came in a minor version of each format (``GEOREF_SINCE``
 first minor that reads them; older readers ignore them and decode the same surface); a grid
 without them keeps its format's older version, byte for byte.
 
+The source's vertex count (``source_vertices``, the size of the mesh or cloud a grid was sliced
+from, which the rebuild comes back near) describes the same nodes too: a minor version of the
+formats that carry it (``COUNTED_SINCE`` of the z-grid: major -> first minor; ``mzc-dwt2d`` 7.1).
+Writers write it only for a grid that has one (``grid_header_lines(..., counted=True)``), so every
+other grid keeps its version byte for byte; the thesis's row codecs and dwt2d's tiles leave it out.
+
 The integrity rule: a compressed format's file carries a ``crc32`` header line, the CRC-32
 of every byte of the file but that line (``with_checksum``); ``read_header`` checks it
 before anything reads the body, whatever the version, and refuses a file of a version that
@@ -40,7 +46,16 @@ import numpy as np
 
 from mzc import projections
 from mzc.errors import MzcError
-from mzc.grid import IDENTITY_TRANSFORM, MAX_CHARTS, Chart, Raster, check_charts, check_crs, check_token
+from mzc.grid import (
+    IDENTITY_TRANSFORM,
+    MAX_CHARTS,
+    MAX_SOURCE_VERTICES,
+    Chart,
+    Raster,
+    check_charts,
+    check_crs,
+    check_token,
+)
 from mzc.limits import MAX_DIMENSION, check_grid_size, length_problem
 from mzc.numbers import parse_int
 from mzc.vectors import determinant, matrix_product
@@ -87,16 +102,18 @@ class Header:
 
     ``major`` and ``minor`` are the file's version; ``projected`` is True when it may hold a central
     projection, ``georeferenced`` when its version reads the ``crs`` and ``raster`` lines,
-    ``charted`` when it may hold charts.
+    ``charted`` when it may hold charts, ``counted`` when it reads ``source_vertices``.
     """
 
-    def __init__(self, source, major=1, projected=False, georeferenced=False, charted=False, minor=0):
+    def __init__(self, source, major=1, projected=False, georeferenced=False, charted=False, minor=0,
+                 counted=False):
         self.source = source
         self.fields = {}
         self.major, self.minor = major, minor
         self.projected = projected
         self.georeferenced = georeferenced
         self.charted = charted
+        self.counted = counted
 
     def add(self, keyword, values, line):
         if keyword in self.fields:
@@ -176,7 +193,7 @@ class Header:
 
 
 def read_header(data, source, kind, supported_major, oldest_major=1, projected_major=None, checksum_since=None,
-                binary=False, georef_since=None, charted_major=None):
+                binary=False, georef_since=None, charted_major=None, counted_since=None):
     """Parse magic and header lines of ``data``; return (Header, body bytes, first body line number).
 
     Majors above ``supported_major`` are refused (upgrade mzc), and so are majors below
@@ -185,7 +202,8 @@ def read_header(data, source, kind, supported_major, oldest_major=1, projected_m
     is checked against the whole file; from ``checksum_since[major]`` (a minor version) on
     it is required. A ``binary`` body (dwt2d's payload) refuses CRLF line ends: a text-mode copy
     changed its bytes. From ``georef_since[major]`` on, the ``crs`` and ``raster`` lines are read
-    (an older version's reader ignored them); from ``charted_major`` on, the ``charts`` line.
+    (an older version's reader ignored them); from ``charted_major`` on, the ``charts`` line; from
+    ``counted_since[major]`` on, the ``source_vertices`` line.
     """
     found, major, minor = split_magic(data, source)
     if found != kind:
@@ -196,10 +214,10 @@ def read_header(data, source, kind, supported_major, oldest_major=1, projected_m
     if major < oldest_major:
         raise MzcError(f"mzc-{kind} {major}.x was a draft of this format and is not read; encode the grid again",
                        source=source, line=1)
-    since = (georef_since or {}).get(major)
     header = Header(source, major, projected=projected_major is not None and major >= projected_major,
-                    georeferenced=since is not None and minor >= since,
-                    charted=charted_major is not None and major >= charted_major, minor=minor)
+                    georeferenced=reads_since(georef_since, major, minor),
+                    charted=charted_major is not None and major >= charted_major, minor=minor,
+                    counted=reads_since(counted_since, major, minor))
     position = data.index(b"\n") + 1 if b"\n" in data else len(data)
     line_number = 1
     checksum_line = None
@@ -228,6 +246,20 @@ def read_header(data, source, kind, supported_major, oldest_major=1, projected_m
         if keyword == CHECKSUM:
             checksum_line = (line_start, position)
 
+
+
+def reads_since(since, major, minor):
+    """True when version major.minor reads the lines that ``since`` (major -> first minor) brought."""
+    first = (since or {}).get(major)
+    return first is not None and minor >= first
+
+
+def counted_version(grid, version, since):
+    """``version``, raised to the first minor that reads ``source_vertices`` (``since``: major -> minor)
+    when ``grid`` has the line: a grid without it keeps its version, byte for byte."""
+    if grid.source_vertices is None:
+        return tuple(version)
+    return version[0], max(version[1], since[version[0]])
 
 
 def file_bytes(lines, payload=b"", checksum=True):
@@ -297,6 +329,8 @@ def read_grid_fields(header, whole=True):
         **read_georeference(header, projected.get("projection", "planar")),
         **read_charts(header, rows, cols),
     )
+    if header.counted:
+        fields["source_vertices"] = header.integer("source_vertices", 1, MAX_SOURCE_VERTICES, required=False)
     for name in ("units", "nodata"):
         try:
             check_token(fields[name], name)
@@ -387,10 +421,11 @@ def format_number(value):
     return text[:-2] if text.endswith(".0") else text
 
 
-def grid_header_lines(grid, write_defaults=True, chart_records=True):
+def grid_header_lines(grid, write_defaults=True, chart_records=True, counted=False):
     """Header lines for the grid fields of ``grid`` (rows and cols come from z's shape);
     without ``write_defaults``, ``nodata`` is left out when it holds its default, nan; without
-    ``chart_records`` a multi-chart grid's charts are left to the format (dwt2d codes them)."""
+    ``chart_records`` a multi-chart grid's charts are left to the format (dwt2d codes them); with
+    ``counted``, the ``source_vertices`` line of a grid that has one (a version that reads it)."""
     rows, cols = grid.shape
     lines = [
         f"rows {rows}",
@@ -413,5 +448,7 @@ def grid_header_lines(grid, write_defaults=True, chart_records=True):
         lines.append(f"raster {grid.raster.words()}")
     if grid.charts is not None and chart_records:
         lines.append("charts " + " ".join(word for chart in grid.charts for word in chart.words()))
+    if counted and grid.source_vertices is not None:
+        lines.append(f"source_vertices {grid.source_vertices}")
     return lines
 

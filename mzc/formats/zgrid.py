@@ -14,13 +14,16 @@ each body (1.1, 3.1); other grids keep 1.0, 2.0 and 3.0 byte for byte. A multi-c
 (``charts``) is ``mzc-zgrid 4.0``: 3.0 with the ``charts`` line, a raw body only. A grid with
 colours at its nodes is ``mzc-zgrid 5.0``: 4.0 (any projection, charts, crs and raster as they
 come) with the ``colours rgb8`` line, its raw body's heights followed by each node's red, green
-and blue bytes, row by row; 5.1 when it has the ``crs`` and ``raster`` lines.
+and blue bytes, row by row; 5.1 when it has the ``crs`` and ``raster`` lines. The count of
+the source's vertices (``source_vertices``) is a minor version of each (1.2, 2.1, 3.2, 4.1, 5.2),
+written only for a grid that has it.
 """
 
 import numpy as np
 
 from mzc.errors import MzcError
 from mzc.formats.header import (
+    counted_version,
     file_bytes,
     file_version,
     format_number,
@@ -46,6 +49,7 @@ CHARTED_VERSION = (4, 0)     # 3.0 with the charts line of a multi-chart grid
 COLOURED_VERSION = (5, 0)    # 4.0 with the colours line and each node's colour after the heights
 COLOURED_GEOREFERENCED_VERSION = (5, 1)   # 5.0 with the crs and raster lines (a coloured LAS cloud's grid)
 GEOREF_SINCE = dict([GEOREFERENCED_VERSION, RAW_GEOREFERENCED_VERSION, COLOURED_GEOREFERENCED_VERSION])   # crs from
+COUNTED_SINCE = {1: 2, 2: 1, 3: 2, 4: 1, 5: 2}   # major -> the minor that adds the source_vertices line
 CHECKSUM_SINCE = {RAW_VERSION[0]: 0, CHARTED_VERSION[0]: 0, COLOURED_VERSION[0]: 0}   # a raw body: never without crc32
 COLOUR_LAYOUTS = {"rgb8": 3}   # the colours line's value -> bytes a node (red, green, blue, 8 bits each)
 SAMPLES = {"float64": "<f8", "float32": "<f4"}   # the raw line's value -> numpy dtype of the body
@@ -82,7 +86,8 @@ def read(data, source="<bytes>"):
     raw = major >= RAW_VERSION[0]
     header, body, first_line = read_header(data, source, KIND, COLOURED_VERSION[0],
                                            projected_major=PROJECTED_VERSION[0], checksum_since=CHECKSUM_SINCE,
-                                           binary=raw, georef_since=GEOREF_SINCE, charted_major=CHARTED_VERSION[0])
+                                           binary=raw, georef_since=GEOREF_SINCE, charted_major=CHARTED_VERSION[0],
+                                           counted_since=COUNTED_SINCE)
     fields, rows, cols = read_grid_fields(header)
     if major >= COLOURED_VERSION[0]:
         body, fields["colors"] = read_colours(body, header, rows, cols)
@@ -169,19 +174,23 @@ def write(grid, precision=None, raw=None):
             what, version = ("multi-chart", 4) if grid.colors is None else ("coloured", 5)
             raise MzcError(f"a {what} grid is written with a raw body (mzc-zgrid {version}.0), not as text rows",
                            field="plain")
-        lines = [magic_line(KIND, file_version(grid, VERSION, PROJECTED_VERSION, GEOREFERENCED_VERSION)),
-                 *grid_header_lines(grid), "data",
+        version = file_version(grid, VERSION, PROJECTED_VERSION, GEOREFERENCED_VERSION)
+        lines = [magic_line(KIND, counted_version(grid, version, COUNTED_SINCE)),
+                 *grid_header_lines(grid, counted=True), "data",
                  *format_rows(grid.z, grid.nodata, precision)]
         return file_bytes(lines, checksum=False)
     if precision is not None:
         raise MzcError("precision rounds the text of a plain body; a raw body holds the values exactly",
                        field="precision")
     if grid.colors is not None:
-        version = COLOURED_GEOREFERENCED_VERSION if grid.georeferenced else COLOURED_VERSION
-        lines = [magic_line(KIND, version), *grid_header_lines(grid), f"raw {raw}", "colours rgb8", "data"]
+        version = counted_version(grid, COLOURED_GEOREFERENCED_VERSION if grid.georeferenced else COLOURED_VERSION,
+                                  COUNTED_SINCE)
+        lines = [magic_line(KIND, version), *grid_header_lines(grid, counted=True), f"raw {raw}", "colours rgb8",
+                 "data"]
         return file_bytes(lines, bytes(raw_body(grid.z, raw)) + grid.colors.tobytes())
-    version = file_version(grid, RAW_VERSION, RAW_VERSION, RAW_GEOREFERENCED_VERSION, CHARTED_VERSION)
-    lines = [magic_line(KIND, version), *grid_header_lines(grid), f"raw {raw}", "data"]
+    version = counted_version(grid, file_version(grid, RAW_VERSION, RAW_VERSION, RAW_GEOREFERENCED_VERSION,
+                                                 CHARTED_VERSION), COUNTED_SINCE)
+    lines = [magic_line(KIND, version), *grid_header_lines(grid, counted=True), f"raw {raw}", "data"]
     return file_bytes(lines, raw_body(grid.z, raw))
 
 

@@ -72,7 +72,8 @@ def densify_grid(grid, n, method=DEFAULT_METHOD, iterations=DEFAULT_ITERATIONS, 
     docstring). A periodic grid (a full turn) is densified with its columns wrapped round.
     ``strip``: as ``densify``'s; the jumps are found strip by strip too. A geographic grid is
     solved with its steps and jumps in metres (``mzc.georef.metric_frame``) and keeps its degrees.
-    A multi-chart grid is densified chart by chart (``densify_charts``).
+    A multi-chart grid is densified chart by chart (``densify_charts``). The densified grid drops the
+    source's vertex count (``kept_count``): its rebuild keeps the density asked for.
     """
     from mzc.georef import metric_frame
 
@@ -85,7 +86,8 @@ def densify_grid(grid, n, method=DEFAULT_METHOD, iterations=DEFAULT_ITERATIONS, 
     breaks = lambda low, high: strip_jumps(grid, low, high, jump_angle, pad)  # noqa: E731
     dense = densify(z, n, grid.d1, grid.d2, method=method, iterations=iterations, tol=tol, breaks=breaks, strip=strip)
     dense = dense[:, pad:pad + cols]
-    return original.with_z(dense, d1=original.d1 / (n + 1), colors=dense_colours(original, dense, n))
+    return original.with_z(dense, d1=original.d1 / (n + 1), colors=dense_colours(original, dense, n),
+                           source_vertices=kept_count(original, n))
 
 
 def dense_colours(grid, dense, n):
@@ -107,7 +109,14 @@ def densify_charts(grid, n, method, iterations, tol, jump_angle, strip):
     z = np.full(((grid.shape[0] - 1) * (n + 1) + 1, grid.shape[1]), np.nan)
     for chart, part in zip(charts, grid.chart_grids()):
         z[chart.block()] = densify_grid(part, n, method, iterations, tol, jump_angle, strip).z
-    return grid.with_z(z, d1=grid.d1 / (n + 1), charts=charts, colors=dense_colours(grid, z, n))
+    return grid.with_z(z, d1=grid.d1 / (n + 1), charts=charts, colors=dense_colours(grid, z, n),
+                       source_vertices=kept_count(grid, n))
+
+
+def kept_count(grid, n):
+    """The source's vertex count a grid densified by ``n`` keeps: none when rows were inserted (the
+    rebuild keeps the density asked for), its own when none were."""
+    return None if n else grid.source_vertices
 
 
 def strip_jumps(grid, low, high, jump_angle, pad):

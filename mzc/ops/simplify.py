@@ -9,6 +9,10 @@ the originals' own vertex counts, against the whole-surface RMS distance of the 
 mesh: f18 1.13 times (30,260 vertices from 81,319, 0.35 s), the hand 1.10, the ogre 1.24 (from
 633,219, 3.3 s); a smooth synthetic mesh whose grid is all but exact, the blob sample, 7.5
 times (0.013 mm on a 100 mm ball: a new mesh's facets are not the original's).
+
+By default a rebuild comes back near the vertex count of the mesh or cloud the grid was sliced
+from, which the grid and its files record (``source_vertices``, spec/zgrid.md): a round trip gives
+back a mesh of the size that went in, as Draco's does. ``vertices="all"`` keeps every valid node.
 """
 
 import numpy as np
@@ -19,13 +23,39 @@ from mzc.meshes import Mesh
 PASSES = (5.0, 7.0)   # fast-simplification's aggressiveness (0 careful and slow .. 10 fast; 7 its default):
                       # a careful pass, then the default one if the count is still over SLACK times the target
 SLACK = 1.2
+ALL = "all"   # a vertex count asked for: every valid node of the grid
 
 
-def simplified(mesh: Mesh, vertices: int) -> Mesh:
+def vertex_target(grid, vertices=None):
+    """The vertex count a rebuild of ``grid`` aims at, or None for a vertex at every valid node:
+    ``vertices`` as asked (a count, or ALL), by default the count of the source the grid was
+    sliced from, when it records one and has more valid nodes than that."""
+    if vertices == ALL:
+        return None
+    if vertices is not None:
+        return vertices
+    if grid.source_vertices is None or np.count_nonzero(grid.valid) <= grid.source_vertices:
+        return None
+    return max(grid.source_vertices, 4)
+
+
+def rebuilt(grid, jump_angle=None, vertices=None, streamed=False):
+    """The mesh of ``grid`` with ``vertex_target``'s count of vertices: a Mesh, or when ``streamed``
+    and every node is kept, what makes it as it is written (``mzc.ops.triangulation.mesh_of``)."""
+    from mzc.ops.triangulation import grid_to_mesh, mesh_of
+
+    target = vertex_target(grid, vertices)
+    if target is not None:   # a count asked for and not reached is named; the default one is best effort
+        return simplified(grid_to_mesh(grid, jump_angle), target, warn=vertices is not None)
+    return mesh_of(grid, jump_angle) if streamed else grid_to_mesh(grid, jump_angle)
+
+
+def simplified(mesh: Mesh, vertices: int, warn: bool = True) -> Mesh:
     """``mesh`` with about ``vertices`` vertices (quadric edge collapse); a mesh that has no more
     than that, or no triangles, as it is. The count of triangles asked for keeps the mesh's own
     ratio of triangles to vertices, so an open grid's mesh and a closed one both land near it.
-    Colours stay: each kept vertex takes the colour of the mesh's vertex nearest it."""
+    Colours stay: each kept vertex takes the colour of the mesh's vertex nearest it. With ``warn``,
+    a count the simplifier cannot reach is named in a warning."""
     if vertices < 4:
         raise MzcError(f"must be at least 4, not {vertices}", field="vertices")
     if len(mesh.points) <= vertices or not len(mesh.triangles):
@@ -39,7 +69,7 @@ def simplified(mesh: Mesh, vertices: int) -> Mesh:
         if len(points) <= SLACK * vertices:
             break
         points, triangles = fast_simplification.simplify(points, triangles, target_count=target, agg=aggressiveness)
-    if len(points) > SLACK * vertices:   # far reductions stall (the blob from 180,000 stops near 6,000)
+    if warn and len(points) > SLACK * vertices:   # far reductions stall (the blob from 180,000 stops near 6,000)
         import warnings
 
         from mzc.errors import MzcWarning

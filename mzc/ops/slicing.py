@@ -108,7 +108,6 @@ def slice_surface(surface, d1=None, d2=None, rows=None, cols=None, align="none",
     """
     from mzc.limits import check_magnitude
     from mzc.ops.charts import SINGLE_COVER, chart_surface, single_grid_cover
-    from mzc.ops.colouring import coloured
     from mzc.ops.views import SEEN_WARNING, choose_view
 
     if isinstance(surface, ZGrid):
@@ -126,7 +125,7 @@ def slice_surface(surface, d1=None, d2=None, rows=None, cols=None, align="none",
         projection, view = "planar", "+z"
     lonlat = lonlat_lattice(mesh)
     if lonlat is not None or geographic_cloud(mesh):
-        return coloured(mesh, lonlat_grid(mesh, lonlat, units, d1=d1, d2=d2, rows=rows, cols=cols, tap=tap,
+        return from_source(mesh, lonlat_grid(mesh, lonlat, units, d1=d1, d2=d2, rows=rows, cols=cols, tap=tap,
                                           thesis_grid=thesis_grid, align=align, projection=projection, view=view,
                                           center=center, axis=axis, charts=charts, cloud=cloud))
     one_grid = one_grid_option(projection=projection != "auto", view=view != "auto", center=center is not None,
@@ -134,7 +133,8 @@ def slice_surface(surface, d1=None, d2=None, rows=None, cols=None, align="none",
                                cols=cols is not None, tap=tap)
     count = chart_count(charts, one_grid)
     if count is not None and count > 1:
-        return coloured(mesh, chart_surface(mesh, *frame_for(mesh, align), chart_spacing(d1, d2, mesh), units, count))
+        charted = chart_surface(mesh, *frame_for(mesh, align), chart_spacing(d1, d2, mesh), units, count)
+        return from_source(mesh, charted)
     chosen = choose_view(mesh, frame_for(mesh, align), projection, center, axis, view)
     grid = slice_in_frame(mesh, chosen.rotation, chosen.shift, d1=d1, d2=d2, rows=rows, cols=cols, units=units,
                           projection=chosen.projection, radius=chosen.radius, full_turn=chosen.full_turn,
@@ -144,7 +144,7 @@ def slice_surface(surface, d1=None, d2=None, rows=None, cols=None, align="none",
     if np.isnan(grid.z).all():
         raise MzcError("no grid node meets the surface (seen edge-on? try --view or --align pca)")
     if count is None and not one_grid and (single_grid_cover(grid, mesh) or 1.0) < SINGLE_COVER:
-        return coloured(mesh, chart_surface(mesh, *frame_for(mesh, align), chart_spacing(d1, d2, mesh), units))
+        return from_source(mesh, chart_surface(mesh, *frame_for(mesh, align), chart_spacing(d1, d2, mesh), units))
     crs = grid_crs(mesh.crs) if grid.projection == "planar" else None
     if crs is not None:
         grid = grid.with_z(grid.z, crs=crs)   # the transform maps the grid to the cloud's frame, the CRS's
@@ -157,7 +157,16 @@ def slice_surface(surface, d1=None, d2=None, rows=None, cols=None, align="none",
             f"the {chosen.projection} grid meets only {100 * chosen.seen:.0f}% of the surface's area within "
             f"60 degrees of its node lines; the rest comes back coarse or not at all (try --projection auto, "
             f"--view or --align pca)"), stacklevel=2)
-    return coloured(mesh, grid)
+    return from_source(mesh, grid)
+
+
+def from_source(mesh, grid):
+    """``grid``, sliced from ``mesh``, with what it keeps of it: the colours at its nodes
+    (``mzc.ops.colouring``) and the count of its vertices, which the rebuild comes back near."""
+    from mzc.ops.colouring import coloured
+
+    grid = coloured(mesh, grid)
+    return grid.with_z(grid.z, source_vertices=len(mesh.points))
 
 
 def lonlat_lattice(mesh):

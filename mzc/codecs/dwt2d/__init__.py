@@ -24,6 +24,7 @@ from mzc.codecs.dwt2d import _rows, compact, flips
 from mzc.codecs.dwt2d import wavelet as w2
 from mzc.errors import MzcError
 from mzc.formats.header import (
+    counted_version,
     file_bytes,
     file_version,
     format_number,
@@ -49,7 +50,8 @@ ROUNDED_VERSION = (6, 0)     # 4.0 with the crs and raster lines and ``rounding 
                              # a 4.0 reader, ignoring the line, would decode other values)
 COMPACT_VERSION = (7, 0)     # the fields of 3.x-6.0 in binary, tagged sections with CRC-32s (mzc.codecs.dwt2d.compact);
                              # tiles of 5.0 stay 3.1 files
-FLIPS_VERSION = (8, 0)       # every grid coded whole: 7.0 with the mask as predicted flips (mzc.codecs.dwt2d.flips)
+COUNTED_SINCE = {COMPACT_VERSION[0]: compact.COUNTED_MINOR}   # 7.1: 7.0 with the source_vertices field
+FLIPS_VERSION = (8, 0)       # every grid coded whole: 7.1 with the mask as predicted flips (mzc.codecs.dwt2d.flips)
 GEOREF_SINCE = dict([GEOREFERENCED_VERSION, TILED_VERSION, ROUNDED_VERSION, COMPACT_VERSION,
                      FLIPS_VERSION])   # major -> first minor
                                                                                          # with crs, raster
@@ -455,15 +457,17 @@ class Prepared:
             max_error = rounded
         decoded[~self.valid] = np.nan
         lines = self.header_lines(version, step, correction, max_error, rounded is not None)
-        if version >= COMPACT_VERSION:
-            return compact.file_bytes(lines[1:-1], encoder.finish(), self.colour and self.colour[1], version), decoded
+        if version[0] >= COMPACT_VERSION[0]:
+            colour = self.colour and self.colour[1]
+            return compact.file_bytes(lines[1:-1], encoder.finish(), colour, version[0]), decoded
         return file_bytes(lines, encoder.finish()), decoded
 
     def header_lines(self, version, step, correction, max_error, rounded=False):
         """The lines of the text header of ``version``, the magic line to the ``data`` line (7.0 codes
         the lines between them as binary fields)."""
         # lines at their defaults are left out: a face's file can be 1.5 KB, and they were 50 B of it
-        lines = [magic_line(KIND, version), *grid_header_lines(self.grid, write_defaults=False, chart_records=False)]
+        lines = [magic_line(KIND, version), *grid_header_lines(self.grid, write_defaults=False, chart_records=False,
+                                                               counted=version[0] >= COMPACT_VERSION[0])]
         if self.grid.charts is not None:   # their records are in the payload: 8-10 bytes a chart, not 25
             lines.append(f"chart_count {len(self.grid.charts)}")
         if self.wavelet != DEFAULT_WAVELET:
@@ -511,11 +515,12 @@ class Prepared:
 
 
 def written_version(grid, rounded, compact=True):
-    """The version the reference encoder writes a grid coded whole in: 8.0 (``compact`` True, or the
-    container version it names: 7.0), or without ``compact`` (a tile of a 5.0 file) the 3.x, 4.0 or 6.0
-    (``rounded``: decoded values rounded to integers) it was before."""
+    """The version the reference encoder writes a grid coded whole in: 8.0 (``compact`` True), or the
+    container version ``compact`` names (7.0 for 7.0's tests; 7.1 with the count of the source's vertices),
+    or without ``compact`` (a tile of a 5.0 file) the 3.x, 4.0 or 6.0 (``rounded``: decoded values rounded
+    to integers) it was before."""
     if compact:
-        return FLIPS_VERSION if compact is True else compact
+        return FLIPS_VERSION if compact is True else counted_version(grid, compact, COUNTED_SINCE)
     if rounded:
         return ROUNDED_VERSION
     return file_version(grid, VERSION, PROJECTED_VERSION, GEOREFERENCED_VERSION, CHARTED_VERSION)

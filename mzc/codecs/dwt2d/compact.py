@@ -1,5 +1,8 @@
-"""The container of ``mzc-dwt2d 7.0`` and 8.0 (spec/dwt2d.md, Version 7.0; 8.0 codes its mask otherwise):
-the magic line, then tagged sections, each with its own CRC-32, the first of them the header's fields in binary.
+"""The container of ``mzc-dwt2d 7.0``, ``7.1`` and ``8.0`` (spec/dwt2d.md, Version 7.0): the magic line,
+then tagged sections, each with its own CRC-32, the first of them the header's fields in binary. 7.1 is 7.0
+with one more field, the source's vertex count (``source_vertices``), written only for a grid that has
+one, so every other grid keeps its 7.0 bytes; 8.0 has every field of 7.1 and codes its mask otherwise
+(Version 8.0).
 
 A 3.x header of a face file took about 215 bytes of text; the same fields take about 60 here. The
 fields are the 3.x header lines (keyword and values), so one reader checks them all
@@ -14,10 +17,11 @@ from decimal import Decimal
 
 from mzc.codecs.dwt2d.entropy import read_varint, varint
 from mzc.errors import MzcError
-from mzc.formats.header import CHECKSUM, Header, format_number
+from mzc.formats.header import CHECKSUM, Header, format_number, split_magic
 
 MAGIC = b"mzc-dwt2d 7.0\n"
-MAJORS = (7, 8)                 # the majors in this container: 8.0 is 7.0 with the mask as predicted flips
+COUNTED_MINOR = 1               # 7.1: 7.0 and the source_vertices field
+MAJORS = (7, 8)                 # the majors in this container: 8.0 is 7.1 with the mask as predicted flips
 HEADER, PAYLOAD, COLOUR = 1, 2, 3   # section tags, in the order they come (COLOUR only in a file with colours)
 CRC = struct.Struct("<I")
 MAX_VARINT_BYTES = 10           # an unsigned 64-bit integer
@@ -29,8 +33,9 @@ FIELDS = {
     6: ("projection", "e"), 7: ("radius", "d"), 8: ("transform", "d"), 9: ("units", "t"), 10: ("nodata", "t"),
     11: ("crs", "t"), 12: ("raster", "t"), 13: ("chart_count", "u"), 14: ("wavelet", "e"), 15: ("levels", "u"),
     16: ("steps", "d"), 17: ("slope_limit", "d"), 18: ("correction", "d"), 19: ("rounding", "e"),
-    20: ("max_error", "d"), 21: ("colour_psnr", "d"), 22: ("colour_max_error", "d"),
+    20: ("max_error", "d"), 21: ("colour_psnr", "d"), 22: ("colour_max_error", "d"), 23: ("source_vertices", "u"),
 }
+SINCE = {23: COUNTED_MINOR}     # field id -> the minor that added it (the others are 7.0's)
 IDS = {keyword: (number, kind) for number, (keyword, kind) in FIELDS.items()}
 SMALL_EXPONENTS, EXPONENT_BIAS = (-8, 6), 8   # a decimal exponent in this range shares the mantissa's varint
 WORDS = ("planar", "cylindrical", "spherical", "bior4.4", "bior2.2", "integer")   # the words of ``e`` fields
@@ -76,17 +81,25 @@ def section(tag, body, before=b""):
     return head + CRC.pack(zlib.crc32(head, zlib.crc32(before)))
 
 
-def magic(version):
+def magic_line(version):
     """The magic line of ``version`` (major, minor)."""
     return f"mzc-dwt2d {version[0]}.{version[1]}\n".encode()
 
 
-def file_bytes(lines, payload, colour=None, version=(7, 0)):
-    """The file of ``version`` (7.0 or 8.0) of the header ``lines`` (3.x's, without the magic and ``data``
-    lines), the payload and, for a grid with colours, its colour section (mzc.codecs.dwt2d.colour's bytes)."""
-    fields = b"".join(field_bytes(line) for line in lines)
+def file_bytes(lines, payload, colour=None, major=7):
+    """The file of ``major`` (7 or 8) of the header ``lines`` (3.x's, without the magic and ``data``
+    lines), the payload and, for a grid with colours, its colour section (mzc.codecs.dwt2d.colour's
+    bytes): 7.1 rather than 7.0 when the lines hold a field that 7.1 added."""
+    fields = b"".join(field_bytes(line) for line in sorted(lines, key=field_number))   # in the table's order
+    minor = max((SINCE.get(field_number(line), 0) for line in lines), default=0) if major == 7 else 0
+    magic = magic_line((major, minor))
     coloured = b"" if colour is None else section(COLOUR, colour)
-    return magic(version) + section(HEADER, fields, magic(version)) + section(PAYLOAD, payload) + coloured
+    return magic + section(HEADER, fields, magic) + section(PAYLOAD, payload) + coloured
+
+
+def field_number(line):
+    """The field id of a header line."""
+    return IDS[line.split()[0]][0]
 
 
 # --------------------------------------------------------------------------- reading
@@ -147,15 +160,23 @@ class Reader:
         return format_number(float(f"{'-' if mantissa % 2 else ''}{mantissa // 2}e{exponent}"))
 
     def header(self):
-        """The Header of the header section (keywords and their value words, as a 3.x header's lines)."""
-        line = bytes(self.data[:self.position])
-        body = self.section(HEADER, line)
-        fields = Reader(line + body, self.source)
-        header = Header(self.source, major(line), projected=True, georeferenced=True, charted=True)
+        """The Header of the header section (keywords and their value words, as a 3.x header's lines)
+        of a 7.0, 7.1 or 8.0 file (a later minor is refused: its fields are not known here)."""
+        magic = bytes(self.data[:self.position])
+        _kind, major, minor = split_magic(magic, self.source)
+        newest = COUNTED_MINOR if major == 7 else 0
+        if minor > newest:
+            raise MzcError(f"mzc-dwt2d version {major}.{minor} is newer than this mzc reads ({major}.{newest}); "
+                           "upgrade mzc", source=self.source, line=1)
+        body = self.section(HEADER, magic)
+        fields = Reader(magic + body, self.source)
+        known = COUNTED_MINOR if major > 7 else minor   # the 7.x whose fields it reads: 8.0 reads 7.1's
+        header = Header(self.source, major, projected=True, georeferenced=True, charted=True, minor=minor,
+                        counted=known >= COUNTED_MINOR)
         end = len(fields.data)
         while fields.position < end:
             number = fields.varint(end)
-            if number not in FIELDS:
+            if number not in FIELDS or SINCE.get(number, 0) > known:
                 raise self.error(f"unknown header field {number}")
             keyword, kind = FIELDS[number]
             if header.has(keyword):
@@ -198,16 +219,16 @@ def unsigned(value):
 def major(data):
     """The major version of a file of this container (its magic line's), else None."""
     head = bytes(data[:len(MAGIC) - 2])
-    return next((m for m in MAJORS if head == magic((m, 0))[:-2]), None)
+    return next((m for m in MAJORS if head == magic_line((m, 0))[:-2]), None)
 
 
 def is_compact(data):
-    """True when ``data`` starts as a 7.x or 8.x file."""
+    """True when ``data`` starts as a 7.x or 8.x file (7.0, 7.1 or 8.0)."""
     return major(data) is not None
 
 
 def read(data, source):
-    """(Header, payload bytes, colour section bytes or None) of a 7.0 or 8.0 file."""
+    """(Header, payload bytes, colour section bytes or None) of a 7.0, 7.1 or 8.0 file."""
     reader = Reader(data, source)
     header = reader.header()
     payload = reader.section(PAYLOAD)
