@@ -25,8 +25,9 @@ probability, plus raw bits and table records where the scheme has them), in byte
   binarised through adaptive binary models (no tables, no raw bits). Its real bytes (a payload of
   it alone) and the C decoder's time are measured too.
 
-The whole-file effect on f18 (at RMS 0.05, 0.1, 0.2 mm): the reference encoder's 7.0 and 8.0 files
-(8.0: 7.0 with the predicted flips), each with its mask's share (mzc.codecs.dwt2d.anatomy.parts).
+The whole-file effect on f18 (at RMS 0.05, 0.1, 0.2 mm): the reference encoder's 7.x and 8.0 files
+(7.1 for a sliced face, which has its source's vertex count; 8.0: 7.1 with the predicted flips), each
+with its mask's share (mzc.codecs.dwt2d.anatomy.parts).
 Writes mask-coding-results.md and mask-coding-results.json into --out (default: this directory).
 """
 
@@ -196,7 +197,7 @@ def measure(corpus, name, valid):
 
 
 def whole_file(path):
-    """f18 coded by the reference encoder at each target as 7.0 and as 8.0 (the same search, each
+    """f18 coded by the reference encoder at each target as 7.x and as 8.0 (the same search, each
     file its own steps), with each file's mask share (mzc.codecs.dwt2d.anatomy.parts)."""
     import mzc
     from mzc.codecs import dwt2d
@@ -257,7 +258,7 @@ def markdown(document):
                      + f" | {r['real']} | {r['decode_ms']:.3f} | {r['decode_7_ms']:.3f} |")
     if document["f18"]:
         lines += ["", "## Whole file: f18", "",
-                  "| rmse mm | 7.0 file | its mask | 8.0 file | its mask | change |", "|---|---|---|---|---|---|"]
+                  "| rmse mm | 7.x file | its mask | 8.0 file | its mask | change |", "|---|---|---|---|---|---|"]
         for w in document["f18"]:
             lines.append(f"| {w['rmse']} | {w['bytes_7']} | {w['mask_7']} | {w['bytes_8']} | {w['mask_8']} "
                          f"| {w['bytes_8'] / w['bytes_7'] - 1:+.1%} |")
