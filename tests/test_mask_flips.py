@@ -133,3 +133,21 @@ def test_the_spec_example_of_8_0_is_7_0s_grid_and_its_mask_rows_are_as_stated():
     assert sets.tolist() == [0, 21, 22, 0, 9, 10, 0, 19, 20, 22, 20, 0, 19, 20]
     bits, models = flips.binarised(values, sets, signed)
     assert flips.probabilities(bits, models)[10] == 12582912   # row 1's count change: set 0's Z at (0, 1)
+
+
+def test_a_sliced_face_is_written_as_8_0_with_7_1s_vertex_count():
+    """8.0 keeps every 7.1 field: a sliced face's source_vertices comes back; its 7.1 file (the same
+    integers but the mask) decodes to the same values and is larger."""
+    from mzc.codecs import dwt2d
+
+    grid = mzc.slice(str(face_path("f18.ply")))
+    assert grid.source_vertices
+    prepared = dwt2d.Prepared(grid, "bior4.4", None, 2.0)
+    new = prepared.encode(0.3)[0]
+    prepared.compact = dwt2d.COMPACT_VERSION
+    old = prepared.encode(0.3)[0]
+    assert new.startswith(b"mzc-dwt2d 8.0\n") and old.startswith(b"mzc-dwt2d 7.1\n")
+    a, b = mzc.decode(new), mzc.decode(old)
+    assert a.source_vertices == b.source_vertices == grid.source_vertices
+    np.testing.assert_array_equal(a.z, b.z)
+    assert len(new) < len(old) - 50
