@@ -303,7 +303,7 @@ def test_the_shared_whole_objects_are_cut_into_charts(name):
 
 
 def test_a_dwt2d_file_keeps_its_chart_records_in_the_payload_and_refuses_a_wrong_count():
-    assert header_fields(dwt2d.write(two_charts(), max_error=0.05))["chart_count"] == ["2"]   # 7.0
+    assert header_fields(dwt2d.write(two_charts(), max_error=0.05))["chart_count"] == ["2"]   # 8.0
     data = dwt2d.encode_whole(two_charts(), max_error=0.05, compact=False)[0]   # 4.0: text lines
     assert b"\nchart_count 2\n" in data and b"\ncharts " not in data
     from mzc.formats.header import with_checksum

@@ -27,7 +27,7 @@ FACES = Path(__file__).resolve().parents[2] / "shared" / "data" / "faces"
 
 def both_versions(grid, step, max_error=None, levels=None, wavelet="bior4.4", slope_limit=2.0):
     """(7.0 bytes, the 3.x/4.0/6.0 bytes) of ``grid`` coded at one step: the same integers."""
-    prepared = dwt2d.Prepared(grid, wavelet, levels, slope_limit)
+    prepared = dwt2d.Prepared(grid, wavelet, levels, slope_limit, compact=dwt2d.COMPACT_VERSION)
     new = prepared.encode(step, max_error=max_error)[0]
     prepared.compact = False
     return new, prepared.encode(step, max_error=max_error)[0]

@@ -338,13 +338,14 @@ def coefficient_set(data, value):
 
 
 def compact_edited(data, keyword, words):
-    """A dwt2d 7.0 file with the header field ``keyword`` set to ``words`` (added when absent), its
-    sections' CRC-32s made right again."""
+    """A dwt2d 7.0 or 8.0 file with the header field ``keyword`` set to ``words`` (added when absent),
+    its sections' CRC-32s made right again."""
     from mzc.codecs.dwt2d import compact
 
     header, payload, _colour = compact.read(data, "t")
     fields = {name: values for name, (values, _line) in header.fields.items()} | {keyword: words}
-    return compact.file_bytes([f"{name} {' '.join(values)}" for name, values in fields.items()], payload)
+    return compact.file_bytes([f"{name} {' '.join(values)}" for name, values in fields.items()], payload,
+                              major=compact.major(data))
 
 
 def beyond_the_limit():
@@ -354,7 +355,7 @@ def beyond_the_limit():
     from mzc.formats import zgrid
 
     grid = bump_grid()
-    compact = mzc.encode(grid, max_error=0.1)   # 7.0: binary header fields
+    compact = mzc.encode(grid, max_error=0.1)   # 8.0: binary header fields
     dwt2d = encode_whole(grid, max_error=0.1, compact=False)[0]   # 3.1: text header lines
     dct = mzc.encode(grid, "dct", quality=50)
     raw = zgrid.write(grid, raw="float64")
@@ -363,9 +364,9 @@ def beyond_the_limit():
         "dwt2d correction 1e300": edited(dwt2d, rb"\ncorrection [^\n]*\n", b"\ncorrection 1e300\n"),
         "dwt2d steps 1e300": edited(dwt2d, rb"\nsteps [^\n]*\n", b"\nsteps 1e300 1e300\n"),
         "dwt2d origin 1e300": edited(dwt2d, rb"\norigin [^\n]*\n", b"\norigin 1e300 0\n"),
-        "dwt2d 7.0 correction 1e300": compact_edited(compact, "correction", ["1e300"]),
-        "dwt2d 7.0 steps 1e300": compact_edited(compact, "steps", ["1e300", "1e300"]),
-        "dwt2d 7.0 origin 1e300": compact_edited(compact, "origin", ["1e300", "0"]),
+        "dwt2d 8.0 correction 1e300": compact_edited(compact, "correction", ["1e300"]),
+        "dwt2d 8.0 steps 1e300": compact_edited(compact, "steps", ["1e300", "1e300"]),
+        "dwt2d 8.0 origin 1e300": compact_edited(compact, "origin", ["1e300", "0"]),
         "dct coefficient 1e308": coefficient_set(dct, b"1e308"),
         "dct coefficient 1e200": coefficient_set(dct, b"1e200"),
         "dct transform shift 1e300": edited(dct, rb"\norigin [^\n]*\n", b"\norigin 0 0\ntransform 1 0 0 1e300 0 1 0 0 "

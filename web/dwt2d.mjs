@@ -1,5 +1,5 @@
 // The 2D wavelet codec `mzc-dwt2d` 2.0, 3.0, 3.1, 3.2, 4.0, 5.0 (tiles), 5.1 (rounded tiles), 6.0 (rounding)
-// and 7.0 (binary header and parametric tables, in the sections of compact.mjs)
+// and 7.0 (binary header and parametric tables, in the sections of compact.mjs), 8.0 (7.0, its mask in mask.mjs)
 // (spec/dwt2d.md): header, payload (tables, rANS, raw bits), mask, relevance, bands, slope
 // factors, inverse transform, correction layer, chart records, rounding and tiles.
 
@@ -7,6 +7,7 @@ import { fail, headerFields, fieldReader, gridFields, checkChecksum, checkCharts
 import { cos } from "./elementary.mjs";
 import { sections, headerLines, HEADER, PAYLOAD, COLOUR, NEWEST_MINOR } from "./compact.mjs";
 import { inversePeriodized2d, relevantPeriodized2d } from "./pywt.mjs";
+import { decodeFlips } from "./mask.mjs";
 
 const WAVELETS_3 = ["bior4.4", "bior2.2"];
 const WAVELETS_2 = ["bior4.4", "bior2.2", "bior3.3", "db2", "db4", "sym4", "coif1", "haar"];
@@ -24,9 +25,10 @@ export function decodeDwt2d(bytes, lines, body, magic) {
  * grid's colours (Colours of 7.0), comes back undecoded as `colourSection` (colour.mjs's
  * `withColours` decodes it over the grid's valid nodes). */
 export function decodeCompact(bytes, magicEnd, magic) {
-  if (magic.minor > NEWEST_MINOR) fail(null, `mzc-dwt2d version 7.${magic.minor} is newer than this decoder reads (7.${NEWEST_MINOR}); upgrade`);
+  const newest = magic.major === 7 ? NEWEST_MINOR : 0;   // 8.0 reads 7.1's fields
+  if (magic.minor > newest) fail(null, `mzc-dwt2d version ${magic.major}.${magic.minor} is newer than this decoder reads (${magic.major}.${newest}); upgrade`);
   const bodies = sections(bytes, magicEnd, [HEADER, PAYLOAD], COLOUR);
-  const grid = decodeWhole(headerLines(bodies[HEADER], magic.minor), bodies[PAYLOAD], magic);
+  const grid = decodeWhole(headerLines(bodies[HEADER], magic.major === 7 ? magic.minor : NEWEST_MINOR), bodies[PAYLOAD], magic);
   return bodies[COLOUR] ? { ...grid, colourSection: bodies[COLOUR] } : grid;
 }
 
@@ -34,7 +36,7 @@ export function decodeCompact(bytes, magicEnd, magic) {
 function decodeWhole(fields, bytes, magic) {
   const h = fieldReader(fields);
   const georef = magic.major >= 6 || (magic.major === 3 && magic.minor >= 2);
-  const grid = gridFields(h, { projected: magic.major >= 3, georef, counted: magic.major === 7 && magic.minor >= 1 });
+  const grid = gridFields(h, { projected: magic.major >= 3, georef, counted: magic.major >= 8 || (magic.major === 7 && magic.minor >= 1) });
   const p = codecFields(h, magic, grid);
   const payload = new Payload(bytes, magic.major >= 7);
   const z = decodeGrid(payload, grid, p);
@@ -138,7 +140,8 @@ function codecFields(h, magic, grid) {
   if (!v3) h.word("coder", ["rans-signs-2"]);
   const chartCount = magic.major >= 4 ? h.integer("chart_count", 1, 65536, false) : undefined;
   const rounding = magic.major >= 6 && h.word("rounding", ["integer"], false) === "integer";
-  return { v3, wavelet, levels, steps: bandSteps(written, levels), slopeLimit, correction, chartCount, rounding };
+  const flips = magic.major >= 8;   // 8.0's mask: predicted flips (mask.mjs)
+  return { v3, wavelet, levels, steps: bandSteps(written, levels), slopeLimit, correction, chartCount, rounding, flips };
 }
 
 /** The step of each of the 1 + 3L bands from the `steps` line's 1, 2 or 1 + 3L values. */
@@ -361,7 +364,7 @@ function power(theta, n) {
 /** The decoded values (NaN at invalid nodes), row-major rows x cols. */
 function decodeGrid(payload, grid, p) {
   const { rows, cols } = grid;
-  const mask = decodeMask(payload, rows, cols);
+  const mask = (p.flips ? decodeFlips : decodeMask)(payload, rows, cols);
   const periodic = isPeriodic(grid);
   const shapes = bandShapes(rows, cols, p);
   const relevant = p.v3 ? relevance3(mask, rows, cols, p, periodic) : relevantPeriodized2d(mask, rows, cols, p.wavelet, p.levels);

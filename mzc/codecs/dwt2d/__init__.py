@@ -1,9 +1,11 @@
-"""The wavelet z-grid codec (``mzc-dwt2d 7.0``, the fields of 3.1, 3.2 with a raster's crs and raster lines, 4.0
-with charts and 6.0 for a raster of integers that decodes to integers in a binary container; those are read, and
-written as the tiles of 5.0; 3.0 and 2.0 are read; extension ``.mzw2``): see spec/dwt2d.md.
+"""The wavelet z-grid codec (``mzc-dwt2d 8.0``, 7.0 with the mask as predicted flips; 7.0: the fields of
+3.1, 3.2 with a raster's crs and raster lines, 4.0 with charts and 6.0 for a raster of integers that decodes
+to integers in a binary container; those are read, and written as the tiles of 5.0; 3.0 and 2.0 are read;
+extension ``.mzw2``): see spec/dwt2d.md.
 
 Text header (grid fields with the projection, wavelet, levels, steps, slope limit,
-correction step), a ``data`` line, then a binary payload: the validity mask as row spans,
+correction step), a ``data`` line, then a binary payload: the validity mask as row spans (8.0: as
+predicted flips through adaptive binary models, mzc.codecs.dwt2d.flips),
 the quantised wavelet bands (the transform of the version, ``wavelet2d.TRANSFORMS``;
 detail steps scaled up where the surface leans from the node lines, magnitudes and signs
 each with their own contexts), and an optional correction layer of residuals that makes
@@ -18,7 +20,7 @@ import numpy as np
 
 from mzc import elementary
 from mzc.codecs.base import Codec, Option
-from mzc.codecs.dwt2d import _rows, compact
+from mzc.codecs.dwt2d import _rows, compact, flips
 from mzc.codecs.dwt2d import wavelet as w2
 from mzc.errors import MzcError
 from mzc.formats.header import (
@@ -46,10 +48,12 @@ ROUNDED_TILED_VERSION = (5, 1)   # 5.0 with ``rounding integer``: its tiles are 
 ROUNDED_VERSION = (6, 0)     # 4.0 with the crs and raster lines and ``rounding integer``: a raster of integers
                              # coded with max_error, whose decoded values are rounded to integers (a new major:
                              # a 4.0 reader, ignoring the line, would decode other values)
-COMPACT_VERSION = (7, 0)     # every grid coded whole: the fields of 3.x-6.0 in binary, tagged sections with CRC-32s
-                             # (mzc.codecs.dwt2d.compact); tiles of 5.0 stay 3.1 files
+COMPACT_VERSION = (7, 0)     # the fields of 3.x-6.0 in binary, tagged sections with CRC-32s (mzc.codecs.dwt2d.compact);
+                             # tiles of 5.0 stay 3.1 files
 COUNTED_SINCE = {COMPACT_VERSION[0]: compact.COUNTED_MINOR}   # 7.1: 7.0 with the source_vertices field
-GEOREF_SINCE = dict([GEOREFERENCED_VERSION, TILED_VERSION, ROUNDED_VERSION, COMPACT_VERSION])   # major -> first minor
+FLIPS_VERSION = (8, 0)       # every grid coded whole: 7.1 with the mask as predicted flips (mzc.codecs.dwt2d.flips)
+GEOREF_SINCE = dict([GEOREFERENCED_VERSION, TILED_VERSION, ROUNDED_VERSION, COMPACT_VERSION,
+                     FLIPS_VERSION])   # major -> first minor
                                                                                          # with crs, raster
 ROUNDING = "integer"         # the one value of the rounding line
 ROUNDING_ULPS = 16           # the coded bound stays this many units in the last place of the largest value below
@@ -125,28 +129,20 @@ SAME_SIZE = (range(detail_model(0), detail_model(CONTEXTS)), range(sign_model(0)
 # --------------------------------------------------------------------------- mask
 
 
-def mask_transitions(valid):
-    """Per row, the columns where validity flips (row padded with invalid on both sides)."""
-    padded = np.zeros((valid.shape[0], valid.shape[1] + 2), dtype=np.int8)
-    padded[:, 1:-1] = valid
-    flips = np.diff(padded, axis=1) != 0
-    return [np.flatnonzero(row) for row in flips]
-
-
 def encode_mask(encoder, valid):
     """Span counts (as change from the row above), then rows whose count did not change as
     moves of each flip from the row above, then the other rows as gaps between flips."""
-    transitions = mask_transitions(valid)
+    transitions = flips.row_flips(valid)
     counts = np.array([len(t) // 2 for t in transitions])
     encoder.add(MASK_COUNT, np.diff(counts, prepend=0))
     same, new = [], []
     previous = np.zeros(0, dtype=np.int64)
-    for flips in transitions:
-        if len(flips) == len(previous):
-            same.append(flips - previous)
+    for row in transitions:
+        if len(row) == len(previous):
+            same.append(row - previous)
         else:
-            new.append(np.diff(flips, prepend=-1) - 1)
-        previous = flips
+            new.append(np.diff(row, prepend=-1) - 1)
+        previous = row
     encoder.add(MASK_SAME, np.concatenate(same or [[]]))
     encoder.add(MASK_NEW, np.concatenate(new or [[]]))
 
@@ -385,7 +381,8 @@ class Prepared:
     is never coded)."""
 
     def __init__(self, grid, wavelet, levels, slope_limit, compact=True, colour=None):
-        self.compact = compact   # 7.0, else the text header of 3.x, 4.0, 6.0 (a tile of a 5.0 file)
+        self.compact = compact   # 8.0 (or the container version given: 7.0), else the text header of 3.x, 4.0, 6.0
+                                 # (a tile of a 5.0 file)
         self.colour = colour     # (target line, colour section bytes) of a 7.0 file of a grid with colours
         self.transform = w2.TRANSFORMS[VERSION[0]]
         if np.isinf(grid.z).any():
@@ -439,8 +436,12 @@ class Prepared:
         from mzc.codecs.dwt2d.entropy import Encoder  # here, not at the top: `mzc encode` builds this
                                                        # module's CODEC whatever codec it runs
         qflat, decoded = self.decoded(step) if decoded is None else decoded
+        version = written_version(self.grid, rounded is not None, self.compact)
         encoder = Encoder(same_size=SAME_SIZE, parametric=self.compact)
-        encode_mask(encoder, self.valid)
+        if version >= FLIPS_VERSION:   # the mask's bits go through the rANS coder before everything else
+            encoder.leading = functools.partial(flips.encode, valid=self.valid)
+        else:
+            encode_mask(encoder, self.valid)
         encode_bands(encoder, qflat, self.relevant, expand_steps(header_steps(step, self.levels), len(qflat)))
         correction = 0.0
         if max_error is not None:
@@ -455,10 +456,10 @@ class Prepared:
             decoded[self.valid] = rounded_values(decoded[self.valid], self.grid.raster.sample)   # as the decoder
             max_error = rounded
         decoded[~self.valid] = np.nan
-        version = written_version(self.grid, rounded is not None, self.compact)
         lines = self.header_lines(version, step, correction, max_error, rounded is not None)
-        if version[0] == COMPACT_VERSION[0]:
-            return compact.file_bytes(lines[1:-1], encoder.finish(), self.colour and self.colour[1]), decoded
+        if version[0] >= COMPACT_VERSION[0]:
+            colour = self.colour and self.colour[1]
+            return compact.file_bytes(lines[1:-1], encoder.finish(), colour, version[0]), decoded
         return file_bytes(lines, encoder.finish()), decoded
 
     def header_lines(self, version, step, correction, max_error, rounded=False):
@@ -466,7 +467,7 @@ class Prepared:
         the lines between them as binary fields)."""
         # lines at their defaults are left out: a face's file can be 1.5 KB, and they were 50 B of it
         lines = [magic_line(KIND, version), *grid_header_lines(self.grid, write_defaults=False, chart_records=False,
-                                                               counted=version[0] == COMPACT_VERSION[0])]
+                                                               counted=version[0] >= COMPACT_VERSION[0])]
         if self.grid.charts is not None:   # their records are in the payload: 8-10 bytes a chart, not 25
             lines.append(f"chart_count {len(self.grid.charts)}")
         if self.wavelet != DEFAULT_WAVELET:
@@ -514,11 +515,12 @@ class Prepared:
 
 
 def written_version(grid, rounded, compact=True):
-    """The version the reference encoder writes a grid coded whole in: 7.0 (7.1 with the count of the
-    source's vertices), or without ``compact`` (a tile of a 5.0 file) the 3.x, 4.0 or 6.0 (``rounded``:
-    decoded values rounded to integers) it was before."""
+    """The version the reference encoder writes a grid coded whole in: 8.0 (``compact`` True), or the
+    container version ``compact`` names (7.0 for 7.0's tests; 7.1 with the count of the source's vertices),
+    or without ``compact`` (a tile of a 5.0 file) the 3.x, 4.0 or 6.0 (``rounded``: decoded values rounded
+    to integers) it was before."""
     if compact:
-        return counted_version(grid, COMPACT_VERSION, COUNTED_SINCE)
+        return FLIPS_VERSION if compact is True else counted_version(grid, compact, COUNTED_SINCE)
     if rounded:
         return ROUNDED_VERSION
     return file_version(grid, VERSION, PROJECTED_VERSION, GEOREFERENCED_VERSION, CHARTED_VERSION)
@@ -802,7 +804,7 @@ def read(data, source="<bytes>"):
     if parametric:
         header, body, colour = compact.read(data, source)
     else:
-        header, body, _first = read_header(data, source, KIND, COMPACT_VERSION[0], oldest_major=OLDEST_MAJOR,
+        header, body, _first = read_header(data, source, KIND, FLIPS_VERSION[0], oldest_major=OLDEST_MAJOR,
                                            projected_major=PROJECTED_VERSION[0], checksum_since=CHECKSUM_SINCE,
                                            binary=True, georef_since=GEOREF_SINCE, charted_major=CHARTED_VERSION[0])
     fields, rows, cols = read_grid_fields(header)
@@ -814,7 +816,7 @@ def read(data, source="<bytes>"):
     from mzc.codecs.dwt2d.entropy import Decoder
 
     decoder = Decoder(body, source, SAME_SIZE, parametric)
-    valid = decode_mask(decoder, rows, cols)
+    valid = (flips.decode if header.major >= FLIPS_VERSION[0] else decode_mask)(decoder, rows, cols)
     relevant = w2.flatten(transform.relevance(valid, wavelet, levels, geometry.periodic))
     qflat = decode_bands(decoder, relevant, steps)
     with np.errstate(over="ignore", invalid="ignore"):
@@ -840,7 +842,7 @@ def read(data, source="<bytes>"):
 
 
 CODEC = Codec(
-    "dwt2d", encode_grid, read, writer_with_decoded=encode_grid_with_decoded, version=COMPACT_VERSION,
+    "dwt2d", encode_grid, read, writer_with_decoded=encode_grid_with_decoded, version=FLIPS_VERSION,
     oldest_major=OLDEST_MAJOR, extension=".mzw2", spec="spec/dwt2d.md", window_writer=window_writer,
     summary="2D wavelet of the whole grid, entropy coded, error-bounded", check_options=check_options,
     example={"max_error": 0.05}, keeps_colour=keeps_colour, options=(

@@ -131,6 +131,15 @@ static void store(const Stream *s)
     s->cursor[BIT_POSITION] = s->position;
 }
 
+/* x = (x << 32) | the next word when x < 2**32 and words remain (after each symbol). */
+static inline void refill(Stream *s)
+{
+    if (s->x < (uint64_t)1 << WORD_BITS && s->left > 0) {
+        const unsigned char *w = s->words + 4 * --s->left;
+        s->x = (s->x << WORD_BITS) | ((uint64_t)w[0] | (uint64_t)w[1] << 8 | (uint64_t)w[2] << 16 | (uint64_t)w[3] << 24);
+    }
+}
+
 /* One class of table `model` (a checked id): m = x mod 2**24, the class s with B(s) <= m < B(s+1),
    x = F(s) (x >> 24) + m - B(s), then x = (x << 32) | the next word when x < 2**32 and words remain.
    The row ends at 2**24 > m, so the search stops inside it. */
@@ -142,10 +151,7 @@ static inline int64_t decode_class(Stream *s, int64_t model)
     while ((uint64_t)row[k + 1] <= m)
         k++;
     s->x = (uint64_t)(row[k + 1] - row[k]) * (s->x >> PRECISION) + (m - (uint64_t)row[k]);
-    if (s->x < (uint64_t)1 << WORD_BITS && s->left > 0) {
-        const unsigned char *w = s->words + 4 * --s->left;
-        s->x = (s->x << WORD_BITS) | ((uint64_t)w[0] | (uint64_t)w[1] << 8 | (uint64_t)w[2] << 16 | (uint64_t)w[3] << 24);
-    }
+    refill(s);
     return k;
 }
 
@@ -480,10 +486,138 @@ static PyObject *fill_spans(PyObject *self, PyObject *args)
     return PyLong_FromSsize_t(bad);
 }
 
+/* ---- 8.0's mask: predicted flips through adaptive binary models (mzc/codecs/dwt2d/flips.py) */
+
+enum { BIN_LIMIT = 1 << 16, PREFIX_BINS = 16, BINS = 2 + 2 * PREFIX_BINS, MAX_CLASS = 40 };
+enum { COUNT_SET = 0, SAME_SET = 1, NEAR_SET = 19, GAP_SET = 21, SETS = 23 };
+
+/* One binary decision of P(1) = f1 / 2**24 (0 < f1 < 2**24): class 0 takes [0, 2**24 - f1). */
+static inline int decode_bit(Stream *s, uint64_t f1)
+{
+    uint64_t f0 = ((uint64_t)1 << PRECISION) - f1, m = s->x & (((uint64_t)1 << PRECISION) - 1);
+    int bit = m >= f0;
+    s->x = (bit ? f1 : f0) * (s->x >> PRECISION) + m - (bit ? f0 : 0);
+    refill(s);
+    return bit;
+}
+
+/* One decision of an adaptive model, counts[0..1] = (n0, n1): P(1) = floor((2 n1 + 1) 2**24 / (2 n + 2)),
+   then the decided count + 1 while n < BIN_LIMIT. */
+static inline int adaptive_bit(Stream *s, int64_t *counts)
+{
+    int64_t n = counts[0] + counts[1];
+    int bit = decode_bit(s, (uint64_t)(((2 * counts[1] + 1) << PRECISION) / (2 * n + 2)));
+    if (n < BIN_LIMIT)
+        counts[bit]++;
+    return bit;
+}
+
+/* One integer of the context set `set` (BINS count pairs): nonzero?, the sign where `is_signed`,
+   the class k in unary, the top bit below the leading one by k, k - 1 bits of probability 1/2.
+   -1 when the class passes MAX_CLASS. */
+static inline int decode_integer(Stream *s, int64_t *set, int is_signed, int64_t *value)
+{
+    *value = 0;
+    if (!adaptive_bit(s, set))
+        return 0;
+    int negative = is_signed && adaptive_bit(s, set + 2);
+    int64_t k = 0, m = 1;
+    while (adaptive_bit(s, set + 2 * (2 + (k < PREFIX_BINS - 1 ? k : PREFIX_BINS - 1))))
+        if (++k > MAX_CLASS)
+            return -1;
+    if (k)
+        m = 2 | adaptive_bit(s, set + 2 * (2 + PREFIX_BINS + (k < PREFIX_BINS - 1 ? k : PREFIX_BINS - 1)));
+    for (int64_t j = 1; j < k; j++)
+        m = (m << 1) | decode_bit(s, (uint64_t)1 << (PRECISION - 1));
+    *value = negative ? -m : m;
+    return 0;
+}
+
+static inline int64_t at_most(int64_t a, int64_t b) { return a < b ? a : b; }
+
+/* One row's flips into `flips` (count n, the row above's in `above`, na of them), with each flip's
+   move and residual (0 in a row not coded as moves); 0, or -1 when a value breaks the mask. */
+static int decode_row(Stream *s, int64_t *counts, const int64_t *above, int64_t na, int64_t n, Py_ssize_t cols,
+                      int64_t *flips, int64_t *moves, int64_t *residuals)
+{
+    int64_t v, low = 0;
+    if (n && n == na) {
+        for (int64_t i = 0; i < n; i++, low = flips[i - 1] + 1) {
+            int64_t set = SAME_SET + i % 2 + 2 * (sign_of(residuals[i]) + 1) + 6 * (sign_of(moves[i]) + 1);
+            if (decode_integer(s, counts + 2 * BINS * set, 1, &v)
+                    || v < low - above[i] - moves[i] || v > cols - above[i] - moves[i])
+                return -1;
+            moves[i] += v;
+            residuals[i] = v;
+            flips[i] = above[i] + moves[i];
+        }
+        return 0;
+    }
+    int64_t next[2] = {0, 1};   /* per side, the first flip above not yet left of the row's last flip */
+    for (int64_t i = 0; i < n; i++, low = flips[i - 1] + 1) {
+        int64_t *j = &next[i % 2];
+        while (*j < na && above[*j] < low)
+            *j += 2;
+        int near = *j < na;
+        int64_t from = near ? above[*j] : low;
+        if (decode_integer(s, counts + 2 * BINS * (near ? NEAR_SET + i % 2 : GAP_SET + at_most(i, 1)), near, &v)
+                || v < low - from || v > cols - from)
+            return -1;
+        flips[i] = from + v;
+        moves[i] = residuals[i] = 0;
+    }
+    return 0;
+}
+
+/* decode_flips(state, cursor, words, bits, cumulative, width, rows, cols, valid): 8.0's mask into
+   `valid` (rows x cols bools), each row's span count as the change from the row above's, then its
+   flips (decode_row); -1, or the first row whose count or flips are impossible. */
+static PyObject *decode_flips(PyObject *self, PyObject *args)
+{
+    Views v = {.count = 6};
+    Py_ssize_t width, rows, cols, bad = -1;
+    Stream s;
+    if (!PyArg_ParseTuple(args, "w*w*y*y*y*nnnw*", &v.views[0], &v.views[1], &v.views[2], &v.views[3],
+                          &v.views[4], &width, &rows, &cols, &v.views[5]))
+        return NULL;
+    Py_ssize_t cells = rows >= 0 && cols >= 0 && (cols == 0 || rows <= PY_SSIZE_T_MAX / 8 / cols) ? rows * cols : -1;
+    if (open_stream(&s, &v.views[0], &v.views[1], &v.views[2], &v.views[3], &v.views[4], width)
+            || check_buffer(&v.views[5], cells, 1, "valid")) {
+        release(&v);
+        return NULL;
+    }
+    int64_t *counts = PyMem_Calloc(2 * BINS * SETS + 5 * ((size_t)cols + 2), sizeof(int64_t));
+    if (!counts) {
+        release(&v);
+        return PyErr_NoMemory();
+    }
+    int64_t *above = counts + 2 * BINS * SETS, *flips = above + cols + 2, *moves = flips + cols + 2;
+    int64_t *residuals = moves + cols + 2, na = 0, d;
+    unsigned char *valid = v.views[5].buf;
+    for (Py_ssize_t r = 0; r < rows && bad < 0; r++) {
+        if (decode_integer(&s, counts, 1, &d) || d < -na / 2 || d > (cols + 1) / 2 - na / 2
+                || decode_row(&s, counts, above, na, na + 2 * d, cols, flips, moves, residuals)) {
+            bad = r;
+            break;
+        }
+        na += 2 * d;
+        memcpy(above, flips, (size_t)na * sizeof(int64_t));
+        unsigned char *row = valid + r * cols;
+        memset(row, 0, (size_t)cols);
+        for (int64_t i = 0; i < na; i += 2)
+            memset(row + flips[i], 1, (size_t)(flips[i + 1] - flips[i]));
+    }
+    PyMem_Free(counts);
+    store(&s);
+    release(&v);
+    return PyLong_FromSsize_t(bad);
+}
+
 static PyMethodDef methods[] = {
     {"read_values", read_values, METH_VARARGS, "Signed values of one model table (see _rows.c)."},
     {"decode_rows", decode_rows, METH_VARARGS, "A band or correction layer, row by row in two passes (see _rows.c)."},
     {"fill_spans", fill_spans, METH_VARARGS, "The validity mask from each row's flips (see _rows.c)."},
+    {"decode_flips", decode_flips, METH_VARARGS, "8.0's mask: predicted flips, adaptive bits (see _rows.c)."},
     {NULL, NULL, 0, NULL},
 };
 

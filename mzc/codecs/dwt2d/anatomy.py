@@ -8,7 +8,7 @@ coefficients are the rest of the payload.
 
 import numpy as np
 
-from mzc.codecs.dwt2d import encode_mask
+from mzc.codecs.dwt2d import encode_mask, flips
 from mzc.codecs.dwt2d import entropy as en
 
 
@@ -25,7 +25,10 @@ def parts(data):
         body = read_header(data, "<bytes>", "dwt2d", 99, binary=True)[1]
     decoder = en.Decoder(body, "<bytes>", parametric=compact.is_compact(data))
     tables = decoder.position - len(en.varint(len(decoder.tables)))
-    mask = mask_bits(grid.valid, decoder.tables) / 8
+    if (compact.major(data) or 0) >= 8:   # the predicted flips: no tables, every bit in the rANS words
+        mask = flips.ideal_bits(grid.valid) / 8
+    else:
+        mask = mask_bits(grid.valid, decoder.tables) / 8
     return {"header": len(data) - len(body), "mask": round(mask), "tables": tables,
             "coefficients": len(body) - tables - round(mask)}
 

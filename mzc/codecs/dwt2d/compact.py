@@ -1,7 +1,8 @@
-"""The container of ``mzc-dwt2d 7.0`` and ``7.1`` (spec/dwt2d.md, Version 7.0): the magic line, then
-tagged sections, each with its own CRC-32, the first of them the header's fields in binary. 7.1 is 7.0
+"""The container of ``mzc-dwt2d 7.0``, ``7.1`` and ``8.0`` (spec/dwt2d.md, Version 7.0): the magic line,
+then tagged sections, each with its own CRC-32, the first of them the header's fields in binary. 7.1 is 7.0
 with one more field, the source's vertex count (``source_vertices``), written only for a grid that has
-one, so every other grid keeps its 7.0 bytes.
+one, so every other grid keeps its 7.0 bytes; 8.0 has every field of 7.1 and codes its mask otherwise
+(Version 8.0).
 
 A 3.x header of a face file took about 215 bytes of text; the same fields take about 60 here. The
 fields are the 3.x header lines (keyword and values), so one reader checks them all
@@ -20,6 +21,7 @@ from mzc.formats.header import CHECKSUM, Header, format_number, split_magic
 
 MAGIC = b"mzc-dwt2d 7.0\n"
 COUNTED_MINOR = 1               # 7.1: 7.0 and the source_vertices field
+MAJORS = (7, 8)                 # the majors in this container: 8.0 is 7.1 with the mask as predicted flips
 HEADER, PAYLOAD, COLOUR = 1, 2, 3   # section tags, in the order they come (COLOUR only in a file with colours)
 CRC = struct.Struct("<I")
 MAX_VARINT_BYTES = 10           # an unsigned 64-bit integer
@@ -79,13 +81,18 @@ def section(tag, body, before=b""):
     return head + CRC.pack(zlib.crc32(head, zlib.crc32(before)))
 
 
-def file_bytes(lines, payload, colour=None):
-    """The 7.0 file of the header ``lines`` (3.x's, without the magic and ``data`` lines), the payload
-    and, for a grid with colours, its colour section (mzc.codecs.dwt2d.colour's bytes); 7.1 when the
-    lines hold a field that 7.1 added."""
+def magic_line(version):
+    """The magic line of ``version`` (major, minor)."""
+    return f"mzc-dwt2d {version[0]}.{version[1]}\n".encode()
+
+
+def file_bytes(lines, payload, colour=None, major=7):
+    """The file of ``major`` (7 or 8) of the header ``lines`` (3.x's, without the magic and ``data``
+    lines), the payload and, for a grid with colours, its colour section (mzc.codecs.dwt2d.colour's
+    bytes): 7.1 rather than 7.0 when the lines hold a field that 7.1 added."""
     fields = b"".join(field_bytes(line) for line in sorted(lines, key=field_number))   # in the table's order
-    minor = max((SINCE.get(field_number(line), 0) for line in lines), default=0)
-    magic = MAGIC.replace(b"7.0", f"7.{minor}".encode())
+    minor = max((SINCE.get(field_number(line), 0) for line in lines), default=0) if major == 7 else 0
+    magic = magic_line((major, minor))
     coloured = b"" if colour is None else section(COLOUR, colour)
     return magic + section(HEADER, fields, magic) + section(PAYLOAD, payload) + coloured
 
@@ -154,20 +161,22 @@ class Reader:
 
     def header(self):
         """The Header of the header section (keywords and their value words, as a 3.x header's lines)
-        of a 7.0 or 7.1 file (a later minor is refused: its fields are not known here)."""
+        of a 7.0, 7.1 or 8.0 file (a later minor is refused: its fields are not known here)."""
         magic = bytes(self.data[:self.position])
-        minor = split_magic(magic, self.source)[2]
-        if minor > COUNTED_MINOR:
-            raise MzcError(f"mzc-dwt2d version 7.{minor} is newer than this mzc reads (7.{COUNTED_MINOR}); upgrade "
-                           "mzc", source=self.source, line=1)
+        _kind, major, minor = split_magic(magic, self.source)
+        newest = COUNTED_MINOR if major == 7 else 0
+        if minor > newest:
+            raise MzcError(f"mzc-dwt2d version {major}.{minor} is newer than this mzc reads ({major}.{newest}); "
+                           "upgrade mzc", source=self.source, line=1)
         body = self.section(HEADER, magic)
         fields = Reader(magic + body, self.source)
-        header = Header(self.source, 7, projected=True, georeferenced=True, charted=True, minor=minor,
-                        counted=minor >= COUNTED_MINOR)
+        known = COUNTED_MINOR if major > 7 else minor   # the 7.x whose fields it reads: 8.0 reads 7.1's
+        header = Header(self.source, major, projected=True, georeferenced=True, charted=True, minor=minor,
+                        counted=known >= COUNTED_MINOR)
         end = len(fields.data)
         while fields.position < end:
             number = fields.varint(end)
-            if number not in FIELDS or SINCE.get(number, 0) > minor:
+            if number not in FIELDS or SINCE.get(number, 0) > known:
                 raise self.error(f"unknown header field {number}")
             keyword, kind = FIELDS[number]
             if header.has(keyword):
@@ -207,13 +216,19 @@ def unsigned(value):
     return -(value // 2) if value % 2 else value // 2
 
 
+def major(data):
+    """The major version of a file of this container (its magic line's), else None."""
+    head = bytes(data[:len(MAGIC) - 2])
+    return next((m for m in MAJORS if head == magic_line((m, 0))[:-2]), None)
+
+
 def is_compact(data):
-    """True when ``data`` starts as a 7.x file (7.0 or 7.1)."""
-    return bytes(data[:len(MAGIC) - 2]) == MAGIC[:-2]
+    """True when ``data`` starts as a 7.x or 8.x file (7.0, 7.1 or 8.0)."""
+    return major(data) is not None
 
 
 def read(data, source):
-    """(Header, payload bytes, colour section bytes or None) of a 7.0 or 7.1 file."""
+    """(Header, payload bytes, colour section bytes or None) of a 7.0, 7.1 or 8.0 file."""
     reader = Reader(data, source)
     header = reader.header()
     payload = reader.section(PAYLOAD)

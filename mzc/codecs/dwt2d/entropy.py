@@ -216,6 +216,7 @@ class Encoder:
         self.models, self.values, self.signed = [], [], []
         self.same_size = [list(group) for group in same_size]
         self.parametric = parametric   # 7.0's table records (parametric or weight codes), else 3.x's
+        self.leading = None            # 8.0: pushes the mask's binary decisions onto the coder, to decode first
 
     def add(self, model, values, signed=True):
         """Append ``values`` (ints) coded with context ``model``: one id, or one id per value.
@@ -240,7 +241,7 @@ class Encoder:
             codes = choose_tables(counts, sizes)
             tables = [frequencies(c) for c in codes]
             table_bytes = b"".join(b"\x00" if shared else encode_table(c) for c, shared in table_records(codes))
-        words = ans_encode(tables, models, cls)
+        words = ans_encode(tables, models, cls, self.leading)
         return (varint(count) + table_bytes + varint(len(words)) + words.astype("<u4").tobytes()
                 + np.packbits(raw_bits(values, cls, np.concatenate(self.signed or [np.zeros(0, np.int64)]))).tobytes())
 
@@ -303,8 +304,9 @@ def table_records(tables):
     return [(t, i > 0 and t is tables[i - 1]) for i, t in enumerate(tables)]
 
 
-def ans_encode(tables, models, cls):
-    """rANS words of the classes, model by model (encoded last-to-first so they decode first-to-last).
+def ans_encode(tables, models, cls, leading=None):
+    """rANS words of the classes, model by model (encoded last-to-first so they decode first-to-last),
+    then what ``leading`` (a function of the coder, or None) pushes, to be decoded before them.
 
     Each run of symbols whose tables have one class count goes to the coder in one call,
     with one row of weights per symbol (a face has about 3,000 runs: what can be taken
@@ -322,6 +324,8 @@ def ans_encode(tables, models, cls):
     runs = list(zip(starts.tolist(), ends.tolist(), [weights[size] for size in sizes[starts].tolist()]))
     for start, end, rows in reversed(runs):
         coder.encode_reverse(symbols[start:end], family, rows[models[start:end]])
+    if leading is not None:
+        leading(coder)
     return coder.get_compressed()
 
 
