@@ -78,7 +78,8 @@ class Frame:
         from mzc.grid import IDENTITY_TRANSFORM
 
         defaults = {"origin": (0.0, 0.0), "transform": IDENTITY_TRANSFORM, "units": None, "nodata": "nan",
-                    "projection": "planar", "radius": None, "crs": None, "raster": None, "charts": None}
+                    "projection": "planar", "radius": None, "crs": None, "raster": None, "charts": None,
+                    "source_vertices": None}
         return SimpleNamespace(shape=self.shape, **{**defaults, **self.fields})
 
     def block_fields(self, row, col, rounded=False):
