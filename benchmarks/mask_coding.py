@@ -25,8 +25,8 @@ probability, plus raw bits and table records where the scheme has them), in byte
   binarised through adaptive binary models (no tables, no raw bits). Its real bytes (a payload of
   it alone) and the C decoder's time are measured too.
 
-The whole-file effect on f18 (at RMS 0.05, 0.1, 0.2 mm): the reference encoder's 7.x and 8.0 files
-(7.1 for a sliced face, which has its source's vertex count; 8.0: 7.1 with the predicted flips), each
+The whole-file effect on f18 (at RMS 0.05, 0.1, 0.2 mm): the reference encoder's 7.0 and 8.0 files
+(8.0: 7.0 with the predicted flips and the face's source_vertices, 5 bytes, which 7.0 has no field for), each
 with its mask's share (mzc.codecs.dwt2d.anatomy.parts).
 Writes mask-coding-results.md and mask-coding-results.json into --out (default: this directory).
 """

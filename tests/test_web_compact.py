@@ -37,7 +37,7 @@ import { MzcError } from "./header.mjs";
 const bodies = JSON.parse(readFileSync(0, "utf8"));
 process.stdout.write(JSON.stringify(bodies.map((hex) => {
   try {
-    return Object.fromEntries(headerLines(Uint8Array.from(Buffer.from(hex, "hex")), 1));
+    return Object.fromEntries(headerLines(Uint8Array.from(Buffer.from(hex, "hex")), 8));
   } catch (error) {
     if (error instanceof MzcError) return null;
     throw error;
@@ -64,9 +64,9 @@ def test_parametric_tables_are_mzcs():
 
 
 def mzc_lines(body):
-    """{keyword: words} of a 7.1 file's header section body (every field) as mzc reads it, or None where
+    """{keyword: words} of an 8.0 file's header section body (every field) as mzc reads it, or None where
     it refuses it."""
-    magic = b"mzc-dwt2d 7.1\n"
+    magic = b"mzc-dwt2d 8.0\n"
     data = magic + compact.section(compact.HEADER, body, magic)
     try:
         header = compact.Reader(data, "t").header()

@@ -1,4 +1,4 @@
-// The container of `mzc-dwt2d 7.0` and 7.1 (spec/dwt2d.md, Version 7.0): the magic line, then tagged
+// The container of `mzc-dwt2d 7.0` and 8.0 (spec/dwt2d.md, Version 7.0): the magic line, then tagged
 // sections each under its own CRC-32, the header's fields in binary turned back into the header
 // lines they stand for, so that dwt2d.mjs reads them as it reads a 3.x file's lines.
 
@@ -16,9 +16,8 @@ const FIELDS = {
   17: ["slope_limit", "d"], 18: ["correction", "d"], 19: ["rounding", "e"], 20: ["max_error", "d"],
   21: ["colour_psnr", "d"], 22: ["colour_max_error", "d"], 23: ["source_vertices", "u"],
 };
-/** Field id -> the minor of 7.x that added it (7.1: the source's vertex count); the others are 7.0's. */
-const SINCE = { 23: 1 };
-export const NEWEST_MINOR = 1;
+/** Field id -> the major that added it (8.0: the source's vertex count); the others are 7.0's. */
+const SINCE = { 23: 8 };
 const WORDS = ["planar", "cylindrical", "spherical", "bior4.4", "bior2.2", "integer"];
 export const HEADER = 1;
 export const PAYLOAD = 2;
@@ -72,14 +71,14 @@ export function sections(bytes, magicEnd, tags, optional) {
   return bodies;
 }
 
-/** The header section's fields of a 7.`minor` file as the map of header lines (keyword -> value
- * words) they stand for. */
-export function headerLines(body, minor) {
+/** The header section's fields of a file of `major` (7 or 8) as the map of header lines (keyword ->
+ * value words) they stand for. */
+export function headerLines(body, major) {
   const cursor = new Cursor(body, 0);
   const fields = new Map();
   while (cursor.at < body.length) {
     const id = cursor.varint();
-    const field = id <= 23n && (SINCE[Number(id)] ?? 0) <= minor ? FIELDS[Number(id)] : undefined;
+    const field = id <= 23n && (SINCE[Number(id)] ?? 7) <= major ? FIELDS[Number(id)] : undefined;
     if (!field) fail("data", `unknown header field ${id}`);
     const [keyword, type] = field;
     if (fields.has(keyword)) fail("data", `header field ${keyword} given twice`);

@@ -5,7 +5,7 @@
 
 import { fail, headerFields, fieldReader, gridFields, checkChecksum, checkCharts, VIEWS, crc32, splitHeader, parseMagic } from "./header.mjs";
 import { cos } from "./elementary.mjs";
-import { sections, headerLines, HEADER, PAYLOAD, COLOUR, NEWEST_MINOR } from "./compact.mjs";
+import { sections, headerLines, HEADER, PAYLOAD, COLOUR } from "./compact.mjs";
 import { inversePeriodized2d, relevantPeriodized2d } from "./pywt.mjs";
 import { decodeFlips } from "./mask.mjs";
 
@@ -25,10 +25,9 @@ export function decodeDwt2d(bytes, lines, body, magic) {
  * grid's colours (Colours of 7.0), comes back undecoded as `colourSection` (colour.mjs's
  * `withColours` decodes it over the grid's valid nodes). */
 export function decodeCompact(bytes, magicEnd, magic) {
-  const newest = magic.major === 7 ? NEWEST_MINOR : 0;   // 8.0 reads 7.1's fields
-  if (magic.minor > newest) fail(null, `mzc-dwt2d version ${magic.major}.${magic.minor} is newer than this decoder reads (${magic.major}.${newest}); upgrade`);
+  if (magic.minor) fail(null, `mzc-dwt2d version ${magic.major}.${magic.minor} is newer than this decoder reads (${magic.major}.0); upgrade`);
   const bodies = sections(bytes, magicEnd, [HEADER, PAYLOAD], COLOUR);
-  const grid = decodeWhole(headerLines(bodies[HEADER], magic.major === 7 ? magic.minor : NEWEST_MINOR), bodies[PAYLOAD], magic);
+  const grid = decodeWhole(headerLines(bodies[HEADER], magic.major), bodies[PAYLOAD], magic);
   return bodies[COLOUR] ? { ...grid, colourSection: bodies[COLOUR] } : grid;
 }
 
@@ -36,7 +35,7 @@ export function decodeCompact(bytes, magicEnd, magic) {
 function decodeWhole(fields, bytes, magic) {
   const h = fieldReader(fields);
   const georef = magic.major >= 6 || (magic.major === 3 && magic.minor >= 2);
-  const grid = gridFields(h, { projected: magic.major >= 3, georef, counted: magic.major >= 8 || (magic.major === 7 && magic.minor >= 1) });
+  const grid = gridFields(h, { projected: magic.major >= 3, georef, counted: magic.major >= 8 });
   const p = codecFields(h, magic, grid);
   const payload = new Payload(bytes, magic.major >= 7);
   const z = decodeGrid(payload, grid, p);

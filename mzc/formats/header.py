@@ -26,7 +26,7 @@ without them keeps its format's older version, byte for byte.
 
 The source's vertex count (``source_vertices``, the size of the mesh or cloud a grid was sliced
 from, which the rebuild comes back near) describes the same nodes too: a minor version of the
-formats that carry it (``COUNTED_SINCE`` of the z-grid: major -> first minor; ``mzc-dwt2d`` 7.1).
+z-grid (``COUNTED_SINCE``: major -> first minor), and a field of ``mzc-dwt2d`` 8.0 from its start.
 Writers write it only for a grid that has one (``grid_header_lines(..., counted=True)``), so every
 other grid keeps its version byte for byte; the thesis's row codecs and dwt2d's tiles leave it out.
 

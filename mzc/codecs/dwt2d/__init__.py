@@ -24,7 +24,6 @@ from mzc.codecs.dwt2d import _rows, compact, flips
 from mzc.codecs.dwt2d import wavelet as w2
 from mzc.errors import MzcError
 from mzc.formats.header import (
-    counted_version,
     file_bytes,
     file_version,
     format_number,
@@ -50,8 +49,8 @@ ROUNDED_VERSION = (6, 0)     # 4.0 with the crs and raster lines and ``rounding 
                              # a 4.0 reader, ignoring the line, would decode other values)
 COMPACT_VERSION = (7, 0)     # the fields of 3.x-6.0 in binary, tagged sections with CRC-32s (mzc.codecs.dwt2d.compact);
                              # tiles of 5.0 stay 3.1 files
-COUNTED_SINCE = {COMPACT_VERSION[0]: compact.COUNTED_MINOR}   # 7.1: 7.0 with the source_vertices field
-FLIPS_VERSION = (8, 0)       # every grid coded whole: 7.1 with the mask as predicted flips (mzc.codecs.dwt2d.flips)
+FLIPS_VERSION = (8, 0)       # every grid coded whole: 7.0 with the source_vertices field and the mask as predicted
+                             # flips (mzc.codecs.dwt2d.flips)
 GEOREF_SINCE = dict([GEOREFERENCED_VERSION, TILED_VERSION, ROUNDED_VERSION, COMPACT_VERSION,
                      FLIPS_VERSION])   # major -> first minor
                                                                                          # with crs, raster
@@ -467,7 +466,7 @@ class Prepared:
         the lines between them as binary fields)."""
         # lines at their defaults are left out: a face's file can be 1.5 KB, and they were 50 B of it
         lines = [magic_line(KIND, version), *grid_header_lines(self.grid, write_defaults=False, chart_records=False,
-                                                               counted=version[0] >= COMPACT_VERSION[0])]
+                                                               counted=version[0] >= FLIPS_VERSION[0])]
         if self.grid.charts is not None:   # their records are in the payload: 8-10 bytes a chart, not 25
             lines.append(f"chart_count {len(self.grid.charts)}")
         if self.wavelet != DEFAULT_WAVELET:
@@ -516,11 +515,10 @@ class Prepared:
 
 def written_version(grid, rounded, compact=True):
     """The version the reference encoder writes a grid coded whole in: 8.0 (``compact`` True), or the
-    container version ``compact`` names (7.0 for 7.0's tests; 7.1 with the count of the source's vertices),
-    or without ``compact`` (a tile of a 5.0 file) the 3.x, 4.0 or 6.0 (``rounded``: decoded values rounded
-    to integers) it was before."""
+    container version ``compact`` names (7.0 for 7.0's tests), or without ``compact`` (a tile of a 5.0
+    file) the 3.x, 4.0 or 6.0 (``rounded``: decoded values rounded to integers) it was before."""
     if compact:
-        return FLIPS_VERSION if compact is True else counted_version(grid, compact, COUNTED_SINCE)
+        return FLIPS_VERSION if compact is True else tuple(compact)
     if rounded:
         return ROUNDED_VERSION
     return file_version(grid, VERSION, PROJECTED_VERSION, GEOREFERENCED_VERSION, CHARTED_VERSION)

@@ -1,8 +1,6 @@
-"""The container of ``mzc-dwt2d 7.0``, ``7.1`` and ``8.0`` (spec/dwt2d.md, Version 7.0): the magic line,
-then tagged sections, each with its own CRC-32, the first of them the header's fields in binary. 7.1 is 7.0
-with one more field, the source's vertex count (``source_vertices``), written only for a grid that has
-one, so every other grid keeps its 7.0 bytes; 8.0 has every field of 7.1 and codes its mask otherwise
-(Version 8.0).
+"""The container of ``mzc-dwt2d 7.0`` and ``8.0`` (spec/dwt2d.md, Version 7.0): the magic line, then
+tagged sections, each with its own CRC-32, the first of them the header's fields in binary. 8.0 has one
+more field, the source's vertex count (``source_vertices``), and codes its mask otherwise (Version 8.0).
 
 A 3.x header of a face file took about 215 bytes of text; the same fields take about 60 here. The
 fields are the 3.x header lines (keyword and values), so one reader checks them all
@@ -20,8 +18,7 @@ from mzc.errors import MzcError
 from mzc.formats.header import CHECKSUM, Header, format_number, split_magic
 
 MAGIC = b"mzc-dwt2d 7.0\n"
-COUNTED_MINOR = 1               # 7.1: 7.0 and the source_vertices field
-MAJORS = (7, 8)                 # the majors in this container: 8.0 is 7.1 with the mask as predicted flips
+MAJORS = (7, 8)                 # the majors in this container: 8.0 is 7.0 with source_vertices and the mask as flips
 HEADER, PAYLOAD, COLOUR = 1, 2, 3   # section tags, in the order they come (COLOUR only in a file with colours)
 CRC = struct.Struct("<I")
 MAX_VARINT_BYTES = 10           # an unsigned 64-bit integer
@@ -35,7 +32,7 @@ FIELDS = {
     16: ("steps", "d"), 17: ("slope_limit", "d"), 18: ("correction", "d"), 19: ("rounding", "e"),
     20: ("max_error", "d"), 21: ("colour_psnr", "d"), 22: ("colour_max_error", "d"), 23: ("source_vertices", "u"),
 }
-SINCE = {23: COUNTED_MINOR}     # field id -> the minor that added it (the others are 7.0's)
+SINCE = {23: 8}                 # field id -> the major that added it (the others are 7.0's)
 IDS = {keyword: (number, kind) for number, (keyword, kind) in FIELDS.items()}
 SMALL_EXPONENTS, EXPONENT_BIAS = (-8, 6), 8   # a decimal exponent in this range shares the mantissa's varint
 WORDS = ("planar", "cylindrical", "spherical", "bior4.4", "bior2.2", "integer")   # the words of ``e`` fields
@@ -88,11 +85,10 @@ def magic_line(version):
 
 def file_bytes(lines, payload, colour=None, major=7):
     """The file of ``major`` (7 or 8) of the header ``lines`` (3.x's, without the magic and ``data``
-    lines), the payload and, for a grid with colours, its colour section (mzc.codecs.dwt2d.colour's
-    bytes): 7.1 rather than 7.0 when the lines hold a field that 7.1 added."""
+    lines; fields of that major's), the payload and, for a grid with colours, its colour section
+    (mzc.codecs.dwt2d.colour's bytes)."""
     fields = b"".join(field_bytes(line) for line in sorted(lines, key=field_number))   # in the table's order
-    minor = max((SINCE.get(field_number(line), 0) for line in lines), default=0) if major == 7 else 0
-    magic = magic_line((major, minor))
+    magic = magic_line((major, 0))
     coloured = b"" if colour is None else section(COLOUR, colour)
     return magic + section(HEADER, fields, magic) + section(PAYLOAD, payload) + coloured
 
@@ -161,22 +157,20 @@ class Reader:
 
     def header(self):
         """The Header of the header section (keywords and their value words, as a 3.x header's lines)
-        of a 7.0, 7.1 or 8.0 file (a later minor is refused: its fields are not known here)."""
+        of a 7.0 or 8.0 file (a later minor is refused: its fields are not known here)."""
         magic = bytes(self.data[:self.position])
         _kind, major, minor = split_magic(magic, self.source)
-        newest = COUNTED_MINOR if major == 7 else 0
-        if minor > newest:
-            raise MzcError(f"mzc-dwt2d version {major}.{minor} is newer than this mzc reads ({major}.{newest}); "
-                           "upgrade mzc", source=self.source, line=1)
+        if minor:
+            raise MzcError(f"mzc-dwt2d version {major}.{minor} is newer than this mzc reads ({major}.0); upgrade mzc",
+                           source=self.source, line=1)
         body = self.section(HEADER, magic)
         fields = Reader(magic + body, self.source)
-        known = COUNTED_MINOR if major > 7 else minor   # the 7.x whose fields it reads: 8.0 reads 7.1's
-        header = Header(self.source, major, projected=True, georeferenced=True, charted=True, minor=minor,
-                        counted=known >= COUNTED_MINOR)
+        header = Header(self.source, major, projected=True, georeferenced=True, charted=True,
+                        counted=major >= SINCE[IDS["source_vertices"][0]])
         end = len(fields.data)
         while fields.position < end:
             number = fields.varint(end)
-            if number not in FIELDS or SINCE.get(number, 0) > known:
+            if number not in FIELDS or SINCE.get(number, 7) > major:
                 raise self.error(f"unknown header field {number}")
             keyword, kind = FIELDS[number]
             if header.has(keyword):
@@ -223,12 +217,12 @@ def major(data):
 
 
 def is_compact(data):
-    """True when ``data`` starts as a 7.x or 8.x file (7.0, 7.1 or 8.0)."""
+    """True when ``data`` starts as a 7.x or 8.x file."""
     return major(data) is not None
 
 
 def read(data, source):
-    """(Header, payload bytes, colour section bytes or None) of a 7.0, 7.1 or 8.0 file."""
+    """(Header, payload bytes, colour section bytes or None) of a 7.0 or 8.0 file."""
     reader = Reader(data, source)
     header = reader.header()
     payload = reader.section(PAYLOAD)
