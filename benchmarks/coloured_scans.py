@@ -14,7 +14,8 @@ and example.obj names no material, so none is measured):
 
 mzc through its API only: ``mzc.slice(scan)`` with its defaults, ``mzc.encode(grid, "dwt2d",
 rmse=..., colour_psnr=...)`` at a ladder of RMS targets in % of D (the scan's bounding-box
-diagonal), ``mzc.decode`` and ``mzc.triangulate``: the whole file, shape and colour. Draco
+diagonal), ``mzc.decode`` and ``mzc.triangulate`` (its default: a mesh near the scan's vertex
+count, issue 31, whose vertices carry the colours measured): the whole file, shape and colour. Draco
 (DracoPy, compression level 10) codes the scan itself (the cloud as a point cloud) with its
 colours as an 8-bit attribute at a ladder of position bits, in the same run.
 
@@ -164,7 +165,9 @@ def markdown(document):
              "the nearest point's), "
              "RMS in 8-bit levels over the three channels, and PSNR. Draco codes the scan (the cloud as points) "
              "with its colours as an 8-bit attribute, compression level 10; its bytes at mzc's shape error are "
-             "interpolated log-log on its Pareto front. mzc's bytes are the whole `.mzw2` file (header, shape "
+             "interpolated log-log on its Pareto front. mzc's mesh is `mzc.triangulate`'s default, near the "
+             "scan's vertex count (issue 31): its vertices carry the colours measured, and the uncoded grid's "
+             "row includes that rebuild. mzc's bytes are the whole `.mzw2` file (header, shape "
              f"payload, colour section). Goal: mzc / Draco <= {RATIO_GOAL} at equal shape error with colour RMS "
              f"<= {COLOUR_RMS_GOAL:g} levels.", "",
              "| scan | input | grid (valid nodes) | D | uncoded grid: shape RMS % D | colour RMS | PSNR |",
