@@ -12,6 +12,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
+from test_colour_file import psnr
 
 import mzc
 from mzc.measure.metrics import nearest_triangles, surface_distance
@@ -27,12 +28,6 @@ def fran():
     if not (FRAN / "fran.obj").is_file():
         pytest.skip("tests/data/public/fran is absent")
     return FRAN / "fran.obj"
-
-
-def psnr(decoded, original, valid):
-    """PSNR in dB of ``decoded`` against ``original`` colours over the ``valid`` nodes' three channels."""
-    error = (decoded.astype(float) - original.astype(float))[valid]
-    return 10 * np.log10(255.0 ** 2 / np.mean(error ** 2))
 
 
 def texture_colours(points):
