@@ -222,20 +222,18 @@ def read_grid_file(data, extra_size=0):
 
 
 def mask_bytes(valid):
-    """The validity mask coded exactly as mzc's dwt2d codes it (row spans through rANS)."""
-    from mzc.codecs.dwt2d import encode_mask
-    from mzc.codecs.dwt2d.entropy import Encoder
+    """The validity mask coded exactly as mzc's dwt2d codes it (8.0's predicted flips through rANS,
+    ``flips.alone``): a peer pays for its mask what mzc pays."""
+    from mzc.codecs.dwt2d import flips
 
-    encoder = Encoder()
-    encode_mask(encoder, valid)
-    return encoder.finish()
+    return flips.alone(valid)
 
 
 def read_mask(data, rows, cols):
-    from mzc.codecs.dwt2d import decode_mask
+    from mzc.codecs.dwt2d import flips
     from mzc.codecs.dwt2d.entropy import Decoder
 
-    return decode_mask(Decoder(data, "<mask>"), rows, cols)
+    return flips.decode(Decoder(data, "<mask>"), rows, cols)
 
 
 def filled(grid):

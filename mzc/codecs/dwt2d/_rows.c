@@ -424,6 +424,14 @@ static PyObject *decode_rows(PyObject *self, PyObject *args)
     return PyLong_FromLong(code);
 }
 
+/* A mask row of cols bytes: 1 between each pair of its n flips (checked to lie in 0..cols, in order), 0 elsewhere. */
+static void fill_row(unsigned char *row, Py_ssize_t cols, const int64_t *flips, int64_t n)
+{
+    memset(row, 0, (size_t)cols);
+    for (int64_t i = 0; i < n; i += 2)
+        memset(row + flips[i], 1, (size_t)(flips[i + 1] - flips[i]));
+}
+
 /* fill_spans(lengths, unchanged, same, gaps, rows, cols, valid): the validity mask into `valid`
    (rows x cols bools) from each row's flips (`lengths`: int64 per row): where the row's `unchanged`
    (a bool per row), the row above's flips moved by the next values of `same`, else the next values
@@ -476,10 +484,7 @@ static PyObject *fill_spans(PyObject *self, PyObject *args)
             break;
         *(moved ? &same_used : &new_used) += n;
         above = n;
-        unsigned char *row = valid + r * cols;
-        memset(row, 0, (size_t)cols);
-        for (int64_t i = 0; i < n; i += 2)
-            memset(row + flips[i], 1, (size_t)(flips[i + 1] - flips[i]));
+        fill_row(valid + r * cols, cols, flips, n);
     }
     PyMem_Free(flips);
     release(&v);
@@ -602,10 +607,7 @@ static PyObject *decode_flips(PyObject *self, PyObject *args)
         }
         na += 2 * d;
         memcpy(above, flips, (size_t)na * sizeof(int64_t));
-        unsigned char *row = valid + r * cols;
-        memset(row, 0, (size_t)cols);
-        for (int64_t i = 0; i < na; i += 2)
-            memset(row + flips[i], 1, (size_t)(flips[i + 1] - flips[i]));
+        fill_row(valid + r * cols, cols, flips, na);
     }
     PyMem_Free(counts);
     store(&s);
