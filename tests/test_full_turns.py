@@ -108,7 +108,7 @@ def test_the_command_line_rebuilds_a_closed_blob(mzc, tmp_path):
     lines = [f"v {x!r} {y!r} {z!r}" for x, y, z in mesh.points.tolist()]
     obj.write_text("\n".join(lines + [f"f {a + 1} {b + 1} {c + 1}" for a, b, c in mesh.triangles]) + "\n")
     grid = mzc("slice", obj, "--d1", "2", "--d2", "2", check=True).stdout
-    assert grid.startswith(b"mzc-zgrid 3.0\n") and b"\nprojection spherical\n" in grid
+    assert grid.startswith(b"mzc-zgrid 3.2\n") and b"\nprojection spherical\n" in grid
     packed = mzc("encode", "--dwt2d", "--max-error", "0.05", input=grid, check=True).stdout
     dense = mzc("densify", "-n", "1", input=mzc("decode", input=packed, check=True).stdout, check=True).stdout
     mzc("triangulate", "-o", tmp_path / "back.ply", input=dense, check=True)
