@@ -232,14 +232,14 @@ def test_tap_puts_cell_edges_on_whole_multiples_of_the_spacing(spacing):
 
 def test_a_cloud_with_a_crs_takes_a_round_default_spacing():
     """A LAS cloud in EPSG:2994 (feet): 20 where the data's own spacing was 21.92; without a CRS and
-    without --tap the data's spacing is kept as it was."""
+    without --tap the data's spacing is kept, to 3 significant digits."""
     pytest.importorskip("laspy")
     from mzc.meshes import read_mesh
 
     cloud = read_mesh(PUBLIC / "autzen_geo_proj.las")
     assert slice_surface(cloud).d1 == 20.0
     bare = Mesh(cloud.points)
-    assert slice_surface(bare).d1 == pytest.approx(21.9229, rel=1e-5)
+    assert slice_surface(bare).d1 == 21.9   # the data's 21.9229, to 3 significant digits
     assert slice_surface(bare, tap=True).d1 == 20.0
 
 
