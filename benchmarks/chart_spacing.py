@@ -65,6 +65,7 @@ def run_grid(mesh, original, d1, samples):
     for r in LADDER:
         data = mzc.encode(grid, "dwt2d", rmse=r * original.diagonal / 100)
         rebuild = Surface.of(mzc.triangulate(mzc.decode(data), vertices="all"))
+        row["format"] = data.split(b"\n", 1)[0].decode()
         row["points"].append({"contender": MZC, "family": "mzc", "setting": r, "bytes": len(data),
                               **errors(original, rebuild, samples)})
     return row
@@ -86,7 +87,7 @@ def cpu_times(mesh, d1, diagonal):
 def run_object(job):
     """Every spacing of one object: {"item", "diagonal", "vertices", "s0", "rows": {k: run_grid}}."""
     import mzc
-    from mzc.ops.slicing import source_spacing
+    from mzc.ops.slicing import chart_spacing, source_spacing
 
     path, factors, samples = job
     started = time.perf_counter()
@@ -94,9 +95,10 @@ def run_object(job):
         warnings.simplefilter("ignore")
         mesh = mzc.read(path)
         original = Surface.of(mesh)
-        s0 = source_spacing(mesh)
+        s0, default = source_spacing(mesh), chart_spacing(None, None, mesh)
         rows = {str(k): run_grid(mesh, original, k * s0, samples) for k in factors}
-        rows[DEFAULT] = run_grid(mesh, original, None, samples)
+        same = [k for k in factors if k * s0 == default]   # the default's grid is measured already
+        rows[DEFAULT] = dict(rows[str(same[0])]) if same else run_grid(mesh, original, None, samples)
         if Path(path).stem == TIMED_OBJECT:
             for k, row in rows.items():
                 row["times"] = cpu_times(mesh, None if k == DEFAULT else float(k) * s0, original.diagonal)
@@ -123,8 +125,33 @@ def figures(row, draco):
     return {"mzc_bytes": sizes, "draco_ratio": ratios or [None, None], "floor_met": met}
 
 
+def met_letters(row):
+    """The floor targets ``row`` meets as letters: R(MS), H(ausdorff), C(overage); "-" for none."""
+    return "".join(c for c, ok in zip("RHC", row["figures"]["floor_met"].values()) if ok) or "-"
+
+
+def pair(values, shown):
+    """Two figures as "a / b", "-" for a missing one."""
+    return " / ".join("-" if v is None else shown(v) for v in values)
+
+
+def summary_lines(document):
+    """Per object, the former default (k = 1: the source's spacing) beside the default of the
+    commit run: nodes, floor targets met, bytes and Draco / mzc at 0.05 and 0.1% D."""
+    lines = ["## The former default (k = 1) and the default of this commit", "",
+             "| item | nodes | floor targets met | mzc KB at 0.05 / 0.1% D | Draco / mzc at 0.05 / 0.1% D |",
+             "|---|---|---|---|---|"]
+    for item in document["items"]:
+        before, after = item["rows"]["1"], item["rows"][DEFAULT]
+        kb = [pair(row["figures"]["mzc_bytes"], lambda b: f"{b / 1000:.1f}") for row in (before, after)]
+        ratio = [pair(row["figures"]["draco_ratio"], fmt) for row in (before, after)]
+        lines.append(f"| {item['item']} | {before['nodes']:,} -> {after['nodes']:,} | {met_letters(before)} -> "
+                     f"{met_letters(after)} | {kb[0]} -> {kb[1]} | {ratio[0]} -> {ratio[1]} |")
+    return lines + [""]
+
+
 def markdown(document):
-    """The report: per object, a row per spacing."""
+    """The report: the summary, then per object a row per spacing."""
     s = document["settings"]
     lines = ["# Multi-chart grid spacing against bytes (issue 28)", "",
              f"Generated {document['generated']} by `python benchmarks/chart_spacing.py` on {document['machine']}, "
@@ -136,8 +163,8 @@ def markdown(document):
              "before this change), and by `mzc.slice(original)` at the default of the commit run (row "
              f"'{DEFAULT}').",
              f"- Floor: the grid rebuilt uncoded. Ladder: `mzc.encode(grid, \"dwt2d\", rmse=r * D / 100)` for r in "
-             f"{', '.join(map(str, s['ladder']))} (% of D). Every rebuild is `mzc.triangulate(..., "
-             "vertices=\"all\")` (every node kept).",
+             f"{', '.join(map(str, s['ladder']))} (% of D), files `{document['format']}`. Every rebuild is "
+             "`mzc.triangulate(..., vertices=\"all\")` (every node kept).",
              f"- Whole-surface error as `benchmarks/objects.py` measures it (`objects.errors`), but with "
              f"{s['samples']:,} samples each way (objects.py: 100,000), seed 0; in % of D.",
              "- mzc KB at 0.05 / 0.1% D: interpolated log-log on the Pareto front (`report.bytes_at`; the cheapest "
@@ -147,7 +174,7 @@ def markdown(document):
              f"- Floor targets (issue 28): RMS <= {FLOOR_RMS}% D, Hausdorff <= {FLOOR_HAUSDORFF}% D, >= "
              f"{COVERAGE}% of the area within 0.1% D; 'met' lists those met (R, H, C).",
              f"- CPU seconds ({TIMED_OBJECT}, median of {REPEATS}): slice + encode at 0.05% D, decode + "
-             "triangulate (default: simplified to the source's vertex count).", ""]
+             "triangulate (default: simplified to the source's vertex count).", "", *summary_lines(document)]
     for item in document["items"]:
         lines += [f"## {item['item']}", "",
                   f"D {fmt(item['diagonal'], 4)}, {item['vertices']:,} vertices, {item['triangles']:,} triangles, "
@@ -157,9 +184,8 @@ def markdown(document):
                   "|---|---|---|---|---|---|---|---|---|---|"]
         for k, row in item["rows"].items():
             f, floor = row["figures"], row["floor"]
-            met = "".join(c for c, ok in zip("RHC", f["floor_met"].values()) if ok) or "-"
-            kb = " / ".join("-" if b is None else f"{b / 1000:.1f}" for b in f["mzc_bytes"])
-            ratio = " / ".join("-" if r is None else fmt(r) for r in f["draco_ratio"])
+            met = met_letters(row)
+            kb, ratio = pair(f["mzc_bytes"], lambda b: f"{b / 1000:.1f}"), pair(f["draco_ratio"], fmt)
             lines.append(f"| {k} | {fmt(row['d1'], 4)} | {row['nodes']:,} | {row['nodes'] / item['vertices']:.2f} | "
                          f"{fmt(floor['whole']['rms'])} | {fmt(floor['whole']['hausdorff'])} | "
                          f"{floor['coverage']:.1f}% | {met} | {kb} | {ratio} |")
@@ -195,6 +221,7 @@ def main(argv=None):
                 "wall_s": time.perf_counter() - started}
     document = {"generated": f"{datetime.datetime.now().astimezone():%Y-%m-%d %H:%M %Z}", "machine": machine(),
                 "commit": git_commit(), "settings": settings, "items": [items[Path(p).stem] for p in paths]}
+    document["format"] = document["items"][0]["rows"][DEFAULT]["format"]
     args.out.mkdir(parents=True, exist_ok=True)
     (args.out / "chart-spacing-results.json").write_text(json.dumps(document, indent=1, default=float) + "\n")
     (args.out / "chart-spacing-results.md").write_text(markdown(document))
