@@ -570,6 +570,40 @@ def test_objects_quick_run_gives_a_verdict_or_a_reason_for_every_figure(objects_
     assert document["summary"]["mm"]["faces"]["Draco"][0][1] == 1   # the face's 0.05 mm ratio counted
 
 
+# --------------------------------------------------------------------------- the chart-spacing benchmark
+
+CHART_SPACING = REPO / "benchmarks" / "chart_spacing.py"
+
+
+def test_chart_spacing_quick_run_measures_each_spacing_against_the_former_default(tmp_path):
+    """benchmarks/chart_spacing.py --quick (the dragon and the hand at 1, 2 and 4 times the
+    source's spacing, and the default): each grid's floor and dwt2d ladder in % of D, coarser
+    spacings with fewer nodes and a larger floor error, and the hand's default coarser than the
+    former one (k = 1) yet meeting the floor figures that one meets, in fewer bytes at 0.1% D."""
+    for name in ("dragon", "hand"):
+        if not (objects.OBJECTS / f"{name}.ply").is_file():
+            pytest.skip(f"shared object data not available ({objects.OBJECTS / name})")
+    subprocess.run([sys.executable, str(CHART_SPACING), "--quick", "--out", str(tmp_path)], check=True,
+                   capture_output=True, timeout=300)
+    document = json.loads((tmp_path / "chart-spacing-results.json").read_text())
+    assert document["format"].startswith("mzc-dwt2d ")
+    assert (tmp_path / "chart-spacing-results.md").read_text().startswith("# Multi-chart grid spacing")
+    for item in document["items"]:
+        rows = item["rows"]
+        assert list(rows) == ["1", "2", "4", "default"]
+        assert rows["1"]["d1"] == pytest.approx(item["s0"]) and rows["4"]["d1"] == pytest.approx(4 * item["s0"])
+        assert rows["1"]["nodes"] > rows["2"]["nodes"] > rows["4"]["nodes"]
+        assert rows["1"]["floor"]["whole"]["rms"] < rows["4"]["floor"]["whole"]["rms"]
+        for row in rows.values():
+            assert [p["setting"] for p in row["points"]] == list(document["settings"]["ladder"])
+            assert all(p["bytes"] > 0 and 0 < p["whole"]["rms"] < 1 for p in row["points"])
+    hand = next(item for item in document["items"] if item["item"] == "hand")["rows"]
+    former, default = hand["1"]["figures"], hand["default"]["figures"]
+    assert hand["default"]["nodes"] < hand["1"]["nodes"]
+    assert all(default["floor_met"][name] for name, met in former["floor_met"].items() if met)
+    assert default["mzc_bytes"][1] < former["mzc_bytes"][1]
+
+
 # --------------------------------------------------------------------------- the DEM benchmark
 
 DEMS = REPO / "benchmarks" / "dems.py"

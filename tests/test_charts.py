@@ -271,6 +271,63 @@ def test_charts_are_packed_in_a_strip_as_wide_as_the_widest_chart(mesh):
     assert all(later == row0 + height + 1 for row0, height, later in zip(shelves, tallest, shelves[1:]))
 
 
+def fine_two_spheres():
+    """``two_spheres`` at 5 subdivisions: 20,484 vertices, half its median edge under 1/200 of
+    its longest side (the sampling ``data_spacing`` trusts)."""
+    points, triangles = icosphere(5)
+    return Mesh(np.concatenate([points * 10, points * 6 + [25.0, 0, 0]]),
+                np.concatenate([triangles, triangles + len(points)]))
+
+
+def test_a_multi_chart_grids_default_spacing_is_coarser_than_its_sources_and_one_grid_keeps_its_own(monkeypatch):
+    """Issue 28: a closed object's charts at half its median edge hold several nodes per vertex;
+    the default chart spacing (``mesh_chart_spacing``) is 3/4 of the median edge on this evenly
+    sampled mesh, so fewer nodes than at the former default (the source's spacing, what the
+    fractions below give back), while a one-grid slice of the same mesh is the same grid
+    whatever the chart fractions are, and --d1 still sets the charts' spacing."""
+    from mzc.ops import slicing
+
+    mesh = fine_two_spheres()
+    grid, one = slice_surface(mesh), slice_surface(mesh, charts=1)
+    edge = slicing.median_edge(mesh.points, mesh.triangles)
+    assert grid.charts is not None and grid.d1 == slicing.shortened(slicing.CHART_EDGE_FRACTION * edge)
+    assert slice_surface(mesh, d1=0.3).d1 == 0.3
+    monkeypatch.setattr(slicing, "CHART_EDGE_FRACTION", slicing.DATA_SPACING_FRACTION)
+    monkeypatch.setattr(slicing, "CHART_AREA_FRACTION", 0.0)
+    former = slice_surface(mesh)
+    assert former.d1 == slicing.source_spacing(mesh)
+    assert np.sum(grid.valid) < 0.5 * np.sum(former.valid)
+    again = slice_surface(mesh, charts=1)
+    assert again.charts is None and again.d1 == one.d1 and again.d2 == one.d2
+    np.testing.assert_array_equal(again.z, one.z)
+
+
+def test_a_mesh_of_few_large_triangles_keeps_its_capped_chart_spacing():
+    """Where half the median edge is above 1/200 of the longest side (a CAD part's few large
+    triangles; the coarse torus) the charts keep that cap: the objects measured lose a floor
+    target of issue 28 at any coarser spacing (benchmarks/chart-spacing-results.md)."""
+    from mzc.ops.slicing import MIN_NODES_ACROSS
+
+    mesh = torus()
+    assert slice_surface(mesh).d1 == float(np.ptp(mesh.points, axis=0).max()) / MIN_NODES_ACROSS
+
+
+def test_a_mesh_dense_in_a_few_places_takes_its_spacing_from_its_area_per_vertex():
+    """A fine sphere beside a coarse one twice its size: the median edge is the fine one's,
+    the area per vertex the two's; the charts' spacing is CHART_AREA_FRACTION of the side of that
+    area, coarser than 3/4 of the median edge (the ogre's case)."""
+    from mzc.measure.metrics import triangle_areas
+    from mzc.ops import slicing
+
+    fine, coarse = icosphere(5), icosphere(3)
+    mesh = Mesh(np.concatenate([fine[0] * 10, coarse[0] * 20 + [35.0, 0, 0]]),
+                np.concatenate([fine[1], coarse[1] + len(fine[0])]))
+    per_vertex = np.sqrt(np.sum(triangle_areas(mesh.points, mesh.triangles)) / len(mesh.points))
+    spacing = slice_surface(mesh).d1
+    assert spacing == slicing.shortened(slicing.CHART_AREA_FRACTION * per_vertex)
+    assert spacing > slicing.CHART_EDGE_FRACTION * slicing.median_edge(mesh.points, mesh.triangles)
+
+
 def test_a_count_of_charts_caps_them_and_one_gives_one_grid():
     mesh = torus()
     assert slice_surface(mesh, charts=1).charts is None

@@ -24,6 +24,9 @@ COLUMN_STEP_RATIO = 10      # and uses about 10x as many vertical planes: d2 = d
 DATA_SPACING_FRACTION = 0.5   # default spacing: half the median edge of the surface's triangles,
 MIN_NODES_ACROSS = 200        # and at least 200 nodes along the longest side
 SPACING_DIGITS = 3            # significant digits of a spacing from the data (within_longest_side)
+CHART_EDGE_FRACTION = 0.75    # a multi-chart grid's (chart_spacing): 3/4 of a mesh's median edge,
+CHART_AREA_FRACTION = 0.6     # or 0.6 of the side of its area per vertex when that is longer,
+CHART_MIN_NODES_ACROSS = 100  # with at least 100 nodes along the longest side
 SNAP_TOLERANCE = 1e-3       # a spacing this close (relative) to a lattice's own step snaps to it
 LATTICE_TOLERANCE = 1e-6    # coordinates this close (in steps) to a multiple of the step lie on a lattice
 PRINTED_TOLERANCE = 0.05    # a lon/lat export's: 6 decimals of a degree are 0.011 of a 1/3 arc-second step
@@ -357,13 +360,48 @@ def chart_count(charts, one_grid):
 
 
 def chart_spacing(d1, d2, mesh):
-    """The one spacing of a multi-chart grid: d1 or d2 as given (equal when both are), else the
-    data's (``data_spacing``; a cloud's DATA_SPACING_FRACTION of its median nearest-point distance)."""
+    """The one spacing of a multi-chart grid: d1 or d2 as given (equal when both are), else a
+    cloud's ``source_spacing`` and a mesh's ``mesh_chart_spacing``."""
     if d1 is not None and d2 is not None and d1 != d2:
         raise MzcError("charts take one spacing: give --d1 alone (or equal --d1 and --d2)", field="d2")
     given = d1 if d1 is not None else d2
     if given is not None:
         return given
+    if len(mesh.triangles):
+        return mesh_chart_spacing(np.asarray(mesh.points, dtype=float), mesh.triangles)
+    return source_spacing(mesh)
+
+
+def mesh_chart_spacing(points, triangles):
+    """The default spacing of a mesh's multi-chart grid: ``data_spacing`` where its cap holds
+    (1/MIN_NODES_ACROSS of the longest side: a CAD part's few large triangles say nothing of the
+    detail it needs), else the longer of CHART_EDGE_FRACTION of the median edge and
+    CHART_AREA_FRACTION of sqrt(area / vertices), at most 1/CHART_MIN_NODES_ACROSS of the
+    longest side (a guard: no measured object comes near it).
+
+    Why: at ``data_spacing`` (half the median edge) a closed object's charts hold 3-24 nodes per
+    vertex, and bytes grow with nodes. benchmarks/chart-spacing-results.md measured the
+    whole-surface error and dwt2d bytes at multiples k of that spacing: the hand keeps every
+    floor target of issue 28 (RMS <= 0.02% D, Hausdorff <= 0.5% D, 99.5% of the area within
+    0.1% D) to k = 1.5 (3/4 of the median edge: 13% / 15% fewer bytes at 0.05 / 0.1% D), the
+    ogre (dense triangles in a few places, sqrt(area / vertices) 3.5x half its median edge) to
+    k = 2 (here k = 2.08: 634,003 -> 146,071 nodes, 34% / 31% fewer bytes); the capped objects
+    (cycloidal, featuretype, dragon) and the armadillo (a cloud) lose a target they meet, or
+    meet none, already at k = 1.5, so keep their spacing."""
+    from mzc.measure.metrics import triangle_areas
+
+    longest, edge = float(np.ptp(points, axis=0).max()), median_edge(points, triangles)
+    if DATA_SPACING_FRACTION * edge >= longest / MIN_NODES_ACROSS:
+        return shortened(longest / MIN_NODES_ACROSS)
+    per_vertex = float(np.sqrt(np.sum(triangle_areas(points, triangles)) / len(np.unique(triangles))))
+    return shortened(min(max(CHART_EDGE_FRACTION * edge, CHART_AREA_FRACTION * per_vertex),
+                         longest / CHART_MIN_NODES_ACROSS))
+
+
+def source_spacing(mesh):
+    """The spacing the source's own sampling suggests: ``data_spacing`` of a mesh, a cloud's
+    DATA_SPACING_FRACTION of its median nearest-point distance (at most 1/MIN_NODES_ACROSS of
+    its longest side)."""
     points = np.asarray(mesh.points, dtype=float)
     if len(mesh.triangles):
         return data_spacing(points, mesh.triangles)
@@ -500,11 +538,15 @@ def data_spacing(points, triangles):
     """DATA_SPACING_FRACTION of the median edge length of ``triangles`` over ``points``, at
     most 1/MIN_NODES_ACROSS of the surface's longest side (a CAD part's few large
     triangles say nothing of the detail it needs)."""
+    return within_longest_side(DATA_SPACING_FRACTION * median_edge(points, triangles), points)
+
+
+def median_edge(points, triangles):
+    """The median length of the edges of ``triangles`` over ``points`` (each triangle's three)."""
     corners = points[np.asarray(triangles, dtype=np.int64)]
     if not len(corners):
         raise MzcError("the surface has no triangles to measure its sampling: give --d1 and --d2")
-    edges = lengths((corners - np.roll(corners, 1, axis=1)).reshape(-1, corners.shape[-1]))
-    return within_longest_side(DATA_SPACING_FRACTION * float(np.median(edges)), points)
+    return float(np.median(lengths((corners - np.roll(corners, 1, axis=1)).reshape(-1, corners.shape[-1]))))
 
 
 def cloud_data_spacing(points, uv):
@@ -519,11 +561,16 @@ def cloud_data_spacing(points, uv):
 
 
 def within_longest_side(spacing, points):
-    """``spacing``, at most 1/MIN_NODES_ACROSS of the longest side of ``points``' box, to
-    SPACING_DIGITS significant digits: a file's header writes the spacing in its shortest decimal
-    form, and f18's 0.747 takes 4 bytes of a dwt2d 8.0 header where 0.7466035520003038 took 11 (twice,
-    d1 and d2: 2% of its 0.2 mm file), for a grid 0.05% coarser or finer."""
-    return float(f"{min(spacing, float(np.ptp(points, axis=0).max()) / MIN_NODES_ACROSS):.{SPACING_DIGITS}g}")
+    """``spacing``, at most 1/MIN_NODES_ACROSS of the longest side of ``points``' box, ``shortened``."""
+    return shortened(min(spacing, float(np.ptp(points, axis=0).max()) / MIN_NODES_ACROSS))
+
+
+def shortened(spacing):
+    """A spacing from the data to SPACING_DIGITS significant digits: a file's header writes it in its
+    shortest decimal form, and f18's 0.747 takes 4 bytes of a dwt2d 8.0 header where
+    0.7466035520003038 took 11 (twice, d1 and d2: 2% of its 0.2 mm file), for a grid 0.05% coarser
+    or finer."""
+    return float(f"{spacing:.{SPACING_DIGITS}g}")
 
 
 def lattice_steps(uv, tolerance=LATTICE_TOLERANCE):
