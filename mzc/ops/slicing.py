@@ -24,7 +24,7 @@ COLUMN_STEP_RATIO = 10      # and uses about 10x as many vertical planes: d2 = d
 DATA_SPACING_FRACTION = 0.5   # default spacing: half the median edge of the surface's triangles,
 MIN_NODES_ACROSS = 200        # and at least 200 nodes along the longest side
 SPACING_DIGITS = 3            # significant digits of a spacing from the data (within_longest_side)
-CHART_EDGE_FRACTION = 0.75    # a multi-chart grid's (chart_spacing): 3/4 of a mesh's median edge,
+CHART_EDGE_FRACTION = 0.5     # a multi-chart grid's (chart_spacing): half a mesh's median edge,
 CHART_AREA_FRACTION = 0.6     # or 0.6 of the side of its area per vertex when that is longer,
 CHART_MIN_NODES_ACROSS = 100  # with at least 100 nodes along the longest side
 SNAP_TOLERANCE = 1e-3       # a spacing this close (relative) to a lattice's own step snaps to it
@@ -383,7 +383,9 @@ def mesh_chart_spacing(points, triangles):
     vertex, and bytes grow with nodes. benchmarks/chart-spacing-results.md measured the
     whole-surface error and dwt2d bytes at multiples k of that spacing: the hand keeps every
     floor target of issue 28 (RMS <= 0.02% D, Hausdorff <= 0.5% D, 99.5% of the area within
-    0.1% D) to k = 1.5 (3/4 of the median edge: 13% / 15% fewer bytes at 0.05 / 0.1% D), the
+    0.1% D) to k = 1.5 with 30,000 samples, but benchmarks/objects.py's 100,000 find its Hausdorff
+    0.544% D there (0.154 at k = 1): so the edge's fraction stays 1/2 and the hand takes the area
+    term, k = 1.11; the
     ogre (dense triangles in a few places, sqrt(area / vertices) 3.5x half its median edge) to
     k = 2 (here k = 2.08: 634,003 -> 146,071 nodes, 34% / 31% fewer bytes); the capped objects
     (cycloidal, featuretype, dragon) and the armadillo (a cloud) lose a target they meet, or
