@@ -132,3 +132,12 @@ def test_the_worked_example_of_8_0_holds_its_count():
     (data, values, _name), = [case for case in spec_examples("dwt2d") if case[0].startswith(b"mzc-dwt2d 8.0\n")]
     grid = dwt2d.read(data)
     assert grid.source_vertices == 30204 and grid.shape == values.shape
+
+
+def test_the_worked_example_of_a_z_grid_1_2_holds_its_count():
+    from codec_contract import spec_examples
+
+    (data, values, _name), = [case for case in spec_examples("zgrid") if case[0].startswith(b"mzc-zgrid 1.2\n")]
+    grid = read_any(data, "spec")
+    assert grid.source_vertices == 12 and grid.shape == values.shape
+    assert read_any(data.replace(b"mzc-zgrid 1.2", b"mzc-zgrid 1.0", 1), "spec").source_vertices is None

@@ -24,7 +24,7 @@ def spec_examples(_path):
     """(example bytes, expected array) pairs of the spec page's worked z-grid examples, plain
     and raw (codec_contract.spec_examples reads both kinds of block)."""
     examples = contract_examples("zgrid")
-    assert len(examples) == 10
+    assert len(examples) == 11
     return [(data, expected) for data, expected, _id in examples]
 
 
