@@ -7,7 +7,6 @@ promise). Skipped when node is not installed."""
 
 import json
 import random
-import shutil
 import subprocess
 import zlib
 
@@ -23,12 +22,11 @@ from mzc.grid import ZGrid
 
 from codec_contract import FIXTURES, damaged, fixture_bytes, fixture_names, rechecksummed, spec_examples
 from conftest import face_path, run_mzc
+from web_node import NODE, WEB, needs_node
 
-WEB = FIXTURES.parents[1] / "web"
-NODE = shutil.which("node")
 TO_1E12 = ("dft", "dct")   # decoded to one part in 10^12, not bit for bit
 
-pytestmark = pytest.mark.skipif(NODE is None, reason="node is not installed")
+pytestmark = needs_node
 
 
 def web_reads():

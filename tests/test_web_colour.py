@@ -5,11 +5,9 @@ masks; damaged sections (cut, bytes added, bytes changed under a right CRC-32, a
 refused where mzc refuses them and decoded alike otherwise. Skipped when node is not installed."""
 
 import random
-import shutil
 import zlib
 
 import numpy as np
-import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 from test_colour_codec import spec_example
@@ -19,11 +17,11 @@ from mzc.codecs.dwt2d import colour
 from mzc.errors import MzcError
 
 from codec_contract import FIXTURES
+from web_node import needs_node
 
-NODE = shutil.which("node")
 COLOUR_FIXTURES = FIXTURES / "colour"
 
-pytestmark = pytest.mark.skipif(NODE is None, reason="node is not installed")
+pytestmark = needs_node
 
 SCRIPT = """
 import { readFileSync } from "node:fs";

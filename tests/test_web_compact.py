@@ -3,11 +3,7 @@ parametric tables of every class count, z and t; the header section's fields, de
 binary64 included, and header sections of random bytes, refused where mzc refuses them and read
 as the same lines otherwise. Skipped when node is not installed."""
 
-import json
-import shutil
-import subprocess
 
-import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
@@ -16,12 +12,9 @@ from mzc.codecs.dwt2d.entropy import parametric_table
 from mzc.errors import MzcError
 from mzc.formats.header import format_number
 
-from codec_contract import FIXTURES
+from web_node import needs_node, node_json
 
-WEB = FIXTURES.parents[1] / "web"
-NODE = shutil.which("node")
-
-pytestmark = pytest.mark.skipif(NODE is None, reason="node is not installed")
+pytestmark = needs_node
 
 TABLES_SCRIPT = """
 import { readFileSync } from "node:fs";
@@ -44,14 +37,6 @@ process.stdout.write(JSON.stringify(bodies.map((hex) => {
   }
 })));
 """
-
-
-def node_json(script, cases):
-    """The JSON that ``script`` (an ES module run in web/) writes for ``cases`` given on stdin."""
-    run = subprocess.run([NODE, "--input-type=module", "-e", script], input=json.dumps(cases).encode(),
-                         capture_output=True, cwd=WEB, timeout=120)
-    assert run.returncode == 0, run.stderr.decode()
-    return json.loads(run.stdout)
 
 
 def test_parametric_tables_are_mzcs():

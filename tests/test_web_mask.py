@@ -2,12 +2,7 @@
 the same mask from the same payload on the faces', an object's and any random mask, and a refusal
 of the same damaged payloads. Skipped when node is not installed."""
 
-import json
-import shutil
-import subprocess
-
 import numpy as np
-import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
@@ -16,13 +11,10 @@ from mzc.codecs.dwt2d import entropy as en
 from mzc.codecs.dwt2d import flips
 from mzc.errors import MzcError
 
-from codec_contract import FIXTURES
 from conftest import REPO, face_path
+from web_node import needs_node, node_json
 
-WEB = FIXTURES.parents[1] / "web"
-NODE = shutil.which("node")
-
-pytestmark = pytest.mark.skipif(NODE is None, reason="node is not installed")
+pytestmark = needs_node
 
 SCRIPT = """
 import { readFileSync } from "node:fs";
@@ -57,10 +49,7 @@ def mzc_mask(payload, rows, cols):
 
 def web_masks(cases):
     """web's masks of (payload, rows, cols) cases (None where it refuses one)."""
-    run = subprocess.run([NODE, "--input-type=module", "-e", SCRIPT], capture_output=True, cwd=WEB, timeout=300,
-                         input=json.dumps([[p.hex(), r, c] for p, r, c in cases]).encode())
-    assert run.returncode == 0, run.stderr.decode()
-    return json.loads(run.stdout)
+    return node_json(SCRIPT, [[p.hex(), r, c] for p, r, c in cases])
 
 
 def test_real_masks_decode_as_mzc_decodes_them():

@@ -25,12 +25,11 @@ from mzc.ops.zipper import zip_charts
 from charts import chart_meshes
 from codec_contract import FIXTURES, fixture_bytes, fixture_names
 from conftest import REPO, run_mzc
+from web_node import NODE, WEB, needs_node
 
-WEB = FIXTURES.parents[1] / "web"
-NODE = shutil.which("node")
 TO_1E12 = ("dft", "dct")   # web/ decodes them within an ulp, so their points may differ in the last bits
 
-pytestmark = pytest.mark.skipif(NODE is None, reason="node is not installed")
+pytestmark = needs_node
 
 
 def node_triangulate(path, *options):
