@@ -263,17 +263,21 @@ export class Payload {
     // x' = f 2^10 (x >> 24) + m - B = (f hi) 2^18 + f (lo >> 24) 2^10 + m - B, each part exact
     const a = f * this.hi;
     const top = Math.floor(a / 16384);
-    const low = (a - top * 16384) * 262144 + f * (this.lo >>> 24) * 1024 + m - table.cum[s] * 1024;
-    const carry = Math.floor(low / 4294967296);
-    let hi = top + carry;
-    let lo = low - carry * 4294967296;
-    if (hi === 0 && this.words.length) {
-      hi = lo;
-      lo = this.words.pop();
-    }
-    this.hi = hi;
-    this.lo = lo;
+    this.settle(top, (a - top * 16384) * 262144 + f * (this.lo >>> 24) * 1024 + m - table.cum[s] * 1024);
     return s;
+  }
+
+  /** The state after a decode step, x' = top 2^32 + low (low < 2^53), as its two 32-bit halves,
+   * then x' = (x' << 32) | the next word when x' < 2^32 and words remain (the symbols' and the 8.0
+   * mask's decisions alike). */
+  settle(top, low) {
+    const carry = Math.floor(low / 4294967296);
+    this.hi = top + carry;
+    this.lo = low - carry * 4294967296;
+    if (this.hi === 0 && this.words.length) {
+      this.hi = this.lo;
+      this.lo = this.words.pop();
+    }
   }
 
   /** n raw bits, most significant first. */

@@ -9,11 +9,11 @@ const PREFIX = 16;             // unary class models P[0..15] and top-bit models
 const BINS = 2 + 2 * PREFIX;   // per context set: Z, S, P, X
 const MAX_CLASS = 40;
 const SAME_SET = 1, NEAR_SET = 19, GAP_SET = 21, SETS = 23;
-const TWO24 = 16777216, TWO32 = 4294967296;
+const TWO24 = 16777216;
 
 /** One decision of P(1) = f1 / 2^24: m = x mod 2^24, 1 when m >= F0, x = F (x >> 24) + m - B,
- * then x = (x << 32) | the next word when x < 2^32 and words remain; exact in doubles (F and
- * x >> 24 split so that every product stays under 2^53). */
+ * then refilled (Payload.settle); exact in doubles (F and x >> 24 split so that every product
+ * stays under 2^53). */
 function decision(payload, f1) {
   const f0 = TWO24 - f1;
   const m = payload.lo & 0xffffff;
@@ -23,16 +23,7 @@ function decision(payload, f1) {
   const t1 = f * top;                                   // < 2^44
   const t2 = f * bottom + m - (bit ? f0 : 0);           // < 2^45
   const t1hi = Math.floor(t1 / 4096);
-  const low = (t1 - t1hi * 4096) * 1048576 + t2;        // x' = t1hi 2^32 + low
-  const carry = Math.floor(low / TWO32);
-  let hi = t1hi + carry;
-  let lo = low - carry * TWO32;
-  if (hi === 0 && payload.words.length) {
-    hi = lo;
-    lo = payload.words.pop();
-  }
-  payload.hi = hi;
-  payload.lo = lo;
+  payload.settle(t1hi, (t1 - t1hi * 4096) * 1048576 + t2);   // x' = t1hi 2^32 + low
   return bit;
 }
 

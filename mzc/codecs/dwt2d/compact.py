@@ -32,7 +32,8 @@ FIELDS = {
     16: ("steps", "d"), 17: ("slope_limit", "d"), 18: ("correction", "d"), 19: ("rounding", "e"),
     20: ("max_error", "d"), 21: ("colour_psnr", "d"), 22: ("colour_max_error", "d"), 23: ("source_vertices", "u"),
 }
-SINCE = {23: 8}                 # field id -> the major that added it (the others are 7.0's)
+COUNTED_MAJOR = 8               # the major whose header has source_vertices (field 23)
+SINCE = {23: COUNTED_MAJOR}     # field id -> the major that added it (the others are 7.0's)
 IDS = {keyword: (number, kind) for number, (keyword, kind) in FIELDS.items()}
 SMALL_EXPONENTS, EXPONENT_BIAS = (-8, 6), 8   # a decimal exponent in this range shares the mantissa's varint
 WORDS = ("planar", "cylindrical", "spherical", "bior4.4", "bior2.2", "integer")   # the words of ``e`` fields
@@ -166,7 +167,7 @@ class Reader:
         body = self.section(HEADER, magic)
         fields = Reader(magic + body, self.source)
         header = Header(self.source, major, projected=True, georeferenced=True, charted=True,
-                        counted=major >= SINCE[IDS["source_vertices"][0]])
+                        counted=major >= COUNTED_MAJOR)
         end = len(fields.data)
         while fields.position < end:
             number = fields.varint(end)
