@@ -22,7 +22,7 @@ colours as an 8-bit attribute at a ladder of position bits, in the same run.
 Shape error: the whole-surface RMS distance of benchmarks/objects.py (``errors``: area-weighted
 samples each way, point-to-surface; a cloud's points as discs), % of D. Colour error: each
 rebuilt vertex's colour against the source colour at the nearest source point (on the
-surface of the fuze or fran, its vertex colours mixed barycentrically; a point of the milk cloud), RMS
+surface of the fuze or fran, its texture at the point's texture coordinates; a point of the milk cloud), RMS
 over the three channels in 8-bit levels, and PSNR. Draco's bytes at mzc's shape error are
 interpolated log-log on its Pareto front (report.bytes_at).
 Writes coloured-scans-results.md and coloured-scans-results.json into --out.
@@ -62,7 +62,7 @@ PACKAGES = ("numpy", "scipy", "constriction", "DracoPy", "Pillow", "trimesh")
 def colour_errors(source, points, rebuilt_colours):
     """(RMS in 8-bit levels, PSNR dB) of ``rebuilt_colours`` at ``points`` against the colour of the
     source (an mzc Mesh) at its point nearest each (mzc.ops.colouring.surface_colours: on a mesh's
-    surface its vertex colours mixed barycentrically, in a cloud the nearest point's)."""
+    surface its texture (or vertex colours mixed barycentrically), in a cloud the nearest point's)."""
     from mzc.ops.colouring import surface_colours
 
     error = rebuilt_colours.astype(np.float64) - surface_colours(points, source)
@@ -79,14 +79,17 @@ def mzc_point(grid, rmse, psnr, mesh, source, samples):
     start = time.perf_counter()
     data = mzc.encode(grid, "dwt2d", rmse=rmse * source.diagonal / 100, colour_psnr=psnr)
     encoded = time.perf_counter()
-    rebuilt = mzc.triangulate(mzc.decode(data))
+    decoded_grid = mzc.decode(data)
+    rebuilt = mzc.triangulate(decoded_grid)
     decoded = time.perf_counter()
     colour_bytes = len(compact.read(data, "mzc")[2])
     rms, peak = colour_errors(mesh, rebuilt.points, rebuilt.colors)
+    every_node = mzc.triangulate(decoded_grid, vertices="all")
     return {"contender": "mzc", "setting": rmse, "colour_psnr": psnr, "bytes": len(data),
             "colour_bytes": colour_bytes, "shape_bytes": len(data) - colour_bytes,
             "encode_s": encoded - start, "decode_s": decoded - encoded,
-            **errors(source, Surface.of(rebuilt), samples), "colour_rms": rms, "colour_psnr_measured": peak}
+            **errors(source, Surface.of(rebuilt), samples), "colour_rms": rms, "colour_psnr_measured": peak,
+            "node_colour_rms": colour_errors(mesh, every_node.points, every_node.colors)[0]}
 
 
 def draco_point(draco, mesh, bits, source, samples):
@@ -120,12 +123,14 @@ def run_scan(name, path, samples, quick, missing):
         source = Surface.of(mesh)
         grid = mzc.slice(mesh)
         floor = mzc.triangulate(grid)
+        every_node = mzc.triangulate(grid, vertices="all")
     result = {"scan": name, "path": str(path.relative_to(HERE.parent)), "points_in": len(mesh.points),
               "triangles_in": len(mesh.triangles), "diagonal": source.diagonal, "grid": list(grid.shape),
               "valid_nodes": int(grid.valid.sum()), "warnings": sorted({str(w.message) for w in caught}),
               "floor": {**errors(source, Surface.of(floor), samples),
                         **dict(zip(("colour_rms", "colour_psnr_measured"),
-                                   colour_errors(mesh, floor.points, floor.colors)))},
+                                   colour_errors(mesh, floor.points, floor.colors))),
+                        "node_colour_rms": colour_errors(mesh, every_node.points, every_node.colors)[0]},
               "points": []}
     ladder = RMSE_LADDER[1::2] if quick else RMSE_LADDER
     for psnr in COLOUR_PSNRS:
@@ -161,31 +166,36 @@ def markdown(document):
              "Shape error: whole-surface RMS distance (benchmarks/objects.py's `errors`, "
              f"{document['samples']} area-weighted samples each way), % of D (the scan's bounding-box diagonal). "
              "Colour error: each rebuilt vertex's colour against the source colour at the nearest source point "
-             "(on a mesh's surface (fuze, fran), its vertex colours mixed barycentrically; of the milk cloud, "
-             "the nearest point's), "
-             "RMS in 8-bit levels over the three channels, and PSNR. Draco codes the scan (the cloud as points) "
+             "(on a textured mesh's surface (fuze, fran), its texture at the point's texture coordinates; of "
+             "the milk cloud, the nearest point's), "
+             "RMS in 8-bit levels over the three channels, and PSNR; node colour RMS: the same of every node of "
+             "the decoded grid (what `triangulate --texture` or `--vertices all` shows: the texture's detail "
+             "finer than the scan's triangles, which slice samples at each node). "
+             "Draco codes the scan (the cloud as points) "
              "with its colours as an 8-bit attribute, compression level 10; its bytes at mzc's shape error are "
              "interpolated log-log on its Pareto front. mzc's mesh is `mzc.triangulate`'s default, near the "
              "scan's vertex count (issue 31): its vertices carry the colours measured, and the uncoded grid's "
              "row includes that rebuild. mzc's bytes are the whole `.mzw2` file (header, shape "
              f"payload, colour section). Goal: mzc / Draco <= {RATIO_GOAL} at equal shape error with colour RMS "
              f"<= {COLOUR_RMS_GOAL:g} levels.", "",
-             "| scan | input | grid (valid nodes) | D | uncoded grid: shape RMS % D | colour RMS | PSNR |",
-             "|---|---|---|---|---|---|---|"]
+             "| scan | input | grid (valid nodes) | D | uncoded grid: shape RMS % D | colour RMS | PSNR | "
+             "node colour RMS |", "|---|---|---|---|---|---|---|---|"]
     for s in document["scans"]:
         what = f"{s['points_in']} points" + (f", {s['triangles_in']} triangles" if s["triangles_in"] else "")
         lines.append(f"| {s['scan']} | {what} | {s['grid'][0]} x {s['grid'][1]} ({s['valid_nodes']}) | "
                      f"{fmt(s['diagonal'])} | {fmt(s['floor']['whole']['rms'])} | {fmt(s['floor']['colour_rms'])} | "
-                     f"{fmt(s['floor']['colour_psnr_measured'])} |")
+                     f"{fmt(s['floor']['colour_psnr_measured'])} | {fmt(s['floor']['node_colour_rms'])} |")
     for s in document["scans"]:
         lines += ["", f"## {s['scan']}", "",
                   "| rmse target % D | colour PSNR target | shape RMS % D | mzc bytes | of them colour | colour RMS | "
-                  "colour PSNR | Draco bytes at that RMS | mzc / Draco | goal met |", "|---" * 10 + "|"]
+                  "colour PSNR | node colour RMS | Draco bytes at that RMS | mzc / Draco | goal met |",
+                  "|---" * 11 + "|"]
         measured = {(p["setting"], p["colour_psnr"]): p for p in s["points"] if p["contender"] == "mzc"}
         for c in s["comparisons"]:
             p = measured[(c["rmse_target"], c["colour_psnr"])]
             lines.append(f"| {c['rmse_target']} | {c['colour_psnr']:g} | {fmt(c['whole_rms'])} | {c['mzc_bytes']} | "
                          f"{c['colour_bytes']} | {fmt(c['colour_rms'])} | {fmt(p['colour_psnr_measured'])} | "
+                         f"{fmt(p['node_colour_rms'])} | "
                          f"{'n/a (outside Draco range)' if c['draco_bytes'] is None else round(c['draco_bytes'])} | "
                          f"{'n/a' if c['ratio'] is None else fmt(c['ratio'])} | {'yes' if c['goal_met'] else 'no'} |")
         met = [c for c in s["comparisons"] if c["goal_met"]]

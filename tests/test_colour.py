@@ -536,3 +536,52 @@ def test_a_ply_texture_file_is_sampled_at_its_texture_coordinates(tmp_path, layo
     (tmp_path / "face.ply").write_text(header + "\n".join(vertices + faces) + "\n")
     read = read_mesh(tmp_path / "face.ply")
     assert np.abs(read.colors.astype(int) - obj_mesh.colors).max() <= 1 and read.dropped == ()
+
+
+def stripes(columns):
+    """The red at u (0..1) of a texture ``columns`` pixels wide of vertical stripes 8 pixels wide,
+    200 and 30 in turn (u = 1 in the last pixel): detail far finer than two triangles."""
+    return lambda u: np.where((np.minimum(np.floor(u * columns), columns - 1) // 8) % 2 == 0, 200, 30)
+
+
+@pytest.mark.parametrize("layout", ["obj", "ply texcoord"])
+def test_slice_samples_a_texture_at_every_node_not_only_at_the_vertices(tmp_path, layout):
+    """A square of two triangles textured with 9 stripes: its four vertices all sit on red, so
+    their colours say nothing of the stripes, but each node takes the image at its own texture
+    coordinates (its triangle's corners' uv mixed by its barycentric weights): the nodes' red
+    follows the stripes (within 2 levels away from their edges), in an OBJ and in a PLY whose
+    faces list their corners' uv."""
+    from PIL import Image
+
+    from mzc.meshes import read_mesh
+    from mzc.ops.slicing import slice_surface
+
+    columns = 72
+    red = stripes(columns)
+    pixels = np.zeros((4, columns, 3), dtype=np.uint8)
+    pixels[..., 0] = red((np.arange(columns) + 0.5) / columns)
+    Image.fromarray(pixels).save(tmp_path / "stripes.png")
+    corners = [(0, 0), (1, 0), (1, 1), (0, 1)]
+    if layout == "obj":
+        (tmp_path / "s.mtl").write_text("newmtl s\nmap_Kd stripes.png\n")
+        lines = ["mtllib s.mtl", *(f"v {x} {y} 0" for x, y in corners), *(f"vt {x} {y}" for x, y in corners),
+                 "f 1/1 2/2 3/3", "f 1/1 3/3 4/4"]
+        (tmp_path / "square.obj").write_text("\n".join(lines) + "\n")
+        mesh = read_mesh(tmp_path / "square.obj")
+    else:
+        faces = [(0, 1, 2), (0, 2, 3)]
+        lines = ["ply", "format ascii 1.0", "comment TextureFile stripes.png", "element vertex 4",
+                 "property float x", "property float y", "property float z", "element face 2",
+                 "property list uchar int vertex_indices", "property list uchar float texcoord", "end_header",
+                 *(f"{x} {y} 0" for x, y in corners),
+                 *(f"3 {' '.join(map(str, f))} 6 {' '.join(f'{corners[i][0]} {corners[i][1]}' for i in f)}"
+                   for f in faces)]
+        (tmp_path / "square.ply").write_text("\n".join(lines) + "\n")
+        mesh = read_mesh(tmp_path / "square.ply")
+    assert (mesh.colors[:, 0] >= 150).all()   # every vertex on red: the stripes lie between them
+    grid = slice_surface(mesh, d1=0.01)
+    points = grid.to_input_frame(grid.node_points()[grid.valid])
+    u = points[:, 0]
+    away = np.abs(u * columns / 8 - np.round(u * columns / 8)) > 0.1   # off a stripe's edge
+    measured = grid.colors[grid.valid][:, 0].astype(int)
+    assert away.sum() > 1000 and np.abs(measured - red(u))[away].max() <= 2

@@ -31,6 +31,7 @@ from mzc.streams import is_stdio, is_stream, write_output
 
 if TYPE_CHECKING:
     from mzc.grid import ZGrid
+    from mzc.meshes.texture import Texture
 
 
 @dataclass
@@ -39,7 +40,9 @@ class Mesh:
     cloud, whose file may give ``normals`` (n, 3) (they tell a slice which side it was seen
     from) and ``classification`` (n,), the ASPRS class of each point of a LAS/LAZ cloud
     (``with_classes``). ``colors`` (n, 3) uint8 is each vertex's red, green and blue, None when
-    the file has none (``mzc.colours``; a texture is sampled at the vertices). ``crs`` is the
+    the file has none (``mzc.colours``; a texture is sampled at the vertices), and ``texture``
+    a textured mesh's image and its triangles' corners' texture coordinates
+    (``mzc.meshes.texture.Texture``), which slicing samples at every node. ``crs`` is the
     coordinate reference system the file names (a WKT
     string, or ``EPSG:code``), None when it names none. ``dropped`` names what the file held
     that mzc does not keep (a mesh's normals, alpha, other properties),
@@ -55,6 +58,7 @@ class Mesh:
     crs: str | None = None
     dropped: tuple[str, ...] = ()
     colors: np.ndarray | None = None
+    texture: Texture | None = None
 
     def __post_init__(self):
         self.points = real_array(self.points, "points", in_threes("points")).reshape(-1, 3)
@@ -66,6 +70,9 @@ class Mesh:
             self.classification = np.asarray(self.classification).reshape(len(self.points))
         if self.colors is not None:
             self.colors = colour_array(self.colors, (len(self.points), 3))
+        if self.texture is not None and self.texture.corner_uv.shape != (len(self.triangles), 3, 2):
+            raise MzcError(f"a texture needs u v for the 3 corners of each of the {len(self.triangles)} triangles",
+                           field="texture")
 
     def with_classes(self, classes) -> Mesh:
         """The cloud of the points whose ``classification`` is one of ``classes`` (ASPRS codes:

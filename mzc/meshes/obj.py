@@ -52,32 +52,31 @@ def read(data: bytes, source: str) -> Mesh:
     points = obj_vertices(tokens, vertex_lines, source)
     corners, flat, counts = face_corners(tokens, face_lines, vertex_lines, source)
     triangles = fan_triangulate_ragged(flat, counts) if len(face_lines) else np.empty((0, 3), dtype=np.int64)
-    colors = obj_colours(tokens, vertex_lines, source)
-    textured = False
+    colors, texture = obj_colours(tokens, vertex_lines, source), None
     if colors is None and len(face_lines):
-        colors = texture_colours(tokens, corners, flat, len(points), source)
-        textured = colors is not None
-    return Mesh(points, triangles, colors=colors,
-                dropped=obj_dropped(tokens, vertex_lines, colors is not None and not textured, textured))
+        colors, texture = texture_colours(tokens, corners, flat, counts, len(points), source)
+    return Mesh(points, triangles, colors=colors, texture=texture,
+                dropped=obj_dropped(tokens, vertex_lines, colors is not None and texture is None, texture is not None))
 
 
-def texture_colours(tokens, corners, flat, count, source):
-    """(count, 3) uint8 colours of the vertices sampled from the texture of the file's material
-    (``mtllib``, its ``map_Kd``: ``mzc.meshes.texture``) at the ``vt`` of a face corner using
-    each (its ``v/vt`` index), or None when the file names no texture, its corners no ``vt``, or
-    the image cannot be read (one warning says why)."""
-    from mzc.meshes.texture import material_image, sampled_texels
+def texture_colours(tokens, corners, flat, counts, count, source):
+    """((count, 3) uint8 colours of the vertices, the ``Texture``) of the texture of the file's
+    material (``mtllib``, its ``map_Kd``: ``mzc.meshes.texture``), through the ``vt`` of each face
+    corner (its ``v/vt`` index; a vertex's colour at the uv of a corner using it), or (None, None)
+    when the file names no texture, its corners no ``vt``, or the image cannot be read (one
+    warning says why)."""
+    from mzc.meshes.texture import material_image, textured
 
     libraries = tokens.statement_words(b"mtllib")
     texture_lines = tokens.lines_of_word(b"vt")
     if not libraries or not len(texture_lines):
-        return None
+        return None, None
     texture_index = tokens.numbers(corners, np.int64, between_slashes=True)
     if texture_index is None or len(texture_index) != len(corners):
-        return None   # corners without a vt index (f 1 2 3, f 1//1) or a bad one: no texture mapping
+        return None, None   # corners without a vt index (f 1 2 3, f 1//1) or a bad one: no texture mapping
     image = material_image(source, libraries)
     if image is None:
-        return None
+        return None, None
     arguments = tokens.arguments(texture_lines)
     position = arguments - np.searchsorted(tokens.line, tokens.line[arguments])
     uv = tokens.numbers(arguments[position <= 2], np.float64)
@@ -91,7 +90,8 @@ def texture_colours(tokens, corners, flat, count, source):
                        source=source)
     per_vertex = np.full((count, 2), np.nan)
     per_vertex[flat] = uv[texture_index]
-    return sampled_texels(image, per_vertex)
+    corner_uv = uv[texture_index][fan_triangulate_ragged(np.arange(len(corners)), counts)]
+    return textured(image, corner_uv, per_vertex)
 
 
 def vertex_arguments(tokens, vertex_lines):

@@ -341,13 +341,14 @@ def ply_mesh(elements, tables, source, texture=None):
     faces, strips = index_lists(tables, "face", source), index_lists(tables, "tristrips", source)
     triangles = ([ply_face_triangles(faces, source)] if faces is not None else []) + \
         ([strip_triangles(strips, source)] if strips is not None else [])
-    colors = ply_colours(elements, vertex)
+    colors, textured = ply_colours(elements, vertex), None
     colour_names = COLOURS if colors is not None else ()
     if colors is None and texture is not None and faces is not None:
-        colors = ply_texture(texture, tables, faces, len(points), source)
+        colors, textured = ply_texture(texture, tables, faces, len(points), source)
         colour_names = TEXTURE_COORDINATES if colors is not None else ()
     if sum(len(part) for part in triangles):   # an ``element face 0`` leaves a cloud
-        return Mesh(points, np.concatenate(triangles), dropped=ply_dropped(elements, colour_names), colors=colors)
+        return Mesh(points, np.concatenate(triangles), dropped=ply_dropped(elements, colour_names), colors=colors,
+                    texture=None if strips is not None else textured)   # strips' triangles: vertex colours
     normals = None
     if all(isinstance(vertex.get(axis), np.ndarray) for axis in NORMALS):
         normals = np.column_stack([real_array(vertex[axis], axis) for axis in NORMALS])
@@ -361,22 +362,28 @@ TEXTURE_COORDINATES = ("texture_u", "texture_v", "texcoord")   # per vertex, or 
 
 
 def ply_texture(texture, tables, faces, count, source):
-    """(count, 3) uint8 colours of the vertices sampled from the ``comment TextureFile`` image at
-    their texture coordinates: the vertex properties ``texture_u texture_v``, or the face list
-    ``texcoord`` (u v of each corner, in the order of the face's vertices), or None (with one
-    warning when the image cannot be read: ``mzc.meshes.texture``)."""
-    from mzc.meshes.texture import image_beside, sampled_texels
+    """((count, 3) uint8 colours of the vertices, the ``Texture`` of the faces) of the ``comment
+    TextureFile`` image at the texture coordinates: the vertex properties ``texture_u
+    texture_v``, or the face list ``texcoord`` (u v of each corner, in the order of the face's
+    vertices; a vertex's colour at one of its corners'), or (None, None) (with one warning when
+    the image cannot be read: ``mzc.meshes.texture``)."""
+    from mzc.meshes.texture import image_beside, textured
 
     vertex, face = tables.get("vertex", {}), tables.get("face", {})
+    corner_vertex = as_indices(faces.values, "face", source)
     if all(isinstance(vertex.get(name), np.ndarray) for name in TEXTURE_COORDINATES[:2]):
         uv = np.column_stack([real_array(vertex[name], name) for name in TEXTURE_COORDINATES[:2]])
+        corner_uv = uv[corner_vertex]
     elif isinstance(face.get("texcoord"), Lists) and np.array_equal(face["texcoord"].counts, 2 * faces.counts):
+        corner_uv = real_array(face["texcoord"].values, "texcoord").reshape(-1, 2)
         uv = np.full((count, 2), np.nan)
-        uv[as_indices(faces.values, "face", source)] = real_array(face["texcoord"].values, "texcoord").reshape(-1, 2)
+        uv[corner_vertex] = corner_uv
     else:
-        return None
+        return None, None
     image = image_beside(source, texture, "comment TextureFile")
-    return None if image is None else sampled_texels(image, uv)
+    if image is None:
+        return None, None
+    return textured(image, corner_uv[fan_triangulate_ragged(np.arange(len(corner_vertex)), faces.counts)], uv)
 
 
 def ply_colours(elements, vertex):

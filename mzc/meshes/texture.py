@@ -10,18 +10,44 @@ read without its colours. PNG and JPEG (and whatever else Pillow reads) are deco
 vertices carry texture coordinates into it, and the material file that names it
 (``triangulate --texture``).
 
-The image is sampled once per vertex (bilinearly, at the uv of a face corner that uses the
-vertex; u to the right, v up from the image's bottom row, repeating outside 0..1), so detail
-finer than the mesh's edges is not kept: the grid's nodes mix their triangle's corners.
+A textured mesh keeps its image and each triangle's corners' texture coordinates
+(``Texture``), so that ``slice`` samples the image at every node's own point (the
+coordinates of its triangle's corners mixed by its barycentric weights): detail finer than
+the mesh's edges reaches the grid. The image is also sampled once per vertex (bilinearly, at
+the uv of a face corner that uses the vertex; u to the right, v up from the image's bottom
+row, repeating outside 0..1): the mesh's vertex colours, which writers and other tools take.
 """
 
 import os
 import re
 import warnings
+from dataclasses import dataclass
 
 import numpy as np
 
 from mzc.errors import MzcError, MzcWarning
+
+
+@dataclass(frozen=True)
+class Texture:
+    """A mesh's texture: the (rows, cols, 3) uint8 ``image`` and ``corner_uv`` (m, 3, 2), the u v
+    of each of the mesh's m triangles' corners (NaN where a corner has none)."""
+
+    image: np.ndarray
+    corner_uv: np.ndarray
+
+    def uv_at(self, triangles, weights):
+        """(n, 2) texture coordinates of the points on ``triangles`` (indices of the mesh's) with
+        barycentric ``weights`` (n, 3): their corners' coordinates mixed by the weights (NaN where
+        a corner has none)."""
+        corners = self.corner_uv[triangles]
+        return corners[:, 0] * weights[:, :1] + corners[:, 1] * weights[:, 1:2] + corners[:, 2] * weights[:, 2:]
+
+
+def textured(image, corner_uv, vertex_uv):
+    """(the vertices' colours, the ``Texture``) of ``image`` with the triangles' ``corner_uv``
+    (m, 3, 2) and a uv of each vertex ``vertex_uv`` (n, 2; NaN for a vertex no face uses)."""
+    return sampled_texels(image, vertex_uv), Texture(image, np.asarray(corner_uv, dtype=np.float64))
 
 
 def texture_problem(message):

@@ -4,8 +4,9 @@ A node's value puts it on the surface (the hit of its line with a triangle, or t
 cloud that made it), so the surface's colour there is the node's: for a mesh, the colour of the
 triangle nearest the node's point (the one its line hit, at distance 0 but for rounding; on an
 edge or vertex the triangles that share it agree), interpolated from its corners' colours with
-the point's barycentric weights; for a cloud, the colour of the point nearest the node's point.
-Densified rows mix their rows' colours (``densified_colours``).
+the point's barycentric weights (of a textured mesh, its image at the texture coordinates so
+interpolated: detail finer than the triangles); for a cloud, the colour of the point nearest the
+node's point. Densified rows mix their rows' colours (``densified_colours``).
 The nearest triangle is found by mzc's exact search (``mzc.measure.metrics.nearest_triangles``,
 the one ``mzc diff`` uses), a point of a cloud as the triangle of one corner repeated thrice,
 so projections, charts, binned and Delaunay clouds all are sampled one way. Vectorised, with
@@ -43,15 +44,24 @@ def sampled_colours(grid, mesh):
 
 def surface_colours(points, mesh):
     """(n, 3) float colours of the coloured ``mesh`` at the point of its surface nearest each of
-    ``points``: its triangle's vertex colours mixed by the point's barycentric weights; of a cloud,
+    ``points``: its triangle's vertex colours mixed by the point's barycentric weights, or of a
+    textured mesh its image at the texture coordinates of its corners so mixed; of a cloud,
     the nearest point's colour (what slicing samples, and what benchmarks/coloured_scans.py measures
     a rebuilt colour against)."""
     from mzc.measure.metrics import nearest_triangles
 
     triangles = mesh.triangles if len(mesh.triangles) else point_triangles(len(mesh.points))
-    corners = triangles[nearest_triangles(points, mesh.points, triangles)[1]]
+    nearest = nearest_triangles(points, mesh.points, triangles)[1]
+    corners = triangles[nearest]
     weights = barycentric(points, *(mesh.points[corners[:, i]] for i in range(3)))
-    return sum(weights[:, i:i + 1] * mesh.colors[corners[:, i]].astype(np.float64) for i in range(3))
+    mixed = sum(weights[:, i:i + 1] * mesh.colors[corners[:, i]].astype(np.float64) for i in range(3))
+    if mesh.texture is not None:
+        from mzc.meshes.texture import sampled_texels
+
+        uv = mesh.texture.uv_at(nearest, weights)
+        mapped = ~np.isnan(uv).any(axis=1)
+        mixed[mapped] = sampled_texels(mesh.texture.image, uv[mapped])
+    return mixed
 
 
 def barycentric(points, a, b, c):
