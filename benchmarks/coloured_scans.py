@@ -12,7 +12,8 @@ and example.obj names no material, so none is measured):
   (benchmarks/fran_obj.py): a real face scan whose colour is a photographic texture.
 - ``milk``: PCL's Kinect RGB-D cloud of a milk carton (``rgba``), sliced by ``mzc.slice``.
 
-mzc through its API only: ``mzc.slice(scan)`` with its defaults, ``mzc.encode(grid, "dwt2d",
+mzc through its API only: ``mzc.slice(scan)`` with its defaults (and at COARSER times its
+spacing, ``d1``/``d2``: the sampling is a rate setting as Draco's bits are), ``mzc.encode(grid, "dwt2d",
 rmse=..., colour_psnr=...)`` at a ladder of RMS targets in % of D (the scan's bounding-box
 diagonal), ``mzc.decode`` and ``mzc.triangulate`` (its default: a mesh near the scan's vertex
 count, issue 31, whose vertices carry the colours measured): the whole file, shape and colour. Draco
@@ -55,6 +56,7 @@ SCANS = {"fuze": PUBLIC / "fuze" / "fuze.obj", "fran": PUBLIC / "fran" / "fran.o
 RMSE_LADDER = (0.01, 0.02, 0.035, 0.05, 0.1, 0.2)   # % of D
 DRACO_BITS = tuple(range(4, 15))   # 4-6 reach the milk cloud's grid, 0.3% D from its noisy points
 COLOUR_PSNRS = (30.0, 36.0)   # dB: the colour section's targets tried at every shape target
+COARSER = (2, 4)   # mzc also at these multiples of the default spacing (slice --d1), colour at 30 dB
 RATIO_GOAL, COLOUR_RMS_GOAL = 0.25, 12.0   # issue 32: mzc's whole file / Draco's; levels
 PACKAGES = ("numpy", "scipy", "constriction", "DracoPy", "Pillow", "trimesh")
 
@@ -70,7 +72,7 @@ def colour_errors(source, points, rebuilt_colours):
     return float(np.sqrt(mse)), (float("inf") if mse == 0 else float(10 * np.log10(255.0 ** 2 / mse)))
 
 
-def mzc_point(grid, rmse, psnr, mesh, source, samples):
+def mzc_point(grid, rmse, psnr, mesh, source, samples, coarser=1):
     """One mzc file of ``grid`` (sliced from the scan ``mesh``, ``source`` its Surface): bytes (and the
     colour section's), shape and colour errors, times."""
     import mzc
@@ -85,7 +87,7 @@ def mzc_point(grid, rmse, psnr, mesh, source, samples):
     colour_bytes = len(compact.read(data, "mzc")[2])
     rms, peak = colour_errors(mesh, rebuilt.points, rebuilt.colors)
     every_node = mzc.triangulate(decoded_grid, vertices="all")
-    return {"contender": "mzc", "setting": rmse, "colour_psnr": psnr, "bytes": len(data),
+    return {"contender": "mzc", "setting": rmse, "colour_psnr": psnr, "coarser": coarser, "bytes": len(data),
             "colour_bytes": colour_bytes, "shape_bytes": len(data) - colour_bytes,
             "encode_s": encoded - start, "decode_s": decoded - encoded,
             **errors(source, Surface.of(rebuilt), samples), "colour_rms": rms, "colour_psnr_measured": peak,
@@ -135,6 +137,11 @@ def run_scan(name, path, samples, quick, missing):
     ladder = RMSE_LADDER[1::2] if quick else RMSE_LADDER
     for psnr in COLOUR_PSNRS:
         result["points"] += [mzc_point(grid, rmse, psnr, mesh, source, samples) for rmse in ladder]
+    for k in COARSER:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")   # the same warnings as the default slice's, kept above
+            coarse = mzc.slice(mesh, d1=k * grid.d1, d2=k * grid.d2)
+        result["points"] += [mzc_point(coarse, rmse, COLOUR_PSNRS[0], mesh, source, samples, k) for rmse in ladder]
     draco = load("DracoPy", missing, "Draco (DracoPy)")
     if draco:
         bits = DRACO_BITS[::2] if quick else DRACO_BITS
@@ -149,7 +156,8 @@ def comparisons(points):
     rows = []
     for p in (p for p in points if p["contender"] == "mzc"):
         draco = bytes_at(front, p["whole"]["rms"])
-        rows.append({"rmse_target": p["setting"], "colour_psnr": p["colour_psnr"], "whole_rms": p["whole"]["rms"],
+        rows.append({"rmse_target": p["setting"], "colour_psnr": p["colour_psnr"], "coarser": p.get("coarser", 1),
+                     "whole_rms": p["whole"]["rms"],
                      "mzc_bytes": p["bytes"], "colour_bytes": p["colour_bytes"], "draco_bytes": draco,
                      "ratio": None if draco is None else p["bytes"] / draco, "colour_rms": p["colour_rms"],
                      "goal_met": draco is not None and p["bytes"] / draco <= RATIO_GOAL
@@ -187,21 +195,25 @@ def markdown(document):
                      f"{fmt(s['floor']['colour_psnr_measured'])} | {fmt(s['floor']['node_colour_rms'])} |")
     for s in document["scans"]:
         lines += ["", f"## {s['scan']}", "",
-                  "| rmse target % D | colour PSNR target | shape RMS % D | mzc bytes | of them colour | colour RMS | "
-                  "colour PSNR | node colour RMS | Draco bytes at that RMS | mzc / Draco | goal met |",
-                  "|---" * 11 + "|"]
-        measured = {(p["setting"], p["colour_psnr"]): p for p in s["points"] if p["contender"] == "mzc"}
+                  "| spacing (x default) | rmse target % D | colour PSNR target | shape RMS % D | mzc bytes | "
+                  "of them colour | colour RMS | colour PSNR | node colour RMS | Draco bytes at that RMS | "
+                  "mzc / Draco | goal met |", "|---" * 12 + "|"]
+        measured = {(p["setting"], p["colour_psnr"], p.get("coarser", 1)): p for p in s["points"]
+                    if p["contender"] == "mzc"}
         for c in s["comparisons"]:
-            p = measured[(c["rmse_target"], c["colour_psnr"])]
-            lines.append(f"| {c['rmse_target']} | {c['colour_psnr']:g} | {fmt(c['whole_rms'])} | {c['mzc_bytes']} | "
+            p = measured[(c["rmse_target"], c["colour_psnr"], c["coarser"])]
+            lines.append(f"| {c['coarser']} | {c['rmse_target']} | {c['colour_psnr']:g} | {fmt(c['whole_rms'])} | "
+                         f"{c['mzc_bytes']} | "
                          f"{c['colour_bytes']} | {fmt(c['colour_rms'])} | {fmt(p['colour_psnr_measured'])} | "
                          f"{fmt(p['node_colour_rms'])} | "
                          f"{'n/a (outside Draco range)' if c['draco_bytes'] is None else round(c['draco_bytes'])} | "
                          f"{'n/a' if c['ratio'] is None else fmt(c['ratio'])} | {'yes' if c['goal_met'] else 'no'} |")
-        met = [c for c in s["comparisons"] if c["goal_met"]]
-        where = f", from {fmt(min(c['whole_rms'] for c in met))} % D" if met else ""
-        lines += ["", f"Goal (mzc / Draco <= {RATIO_GOAL} at equal shape RMS, colour RMS <= {COLOUR_RMS_GOAL:g}) "
-                  f"met at {len(met)} of {len(s['comparisons'])} points{where}."]
+        for label, rows in (("default spacing", [c for c in s["comparisons"] if c["coarser"] == 1]),
+                            ("coarser spacings", [c for c in s["comparisons"] if c["coarser"] != 1])):
+            met = [c for c in rows if c["goal_met"]]
+            where = f", from {fmt(min(c['whole_rms'] for c in met))} % D" if met else ""
+            lines += ["", f"Goal (mzc / Draco <= {RATIO_GOAL} at equal shape RMS, colour RMS <= {COLOUR_RMS_GOAL:g}), "
+                      f"{label}: met at {len(met)} of {len(rows)} points{where}."]
         lines += ["", "Draco's points (of them colour: its bytes beyond the same file without colours):", "",
                   "| bits | bytes | of them colour | shape RMS % D | colour RMS | colour PSNR |", "|---" * 6 + "|"]
         lines += [f"| {p['setting']} | {p['bytes']} | {p['colour_bytes']} | {fmt(p['whole']['rms'])} | "
