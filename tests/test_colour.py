@@ -544,13 +544,14 @@ def stripes(columns):
     return lambda u: np.where((np.minimum(np.floor(u * columns), columns - 1) // 8) % 2 == 0, 200, 30)
 
 
-@pytest.mark.parametrize("layout", ["obj", "ply texcoord"])
+@pytest.mark.parametrize("layout", ["obj", "obj quad", "ply texcoord"])
 def test_slice_samples_a_texture_at_every_node_not_only_at_the_vertices(tmp_path, layout):
     """A square of two triangles textured with 9 stripes: its four vertices all sit on red, so
     their colours say nothing of the stripes, but each node takes the image at its own texture
     coordinates (its triangle's corners' uv mixed by its barycentric weights): the nodes' red
-    follows the stripes (within 2 levels away from their edges), in an OBJ and in a PLY whose
-    faces list their corners' uv."""
+    follows the stripes (within 2 levels away from their edges), in an OBJ (of two triangles, or
+    a quad and a triangle, whose corners' uv fan as their vertices do) and in a PLY whose faces list their
+    corners' uv."""
     from PIL import Image
 
     from mzc.meshes import read_mesh
@@ -562,10 +563,14 @@ def test_slice_samples_a_texture_at_every_node_not_only_at_the_vertices(tmp_path
     pixels[..., 0] = red((np.arange(columns) + 0.5) / columns)
     Image.fromarray(pixels).save(tmp_path / "stripes.png")
     corners = [(0, 0), (1, 0), (1, 1), (0, 1)]
-    if layout == "obj":
+    if layout.startswith("obj"):
         (tmp_path / "s.mtl").write_text("newmtl s\nmap_Kd stripes.png\n")
+        faces = ["f 1/1 3/3 4/4", "f 1/1 2/2 3/3"]
+        if layout == "obj quad":   # a quad and a triangle: a ragged fan, the top edge's midpoint on red too
+            corners = [*corners, (0.5, 1)]
+            faces = ["f 2/2 3/3 5/5 1/1", "f 1/1 5/5 4/4"]
         lines = ["mtllib s.mtl", *(f"v {x} {y} 0" for x, y in corners), *(f"vt {x} {y}" for x, y in corners),
-                 "f 1/1 2/2 3/3", "f 1/1 3/3 4/4"]
+                 *faces]
         (tmp_path / "square.obj").write_text("\n".join(lines) + "\n")
         mesh = read_mesh(tmp_path / "square.obj")
     else:
