@@ -29,8 +29,6 @@ interpolated log-log on its Pareto front (report.bytes_at).
 Writes coloured-scans-results.md and coloured-scans-results.json into --out.
 """
 
-import datetime
-import json
 import os
 import sys
 import time
@@ -48,7 +46,7 @@ sys.path.insert(0, str(HERE.parent))
 
 from contenders import load  # noqa: E402
 from objects import QUICK_SAMPLES, SAMPLES, Surface, errors  # noqa: E402
-from report import benchmark_parser, bytes_at, fmt, git_commit, machine, pareto, versions  # noqa: E402
+from report import benchmark_parser, bytes_at, fmt, pareto, stamped, write_report  # noqa: E402
 
 PUBLIC = HERE.parent / "tests" / "data" / "public"
 SCANS = {"fuze": PUBLIC / "fuze" / "fuze.obj", "fran": PUBLIC / "fran" / "fran.obj",
@@ -232,13 +230,8 @@ def main():
     samples = QUICK_SAMPLES if args.quick else SAMPLES
     missing = {}
     scans = [run_scan(name, path, samples, args.quick, missing) for name, path in SCANS.items() if path.is_file()]
-    document = {"commit": git_commit(), "date": datetime.datetime.now(datetime.UTC).strftime("%Y-%m-%d %H:%M UTC"),
-                "machine": machine(), "versions": versions(PACKAGES), "quick": args.quick, "samples": samples,
-                "missing": missing, "scans": scans, "seconds": time.perf_counter() - started}
-    args.out.mkdir(parents=True, exist_ok=True)
-    (args.out / "coloured-scans-results.json").write_text(json.dumps(document, indent=1) + "\n")
-    (args.out / "coloured-scans-results.md").write_text(markdown(document))
-    print(markdown(document))
+    document = stamped(PACKAGES, started, quick=args.quick, samples=samples, missing=missing, scans=scans)
+    write_report(args.out, "coloured-scans", document, markdown)
 
 
 if __name__ == "__main__":

@@ -24,8 +24,6 @@ Pareto front (report.bytes_at) at 0.05, 0.1 and 0.2 mm. The prior itself (a mean
 dictionary) is shared by every file and not counted. Writes prior-study-results.md and .json.
 """
 
-import datetime
-import json
 import os
 import sys
 import time
@@ -42,13 +40,14 @@ sys.path.insert(0, str(HERE))
 sys.path.insert(0, str(HERE.parent))
 
 from objects import QUICK_SAMPLES, Surface, errors  # noqa: E402
-from report import benchmark_parser, bytes_at, fmt, git_commit, machine, pareto, versions  # noqa: E402
+from report import benchmark_parser, bytes_at, fmt, pareto, stamped, write_report  # noqa: E402
 
 FACES = HERE.parent.parent / "shared" / "data" / "faces"
 TARGETS = (0.05, 0.1, 0.2)   # mm, whole-surface RMS
 LADDER = (0.03, 0.05, 0.07, 0.1, 0.14, 0.2, 0.28)   # mm: the rmse targets of both mzc files
 ZSTD_LEVEL = 19
 DICTIONARY_BYTES = 2048   # about the files' headers and tables: what they could share
+PACKAGES = ("numpy", "scipy", "constriction", "zstandard")
 SAMPLES = 30000   # per direction: the faces' errors are smooth, 30,000 samples settle them to ~1%
 
 
@@ -183,13 +182,8 @@ def main():
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")   # example.obj's texture coordinates, named by every read
         results = run(faces)
-    document = {"commit": git_commit(), "date": datetime.datetime.now(datetime.UTC).strftime("%Y-%m-%d %H:%M UTC"),
-                "machine": machine(), "versions": versions(("numpy", "scipy", "constriction", "zstandard")),
-                "quick": args.quick, "samples": SAMPLES, "results": results, "seconds": time.perf_counter() - started}
-    args.out.mkdir(parents=True, exist_ok=True)
-    (args.out / "prior-study-results.json").write_text(json.dumps(document, indent=1) + "\n")
-    (args.out / "prior-study-results.md").write_text(markdown(document))
-    print(markdown(document))
+    document = stamped(PACKAGES, started, quick=args.quick, samples=SAMPLES, results=results)
+    write_report(args.out, "prior-study", document, markdown)
 
 
 if __name__ == "__main__":

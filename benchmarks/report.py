@@ -523,3 +523,20 @@ def git_commit():
 
     changed = git("status", "--porcelain", "--untracked-files=no", "--", ".")
     return (git("rev-parse", "--short", "HEAD") or "unknown") + ("+" if changed else "")
+
+
+def stamped(packages, started, **fields):
+    """A report's document: the commit, date, machine and ``packages``' versions it was measured
+    with, ``fields``, and the seconds since ``started`` (a time.perf_counter())."""
+    return {"commit": git_commit(), "date": datetime.datetime.now(datetime.UTC).strftime("%Y-%m-%d %H:%M UTC"),
+            "machine": machine(), "versions": versions(packages), **fields,
+            "seconds": time.perf_counter() - started}
+
+
+def write_report(out, name, document, render):
+    """``name``-results.json and ``name``-results.md (``render(document)``) into the folder ``out``;
+    the markdown printed too."""
+    out.mkdir(parents=True, exist_ok=True)
+    (out / f"{name}-results.json").write_text(json.dumps(document, indent=1) + "\n")
+    (out / f"{name}-results.md").write_text(render(document))
+    print(render(document))
