@@ -84,7 +84,11 @@ def mzc_header(row, data, source, decode):
 
     kind, major, minor = split_magic(data, source)
     colour = None
-    if row.name == "dwt2d" and compact.is_compact(data):   # binary fields, shown as the lines they stand for
+    levels = []
+    if row.name == "dwt2d" and compact.major(data) == compact.PROGRESSIVE_MAJOR:
+        header, bodies, colour, cut, ends = compact.read_progressive(data, source)
+        levels = level_lines(bodies, ends, cut)
+    elif row.name == "dwt2d" and compact.is_compact(data):   # binary fields, shown as the lines they stand for
         header, _payload, colour = compact.read(data, source)
     else:
         header, _body, _line = read_header(data, source, kind, major, **header_versions(row))
@@ -92,7 +96,17 @@ def mzc_header(row, data, source, decode):
     grid = read_as(row, data, source) if decode else ZGrid(z=np.broadcast_to(np.nan, (rows, cols)), **fields)
     lines = [f"{keyword} {' '.join(values)}" for keyword, (values, _) in header.fields.items()]
     chart_count = " ".join(header.tokens("chart_count")) if header.charted and header.has("chart_count") else None
-    return grid, f"mzc-{kind} {major}.{minor}", lines, chart_count, colour_lines(header, colour)
+    return grid, f"mzc-{kind} {major}.{minor}", lines, chart_count, levels + colour_lines(header, colour)
+
+
+def level_lines(bodies, ends, cut):
+    """The lines of a 9.0 file's base and level sections: each one's bytes, and the prefix of the file that
+    decodes up to it (``mzc decode --levels K``'s surface); a cut file says so."""
+    names = ["the mask and band 0 (section 4)", *(f"detail level {k} (section 5)" for k in range(1, len(bodies)))]
+    lines = [f"{'level ' + str(k):10s}{len(body)} bytes, {name}: the first {end} bytes decode to here"
+             for k, (body, name, end) in enumerate(zip(bodies, names, ends))]
+    return lines + (["cut       the file ends inside the next section (cut short): it decodes to these levels"]
+                    if cut else [])
 
 
 def colour_lines(header, colour):
