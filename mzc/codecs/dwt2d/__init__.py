@@ -867,9 +867,6 @@ def read(data, source="<bytes>", wanted=None):
     rounding = read_rounding(header, fields, ROUNDED_VERSION)
     geometry = w2.Geometry.of(fields["d1"], fields["d2"], fields["origin"], (rows, cols),
                               fields.get("projection", "planar"), fields.get("radius"))
-    coloured = header.has("colour_psnr") or header.has("colour_max_error")
-    if progressive and (len(bodies) - 1 < levels or coloured and colour is None):   # cut short
-        warn_cut(source, len(bodies) - 1, levels, coloured)
     decoders = section_decoders(bodies, levels, wanted, source, parametric, progressive)
     valid = (flips.decode if header.major >= FLIPS_VERSION[0] else decode_mask)(decoders[0], rows, cols)
     relevant = w2.flatten(transform.relevance(valid, wavelet, levels, geometry.periodic))
@@ -895,7 +892,11 @@ def read(data, source="<bytes>", wanted=None):
         from mzc.codecs.dwt2d.colour import decode_colour
 
         fields["colors"] = decode_colour(colour, valid, source)
-    return ZGrid(z=z, **fields)
+    grid = ZGrid(z=z, **fields)
+    coloured = header.has("colour_psnr") or header.has("colour_max_error")
+    if progressive and (len(bodies) - 1 < levels or coloured and colour is None):   # cut short: said once decoded
+        warn_cut(source, len(bodies) - 1, levels, coloured)
+    return grid
 
 
 def section_decoders(bodies, levels, wanted, source, parametric, progressive):
