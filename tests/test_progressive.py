@@ -168,6 +168,8 @@ def test_cli_on_a_real_face_encodes_progressive_decodes_levels_and_a_cut_file(mz
     result = mzc("decode", str(cut), "-o", str(tmp_path / "cut.zg"))
     assert result.returncode == 0 and result.stderr.count(b"\n") == 1
     assert f"decoded 2 of its {len(sections.ends) - 1} detail levels" in result.stderr.decode()
+    cut_info = mzc("info", str(cut), check=True).stdout.decode()
+    assert f"it holds 2 of its {len(sections.ends) - 1} detail levels whole" in cut_info
     levels = api.decode((tmp_path / "l2.zg").read_bytes()).z
     np.testing.assert_array_equal(levels, api.decode((tmp_path / "cut.zg").read_bytes()).z)
     refused = mzc("decode", "--levels", "1", str(grid_path))
