@@ -189,3 +189,23 @@ def test_the_spec_worked_example_is_the_whole_file_and_its_cut_prefix():
     np.testing.assert_array_equal(cut.z, dwt2d.read(whole, wanted=0).z)
     np.testing.assert_allclose(cut.z, coarse, atol=1e-7)
     np.testing.assert_allclose(dwt2d.read(whole).z, heights, atol=1e-7)
+
+
+def test_more_level_sections_than_levels_or_another_tag_are_refused_in_one_line():
+    data = dwt2d.write(surface(), rmse=0.02, progressive=True)
+    sections = compact.read_progressive(data, "p")
+    last = data[sections.ends[-2]:sections.ends[-1]]
+    extra = compact.chained([(compact.LEVEL, sections.bodies[-1])], last[-4:])   # one level section too many
+    with pytest.raises(MzcError, match="level sections for"):
+        dwt2d.read(data + extra)
+    payload = compact.chained([(compact.PAYLOAD, sections.bodies[1])], data[sections.ends[0] - 4:sections.ends[0]])
+    with pytest.raises(MzcError, match="section tag 2 where section 3 belongs"):
+        dwt2d.read(data[:sections.ends[0]] + payload)
+
+
+def test_levels_beyond_the_files_decode_all_of_it_and_a_level_count_is_checked():
+    data = dwt2d.write(surface(), max_error=0.05, progressive=True)
+    np.testing.assert_array_equal(dwt2d.read(data, wanted=99).z, dwt2d.read(data).z)
+    np.testing.assert_array_equal(api.decode(data, levels=99).z, dwt2d.read(data).z)
+    with pytest.raises(MzcError, match="legacy"):
+        api.decode(data, legacy="dwt", levels=1)
