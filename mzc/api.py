@@ -38,6 +38,7 @@ class EncodeOptions(TypedDict, total=False):
     size: int            # dwt2d: the file size aimed at, in bytes
     slope_limit: float   # dwt2d: steps grow as 1/sqrt(cos lean) up to this many times
     tile: int            # dwt2d: the side of independent tiles (0: the grid whole)
+    progressive: bool    # dwt2d: write 9.0, levels in sections coarsest first (a prefix decodes coarser)
     colour_psnr: float   # dwt2d: the PSNR of the grid's colours, dB [default: 36]
     colour_max_error: int   # dwt2d: |decoded - input| <= this many 8-bit levels in every colour channel
     wavelet: str         # dwt2d: bior4.4 or bior2.2; dwt: a PyWavelets name
@@ -248,15 +249,22 @@ def encode(grid: ZGrid | np.ndarray, codec: str = DEFAULT_CODEC, **options: Unpa
     return data
 
 
-def decode(data: bytes, legacy: str | None = None, *, window: Any = None) -> ZGrid:
+def decode(data: bytes, legacy: str | None = None, *, window: Any = None, levels: int | None = None) -> ZGrid:
     """The z-grid of any mzc file's bytes, or of a raster's (``mzc decode``); ``legacy`` names the
     kind of a thesis file (poly, dft, dct, dwt), which has no magic line; ``window`` (row, col,
-    rows, cols) decodes only those rows and columns (of a tiled file, only the tiles they touch)."""
+    rows, cols) decodes only those rows and columns (of a tiled file, only the tiles they touch);
+    ``levels`` K decodes a progressive file (mzc-dwt2d 9.0) to band 0 and its K coarsest detail levels."""
     try:
         contents = bytes(memoryview(data).cast("B"))
     except TypeError:
         raise MzcError(f"must be the bytes of an mzc file, not a {type(data).__name__}", field="data") from None
     window = window_argument(window)
+    if levels is not None:
+        if legacy is not None:
+            raise MzcError("decodes a progressive mzc-dwt2d 9.0 file, not a legacy one", field="levels")
+        from mzc.codecs.dwt2d import read
+
+        return windowed(read(contents, BYTES_SOURCE, wanted=number(levels, "levels", int, 0)), window)
     if legacy is not None:
         from mzc.codecs.rows.legacy import read_legacy
 

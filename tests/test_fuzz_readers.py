@@ -1,7 +1,7 @@
 """A property-based fuzz of every reader (tests/fuzz/readers.py): real files of each kind (every
 mesh and cloud format, the rasters, the z-grid, every compressed kind and the thesis's files),
 mutated by hypothesis, each read in a worker process under RLIMIT_AS and a deadline. An input
-must be read into a sane result or refused in one MzcError line, without a warning, in under
+must be read into a sane result or refused in one MzcError line, without a warning but mzc's own, in under
 SECONDS and under PEAK bytes of allocations. MZC_FUZZ_EXAMPLES sets the inputs per kind (200 in
 the suite, 4,400 inputs in about 25 s; more for a longer run)."""
 

@@ -209,8 +209,16 @@ def mutations(data, count, seed):
 
 
 def compact_sections(data):
-    """The (start, end) of each section of a 7.0 file before its CRC-32 (the first from its tag)."""
+    """The (start, end) of each section of a 7.0 or 8.0 file before its CRC-32 (the first from its tag);
+    of a 9.0 file, of its header, base and whole level sections and its colour section, if whole."""
     reader = compact.Reader(data, "t")
+    if compact.major(data) == compact.PROGRESSIVE_MAJOR:
+        start = reader.position
+        reader.header()
+        spans = [(start, reader.position - 4)]
+        sections = compact.read_progressive(data, "t")
+        ends = [*sections.ends, *([len(data)] if sections.colour is not None else [])]
+        return spans + [(spans[-1][1] + 4 if i == 0 else ends[i - 1], end - 4) for i, end in enumerate(ends)]
     spans = []
     for tag in (compact.HEADER, compact.PAYLOAD):
         start = reader.position
@@ -221,9 +229,11 @@ def compact_sections(data):
 
 def sections_rechecksummed(changed, spans):
     """A 7.0 file edited on purpose with the CRC-32 of each of its original sections' spans made
-    right again (the header's from the magic line on)."""
+    right again (the header's from the magic line on; a 9.0 file's each from the CRC-32 before it)."""
+    chained = compact.major(changed) == compact.PROGRESSIVE_MAJOR
     for number, (start, end) in enumerate(spans):
-        changed[end:end + 4] = zlib.crc32(changed[0 if number == 0 else start:end]).to_bytes(4, "little")
+        before = zlib.crc32(changed[start - 4:start]) if chained and number else 0
+        changed[end:end + 4] = zlib.crc32(changed[0 if number == 0 else start:end], before).to_bytes(4, "little")
     return bytes(changed)
 
 

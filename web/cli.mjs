@@ -48,7 +48,9 @@ function main(args) {
   }
   let out;
   try {
-    out = COMMANDS[run.command](decode(readFileSync(run.name === "-" ? 0 : run.name)), run.options);
+    const grid = decode(readFileSync(run.name === "-" ? 0 : run.name));
+    if (grid.cut) process.stderr.write(`mzc: warning: ${run.name}: ${grid.cut}\n`);   // a cut 9.0 file, decoded coarser
+    out = COMMANDS[run.command](grid, run.options);
   } catch (error) {
     process.stderr.write(`mzc: ${run.name}: ${error.code === "ENOENT" ? "no such file" : error.message}\n`);
     return 1;

@@ -1,6 +1,8 @@
-// The container of `mzc-dwt2d 7.0` and 8.0 (spec/dwt2d.md, Version 7.0): the magic line, then tagged
+// The container of `mzc-dwt2d 7.0`, 8.0 and 9.0 (spec/dwt2d.md, Version 7.0): the magic line, then tagged
 // sections each under its own CRC-32, the header's fields in binary turned back into the header
-// lines they stand for, so that dwt2d.mjs reads them as it reads a 3.x file's lines.
+// lines they stand for, so that dwt2d.mjs reads them as it reads a 3.x file's lines. 9.0 (Version 9.0)
+// has a base section and one section per detail level, each CRC-32 chained to the section before, and
+// a prefix of whole sections decodes (`progressiveSections`).
 
 import { fail, crc32, formatNumber, words } from "./header.mjs";
 
@@ -22,6 +24,8 @@ const WORDS = ["planar", "cylindrical", "spherical", "bior4.4", "bior2.2", "inte
 export const HEADER = 1;
 export const PAYLOAD = 2;
 export const COLOUR = 3;
+export const BASE = 4;
+export const LEVEL = 5;
 
 /** A front-to-back reader of a byte range whose every failure is a one-line MzcError. */
 class Cursor {
@@ -69,6 +73,60 @@ export function sections(bytes, magicEnd, tags, optional) {
   });
   if (cursor.at !== bytes.length) fail("crc32", `checksum mismatch: ${bytes.length - cursor.at} byte(s) after the last section (added to the file)`);
   return bodies;
+}
+
+/** The sections of a 9.0 file or a prefix of one (`magicEnd`: the end of its magic line): {header,
+ * bodies: [base, level 1 (coarsest), ...], colour, cut}. Each section's CRC-32 starts from the CRC-32
+ * bytes of the section before (the header's from the magic line); a file that ends inside or before a
+ * level or colour section is `cut` there (a cut in the header or base section is refused). */
+export function progressiveSections(bytes, magicEnd) {
+  if (bytes[magicEnd - 2] === 13) fail("crc32", "the magic line ends in CRLF: the file was copied as text; copy mzc files as binary");
+  const cursor = new Cursor(bytes, magicEnd);
+  let before = bytes.subarray(0, magicEnd);
+  const read = (tag, cut) => {
+    const start = cursor.at;
+    if (cut && endsInside(bytes, start)) return null;
+    if (start >= bytes.length) fail("data", `the file ends before its section ${tag}`);
+    if (bytes[start] !== tag) fail("data", `section tag ${bytes[start]} where section ${tag} belongs`);
+    cursor.at++;
+    const length = Number(cursor.varint());   // before cursor.at is read: the varint moves it
+    const end = cursor.at + length;
+    if (end + 4 > bytes.length) fail("data", `the file ends inside section ${tag} (cut short?)`);
+    const stated = new DataView(bytes.buffer, bytes.byteOffset + end, 4).getUint32(0, true);
+    if (crc32(before, bytes.subarray(start, end)) !== stated) fail("crc32", `checksum mismatch: section ${tag} of the file is corrupt`);
+    const body = bytes.subarray(cursor.at, end);
+    before = bytes.subarray(end, end + 4);
+    cursor.at = end + 4;
+    return body;
+  };
+  const header = read(HEADER, false);
+  const bodies = [read(BASE, false)];
+  while (cursor.at < bytes.length && bytes[cursor.at] === LEVEL) {
+    const body = read(LEVEL, true);
+    if (!body) return { header, bodies, colour: null, cut: true };
+    bodies.push(body);
+  }
+  let colour = null;
+  if (cursor.at < bytes.length) {
+    colour = read(COLOUR, true);
+    if (!colour) return { header, bodies, colour, cut: true };
+  }
+  if (cursor.at !== bytes.length) fail("crc32", `checksum mismatch: ${bytes.length - cursor.at} byte(s) after the last section (added to the file)`);
+  return { header, bodies, colour, cut: false };
+}
+
+/** True when the section at `start` does not end within the file (its tag, length, body or CRC-32 cut). */
+function endsInside(bytes, start) {
+  let length = 0;
+  let at = start + 1;
+  for (let i = 0; ; i++) {
+    if (at >= bytes.length) return true;
+    if (i >= MAX_VARINT_BYTES) fail("data", `a number longer than ${MAX_VARINT_BYTES} bytes`);
+    const b = bytes[at++];
+    length += (b & 0x7f) * 2 ** (7 * i);
+    if (!(b & 0x80)) break;
+  }
+  return at + length + 4 > bytes.length;
 }
 
 /** The header section's fields of a file of `major` (7 or 8) as the map of header lines (keyword ->

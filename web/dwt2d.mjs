@@ -1,11 +1,12 @@
 // The 2D wavelet codec `mzc-dwt2d` 2.0, 3.0, 3.1, 3.2, 4.0, 5.0 (tiles), 5.1 (rounded tiles), 6.0 (rounding)
-// and 7.0 (binary header and parametric tables, in the sections of compact.mjs), 8.0 (7.0, its mask in mask.mjs)
+// and 7.0 (binary header and parametric tables, in the sections of compact.mjs), 8.0 (7.0, its mask in mask.mjs),
+// 9.0 (8.0 in sections of levels, coarsest first: a prefix of whole sections decodes to a coarser surface)
 // (spec/dwt2d.md): header, payload (tables, rANS, raw bits), mask, relevance, bands, slope
 // factors, inverse transform, correction layer, chart records, rounding and tiles.
 
 import { fail, headerFields, fieldReader, gridFields, checkChecksum, checkCharts, VIEWS, crc32, splitHeader, parseMagic } from "./header.mjs";
 import { cos } from "./elementary.mjs";
-import { sections, headerLines, HEADER, PAYLOAD, COLOUR } from "./compact.mjs";
+import { sections, progressiveSections, headerLines, HEADER, PAYLOAD, COLOUR } from "./compact.mjs";
 import { inversePeriodized2d, relevantPeriodized2d } from "./pywt.mjs";
 import { decodeFlips } from "./mask.mjs";
 
@@ -17,7 +18,7 @@ export function decodeDwt2d(bytes, lines, body, magic) {
   if (magic.major === 5) return decodeTiled(bytes, lines, body, magic);
   const fields = headerFields(lines, false);
   checkChecksum(bytes, lines, fields, magic.major >= 4 || (magic.major === 3 && magic.minor >= 1));
-  return decodeWhole(fields, bytes.subarray(body), magic);
+  return decodeWhole(fields, [bytes.subarray(body)], magic);
 }
 
 /** Decodes a 7.0 file (bytes; the end of its magic line; its magic): its sections, the header's
@@ -26,23 +27,45 @@ export function decodeDwt2d(bytes, lines, body, magic) {
  * `withColours` decodes it over the grid's valid nodes). */
 export function decodeCompact(bytes, magicEnd, magic) {
   if (magic.minor) fail(null, `mzc-dwt2d version ${magic.major}.${magic.minor} is newer than this decoder reads (${magic.major}.0); upgrade`);
+  if (magic.major >= 9) return decodeProgressive(bytes, magicEnd, magic);
   const bodies = sections(bytes, magicEnd, [HEADER, PAYLOAD], COLOUR);
-  const grid = decodeWhole(headerLines(bodies[HEADER], magic.major), bodies[PAYLOAD], magic);
+  const grid = decodeWhole(headerLines(bodies[HEADER], magic.major), [bodies[PAYLOAD]], magic);
   return bodies[COLOUR] ? { ...grid, colourSection: bodies[COLOUR] } : grid;
 }
 
-/** Decodes a grid coded whole from its header lines (keyword -> words) and its payload. */
-function decodeWhole(fields, bytes, magic) {
+/** Decodes a 9.0 file or a prefix of one (Version 9.0): its base section and each whole level section,
+ * coarsest first, the finer bands zero; a file cut short comes back with `cut`, the line saying so. */
+function decodeProgressive(bytes, magicEnd, magic) {
+  const { header, bodies, colour, cut } = progressiveSections(bytes, magicEnd);
+  const fields = headerLines(header, magic.major);
+  const grid = decodeWhole(fields, bodies, magic);
+  const coloured = fields.has("colour_psnr") || fields.has("colour_max_error");
+  const complete = bodies.length - 1;
+  if (complete < grid.levels || (coloured && !colour)) {
+    grid.cut = complete < grid.levels
+      ? `the file is cut short: decoded ${complete} of its ${grid.levels} detail levels, a coarser surface (without its finest levels${coloured ? " and colours" : ""})`
+      : "the file is cut short in its colour section: the surface is whole, its colours are left out";
+  }
+  delete grid.levels;
+  return colour ? { ...grid, colourSection: colour } : grid;
+}
+
+/** Decodes a grid coded whole from its header lines (keyword -> words) and its payload bodies: one
+ * (before 9.0, every level's integers in it), or 9.0's base and level sections, each with its own tables
+ * and rANS words (a level section may keep the base section's tables). */
+function decodeWhole(fields, bodies, magic) {
   const h = fieldReader(fields);
   const georef = magic.major >= 6 || (magic.major === 3 && magic.minor >= 2);
   const grid = gridFields(h, { projected: magic.major >= 3, georef, counted: magic.major >= 8 });
   const p = codecFields(h, magic, grid);
-  const payload = new Payload(bytes, magic.major >= 7);
-  const z = decodeGrid(payload, grid, p);
-  const charts = p.chartCount ? chartRecords(payload, p.chartCount, grid, z) : undefined;
-  payload.finish();
+  if (bodies.length > 1 + p.levels) fail("data", `${bodies.length - 1} level sections for ${p.levels} wavelet levels`);
+  const payloads = [];
+  for (const body of bodies) payloads.push(new Payload(body, magic.major >= 7, magic.major >= 9 && payloads.length ? payloads[0].tables : null));
+  const z = decodeGrid(payloads, grid, p);
+  const charts = p.chartCount ? chartRecords(payloads[0], p.chartCount, grid, z) : undefined;
+  for (const payload of payloads) payload.finish();
   if (p.rounding) roundToSamples(z, grid);
-  return { ...grid, z, charts };
+  return magic.major >= 9 ? { ...grid, z, charts, levels: p.levels } : { ...grid, z, charts };
 }
 
 const SAMPLE_RANGES = { uint8: [0, 255], int8: [-128, 127], uint16: [0, 65535], int16: [-32768, 32767],
@@ -166,11 +189,12 @@ const SAME_SIZE = [range(4, 14), range(15, 22), range(23, 26)];   // detail, sig
 
 /** A reader of the payload: its tables, its rANS state and its raw-bit cursor. */
 export class Payload {
-  /** `parametric`: 7.0's table records (Tables of 7.0), else 3.x's. */
-  constructor(bytes, parametric) {
+  /** `parametric`: 7.0's table records (Tables of 7.0), else 3.x's; `prior`: a 9.0 level section's, the
+   * base section's tables (Tables of 9.0). */
+  constructor(bytes, parametric, prior = null) {
     this.bytes = bytes;
     this.at = 0;
-    this.tables = this.readTables(parametric);
+    this.tables = this.readTables(parametric, prior);
     this.startRans();
     this.bitAt = this.at * 8;
   }
@@ -187,9 +211,12 @@ export class Payload {
     return fail(field, "a varint longer than 5 bytes");
   }
 
-  /** The M model tables, each a lookup from a 14-bit slot to its class. */
-  readTables(parametric) {
+  /** The M model tables, each a lookup from a 14-bit slot to its class; with `prior` (9.0's level
+   * sections), M = 0 keeps every table of the base section and a record 1 that section's table of
+   * its model. */
+  readTables(parametric, prior) {
     const m = this.varint("tables");
+    if (m === 0 && prior) return prior;
     if (m > 4096) fail("tables", `${m} tables (at most 4096)`);
     const tables = [];
     for (let t = 0; t < m; t++) {
@@ -197,6 +224,11 @@ export class Payload {
       if (s === 0) {
         if (!t) fail("tables", "the first table repeats none");
         tables.push(tables[t - 1]);
+        continue;
+      }
+      if (s === 1 && prior) {
+        if (t >= prior.length) fail("tables", `model table ${t} keeps the base section's, which has none`);
+        tables.push(prior[t]);
         continue;
       }
       const kind = parametric ? s % 2 : 0;
@@ -364,18 +396,25 @@ function power(theta, n) {
 // ---------------------------------------------------------------------------------------
 // The grid: mask, bands, slope factors, transform, correction (spec/dwt2d.md)
 
-/** The decoded values (NaN at invalid nodes), row-major rows x cols. */
-function decodeGrid(payload, grid, p) {
+/** The decoded values (NaN at invalid nodes), row-major rows x cols, from the payload of each level of
+ * bands (`payloads`: one for them all, or 9.0's sections, the bands of the levels beyond them zero). */
+function decodeGrid(payloads, grid, p) {
   const { rows, cols } = grid;
+  const payload = payloads[0];
+  const level = (b) => (payloads.length === 1 ? 0 : Math.floor((b + 2) / 3));
   const mask = (p.flips ? decodeFlips : decodeMask)(payload, rows, cols);
   const periodic = isPeriodic(grid);
   const shapes = bandShapes(rows, cols, p);
   const relevant = p.v3 ? relevance3(mask, rows, cols, p, periodic) : relevantPeriodized2d(mask, rows, cols, p.wavelet, p.levels);
   const q = [decodeBand0(payload, shapes[0])];
-  for (let b = 1; b < shapes.length; b++) q.push(decodeDetail(payload, q, b, shapes, relevant, p));
+  for (let b = 1; b < shapes.length; b++) {
+    const zero = () => new Float64Array(shapes[b].rows * shapes[b].cols);
+    q.push(level(b) < payloads.length ? decodeDetail(payloads[level(b)], q, b, shapes, relevant, p) : zero());
+  }
   const bands = dequantise(q, shapes, grid, p, periodic);
   const w = p.v3 ? inverse3(bands, shapes, rows, cols, p, periodic) : inversePeriodized2d(bands, shapes, rows, cols, p.wavelet, p.levels);
-  const k = p.correction > 0 ? decodeCorrection(payload, mask, rows, cols) : null;
+  const whole = payloads.length === 1 || payloads.length === 1 + p.levels;   // the corrections: the last section's
+  const k = p.correction > 0 && whole ? decodeCorrection(payloads.at(-1), mask, rows, cols) : null;
   const z = new Float64Array(rows * cols);
   for (let i = 0; i < z.length; i++) {
     if (!mask[i]) z[i] = NaN;

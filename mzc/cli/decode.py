@@ -33,15 +33,23 @@ which --precision rounds.
 @click.option("--window", type=click.IntRange(0), nargs=4, metavar="ROW COL ROWS COLS",
               help="Decode only rows ROW..ROW+ROWS-1 and columns COL..COL+COLS-1 of the grid (row 0 is its "
                    "first, a north-up raster's last); of a tiled file only the tiles they touch are read.")
+@click.option("--levels", type=click.IntRange(0), metavar="K",
+              help="Of a progressive file (mzc-dwt2d 9.0, encode --progressive): decode band 0 and the K coarsest "
+                   "detail levels alone, a coarser surface (K from the file's level count on: all of it).")
 @grid_output_options
-def command(input, output, legacy, window, file_format, plain, float32, precision):
+def command(input, output, legacy, window, levels, file_format, plain, float32, precision):
     from mzc.streams import check_not_input, display_name, read_input
 
     write = grid_writer(output, file_format, plain, float32, precision)
     check_not_input(output, input)
-    if not legacy and decoded_by_tiles(input, output, window or None, file_format, write, float32):
+    if legacy and levels is not None:
+        raise click.UsageError("--levels decodes a progressive mzc-dwt2d 9.0 file, not a --legacy one")
+    if not legacy and levels is None and decoded_by_tiles(input, output, window or None, file_format, write,
+                                                          float32):
         return
-    if legacy:
+    if levels is not None:
+        grid = read_levels(input, levels)
+    elif legacy:
         from mzc.codecs.rows.legacy import read_legacy
 
         grid = read_legacy(read_input(input), display_name(input), legacy)
@@ -53,6 +61,15 @@ def command(input, output, legacy, window, file_format, plain, float32, precisio
         with about(display_name(input), "cutting its window"):
             grid = window_of(grid, window)
     write(grid)
+
+
+def read_levels(path, levels):
+    """The grid of a progressive file at ``path`` (or stdin) decoded to its ``levels`` coarsest detail levels."""
+    from mzc.codecs.dwt2d import read
+    from mzc.streams import display_name, read_input
+
+    with about(display_name(path), "decoding it"):
+        return read(read_input(path), display_name(path), wanted=levels)
 
 
 def decoded_by_tiles(path, output, window, file_format, write, float32):

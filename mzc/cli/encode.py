@@ -80,6 +80,8 @@ def tuning_option(name, pairs):
         default = f" [default: {', '.join(f'{d} for {flag(c.name)}' for c, d in defaults)}]" if defaults else ""
     codecs = ", ".join(flag(c.name) for c, _o in pairs)
     names = [SHORT_NAMES[name], flag(name)] if name in SHORT_NAMES else [flag(name)]
+    if first.type is bool:   # a switch: given or not (None, so that a codec without it is not told False)
+        return click.Option([*names, name], is_flag=True, default=None, help=f"{first.help} ({codecs})")
     return click.Option([*names, name], type=click_type(first, [o for _c, o in pairs[1:]]), metavar=first.metavar,
                         help=f"{first.help}{default} ({codecs})")
 

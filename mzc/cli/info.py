@@ -84,15 +84,38 @@ def mzc_header(row, data, source, decode):
 
     kind, major, minor = split_magic(data, source)
     colour = None
-    if row.name == "dwt2d" and compact.is_compact(data):   # binary fields, shown as the lines they stand for
+    sections = None
+    if row.name == "dwt2d" and compact.major(data) == compact.PROGRESSIVE_MAJOR:
+        sections = compact.read_progressive(data, source)
+        header, colour = sections.header, sections.colour
+    elif row.name == "dwt2d" and compact.is_compact(data):   # binary fields, shown as the lines they stand for
         header, _payload, colour = compact.read(data, source)
     else:
         header, _body, _line = read_header(data, source, kind, major, **header_versions(row))
     fields, rows, cols = read_grid_fields(header)
+    levels = level_lines(sections, (rows, cols)) if sections else []
     grid = read_as(row, data, source) if decode else ZGrid(z=np.broadcast_to(np.nan, (rows, cols)), **fields)
     lines = [f"{keyword} {' '.join(values)}" for keyword, (values, _) in header.fields.items()]
     chart_count = " ".join(header.tokens("chart_count")) if header.charted and header.has("chart_count") else None
-    return grid, f"mzc-{kind} {major}.{minor}", lines, chart_count, colour_lines(header, colour)
+    return grid, f"mzc-{kind} {major}.{minor}", lines, chart_count, levels + colour_lines(header, colour)
+
+
+def level_lines(sections, shape):
+    """The lines of a 9.0 file's base and level sections (compact.Sections, of a grid of ``shape``): each one's
+    bytes, and the prefix of the file that decodes up to it (``mzc decode --levels K``'s surface); a cut file
+    says so."""
+    from mzc.codecs.dwt2d import wavelet
+
+    header, bodies = sections.header, sections.bodies
+    total = header.integer("levels", required=False,
+                           default=wavelet.default_levels(shape, wavelet.TRANSFORMS[header.major].coarsest))
+    names = ["the mask and band 0 (section 4)", *(f"detail level {k} (section 5)" for k in range(1, len(bodies)))]
+    lines = [f"{'level ' + str(k):10s}{len(body)} bytes, {name}: the first {end} bytes decode to here"
+             for k, (body, name, end) in enumerate(zip(bodies, names, sections.ends))]
+    if sections.cut or len(bodies) - 1 < total:
+        lines.append(f"cut       the file is cut short: it holds {len(bodies) - 1} of its {total} detail levels whole, "
+                     "and decodes to them")
+    return lines
 
 
 def colour_lines(header, colour):

@@ -25,7 +25,7 @@ if TYPE_CHECKING:
 
 @dataclass(frozen=True)
 class Option:
-    """One tuning option of a codec: its type (int, float, str, or a tuple of the choices), its
+    """One tuning option of a codec: its type (int, float, str, bool for a switch, or a tuple of the choices), its
     default (None: unset unless given), its range and the help the command line shows."""
 
     name: str
@@ -42,6 +42,10 @@ class Option:
         if isinstance(self.type, tuple):
             if value not in self.type:
                 raise MzcError(f"{value!r} is not one of {', '.join(self.type)}", field=self.name)
+            return value
+        if self.type is bool:   # a switch (a command-line flag): True or False, nothing that would pass for one
+            if not isinstance(value, bool):
+                raise MzcError(f"must be True or False, not {value!r}", field=self.name)
             return value
         if self.type is str:
             if not isinstance(value, str):

@@ -4,7 +4,8 @@ outside the test suite (README.md beside this file says how to run it).
 An input is one byte choosing the kind (an index into readers.KINDS), then the bytes to read as
 that kind; ``--seeds DIR`` writes the repository's real files of every kind (readers.seeds) into
 DIR as such inputs, the corpus libFuzzer starts from. An input passes when its reader returns
-a sane result or raises one MzcError of one line (readers.read), without a warning; anything
+a sane result or raises one MzcError of one line (readers.read), without a warning but mzc's own
+(MzcWarning: a cut progressive dwt2d file's); anything
 else is a crash that libFuzzer saves, and its ``-timeout`` and ``-rss_limit_mb`` bound each
 input's time and memory. MZC_FUZZ_KINDS (comma-separated) keeps the inputs of some kinds only.
 """
@@ -35,7 +36,7 @@ with atheris.instrument_imports(include=["mzc"]):
     import mzc.rasters.asc  # noqa: F401
     import mzc.rasters.geotiff  # noqa: F401
     from mzc.codecs import BUILT_IN, get_codec
-    from mzc.errors import MzcError
+    from mzc.errors import MzcError, MzcWarning
 
     for name in BUILT_IN:
         get_codec(name)
@@ -51,6 +52,7 @@ def one_input(data: bytes) -> None:
     try:
         with warnings.catch_warnings():
             warnings.simplefilter("error")
+            warnings.simplefilter("ignore", MzcWarning)   # mzc's own: a cut dwt2d 9.0 file's, by design
             read(kind, data[1:])
     except MzcError as error:
         if "\n" in str(error):

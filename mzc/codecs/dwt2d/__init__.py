@@ -51,8 +51,10 @@ COMPACT_VERSION = (7, 0)     # the fields of 3.x-6.0 in binary, tagged sections 
                              # tiles of 5.0 stay 3.1 files
 FLIPS_VERSION = (8, 0)       # every grid coded whole: 7.0 with the source_vertices field and the mask as predicted
                              # flips (mzc.codecs.dwt2d.flips)
+PROGRESSIVE_VERSION = (9, 0)   # opt-in (``progressive``): 8.0 in sections, the mask and band 0, then one detail level
+                               # each, coarsest first, so that a prefix of whole sections decodes (coarser)
 GEOREF_SINCE = dict([GEOREFERENCED_VERSION, TILED_VERSION, ROUNDED_VERSION, COMPACT_VERSION,
-                     FLIPS_VERSION])   # major -> first minor
+                     FLIPS_VERSION, PROGRESSIVE_VERSION])   # major -> first minor
                                                                                          # with crs, raster
 ROUNDING = "integer"         # the one value of the rounding line
 ROUNDING_ULPS = 16           # the coded bound stays this many units in the last place of the largest value below
@@ -307,11 +309,18 @@ def encode_corrections(encoder, k, valid):
     encoder.add(correction_model(ks), k[rows, cols])
 
 
-def encode_bands(encoder, qflat, relevant, steps):
+def band_level(index):
+    """The level of band ``index`` of a flat list: 0 for the approximation, then 1 for the coarsest
+    detail level's three bands, 2 for the next finer ones', ... (9.0's section of it)."""
+    return (index + 2) // 3
+
+
+def encode_bands(encoders, qflat, relevant, steps):
     """The approximation as planar differences, then each detail band row by row, each row in
     two passes (even columns, odd columns): the pass's magnitudes by context, then the signs
-    of its nonzero values left to right."""
-    encoder.add(APPROXIMATION, np.diff(np.diff(qflat[0], axis=0, prepend=0), axis=1, prepend=0))
+    of its nonzero values left to right; each band's integers to ``encoders[band_level(index)]``
+    (8.0: one encoder for all of them)."""
+    encoders[0].add(APPROXIMATION, np.diff(np.diff(qflat[0], axis=0, prepend=0), axis=1, prepend=0))
     for index in range(1, len(qflat)):
         band = qflat[index]
         parent = parent_map(qflat, index, band.shape)
@@ -325,17 +334,22 @@ def encode_bands(encoder, qflat, relevant, steps):
         models = np.concatenate([detail_model(ks), sign_model(sign_context[signed_rows, signed_cols])])
         values = np.concatenate([np.abs(band[rows, cols]),
                                  sign_bits(band[signed_rows, signed_cols], predicted[signed_rows, signed_cols])])
-        encoder.add(models[order], values[order], signed=False)
+        encoders[band_level(index)].add(models[order], values[order], signed=False)
 
 
-def decode_bands(decoder, relevant, steps):
-    """Inverse of encode_bands: the flat list of integer bands."""
-    residual = decoder.read(APPROXIMATION, relevant[0].size).reshape(relevant[0].shape)
+def decode_bands(decoders, relevant, steps):
+    """Inverse of encode_bands: the flat list of integer bands, those of the levels ``decoders``
+    does not reach zero (a prefix of a 9.0 file, or ``read``'s ``wanted``)."""
+    residual = decoders[0].read(APPROXIMATION, relevant[0].size).reshape(relevant[0].shape)
     qflat = [np.cumsum(np.cumsum(residual, axis=0), axis=1)]
     for index in range(1, len(relevant)):
+        if band_level(index) >= len(decoders):
+            qflat.append(np.zeros(relevant[index].shape, dtype=np.int64))
+            continue
         parent = parent_map(qflat, index, relevant[index].shape)
-        band = decoder.read_rows(relevant[index], activity(qflat, index, steps, parent), THRESHOLDS, detail_model(0),
-                                 signs=(parent, SIGN_WEIGHTS[(index - 1) % 3], sign_model(0), SIGN_CONTEXTS))
+        band = decoders[band_level(index)].read_rows(
+            relevant[index], activity(qflat, index, steps, parent), THRESHOLDS, detail_model(0),
+            signs=(parent, SIGN_WEIGHTS[(index - 1) % 3], sign_model(0), SIGN_CONTEXTS))
         qflat.append(band)
     return qflat
 
@@ -380,8 +394,8 @@ class Prepared:
     is never coded)."""
 
     def __init__(self, grid, wavelet, levels, slope_limit, compact=True, colour=None):
-        self.compact = compact   # 8.0 (or the container version given: 7.0), else the text header of 3.x, 4.0, 6.0
-                                 # (a tile of a 5.0 file)
+        self.compact = compact   # 8.0 (or the container version given: 7.0 or 9.0), else the text header of 3.x,
+                                 # 4.0, 6.0 (a tile of a 5.0 file)
         self.colour = colour     # (target line, colour section bytes) of a 7.0 file of a grid with colours
         self.transform = w2.TRANSFORMS[VERSION[0]]
         if np.isinf(grid.z).any():
@@ -432,22 +446,21 @@ class Prepared:
         a correction layer bounds every valid node. ``decoded``: what ``decoded(step)`` gives, when
         the caller has it already (it is changed). ``rounded``: the integer bound of a grid of
         integer samples coded at ``max_error`` (rounding_bounds), whose decoded values are rounded."""
-        from mzc.codecs.dwt2d.entropy import Encoder  # here, not at the top: `mzc encode` builds this
-                                                       # module's CODEC whatever codec it runs
         qflat, decoded = self.decoded(step) if decoded is None else decoded
         version = written_version(self.grid, rounded is not None, self.compact)
-        encoder = Encoder(same_size=SAME_SIZE, parametric=self.compact)
+        encoders = self.encoders(version)
+        encoder = encoders[0]
         if version >= FLIPS_VERSION:   # the mask's bits go through the rANS coder before everything else
             encoder.leading = functools.partial(flips.encode, valid=self.valid)
         else:
             encode_mask(encoder, self.valid)
-        encode_bands(encoder, qflat, self.relevant, expand_steps(header_steps(step, self.levels), len(qflat)))
+        encode_bands(encoders, qflat, self.relevant, expand_steps(header_steps(step, self.levels), len(qflat)))
         correction = 0.0
         if max_error is not None:
             correction = w2.correction_step(max_error)
             k = np.zeros(self.valid.shape, dtype=np.int64)
             k[self.valid] = w2.corrections(self.grid.z, decoded, self.valid, correction)
-            encode_corrections(encoder, k, self.valid)
+            encode_corrections(encoders[-1], k, self.valid)   # with the finest level: 9.0's last section
             decoded[self.valid] += correction * k[self.valid]   # as the decoder adds them
         if self.grid.charts is not None:
             encode_charts(encoder, self.grid.charts)
@@ -458,8 +471,18 @@ class Prepared:
         lines = self.header_lines(version, step, correction, max_error, rounded is not None)
         if version[0] >= COMPACT_VERSION[0]:
             colour = self.colour and self.colour[1]
-            return compact.file_bytes(lines[1:-1], encoder.finish(), colour, version[0]), decoded
+            payload = section_payloads(encoders) if version >= PROGRESSIVE_VERSION else encoder.finish()
+            return compact.file_bytes(lines[1:-1], payload, colour, version[0]), decoded
         return file_bytes(lines, encoder.finish()), decoded
+
+    def encoders(self, version):
+        """The entropy encoder of each level of bands (band_level): 9.0's one per section, its own
+        tables and rANS words; before, one encoder for them all (the same object 1 + levels times)."""
+        from mzc.codecs.dwt2d.entropy import Encoder
+
+        count = 1 + self.levels if version >= PROGRESSIVE_VERSION else 1
+        encoders = [Encoder(same_size=SAME_SIZE, parametric=self.compact) for _ in range(count)]
+        return encoders * (1 + self.levels) if count == 1 else encoders
 
     def header_lines(self, version, step, correction, max_error, rounded=False):
         """The lines of the text header of ``version``, the magic line to the ``data`` line (7.0 codes
@@ -513,10 +536,24 @@ class Prepared:
         return max(float(z.max() - z.min()), 1e-6) if z.size else 1.0
 
 
+def section_payloads(encoders):
+    """The bodies of 9.0's base and level sections from their encoders, in order. The base section's
+    tables are chosen by the whole file's class counts, as 8.0's one payload's are, so that each level
+    section can keep them all (a table count of 0) or some (entropy.KEPT) where that costs less than
+    tables of its own, each section choosing for itself."""
+    count = max(len(encoder.class_counts()) for encoder in encoders)
+    payloads = [encoders[0].finish(sum(encoder.class_counts(count) for encoder in encoders))]
+    for encoder in encoders[1:]:
+        encoder.prior = encoders[0].tables
+        payloads.append(encoder.finish())
+    return payloads
+
+
 def written_version(grid, rounded, compact=True):
     """The version the reference encoder writes a grid coded whole in: 8.0 (``compact`` True), or the
-    container version ``compact`` names (7.0 for 7.0's tests), or without ``compact`` (a tile of a 5.0
-    file) the 3.x, 4.0 or 6.0 (``rounded``: decoded values rounded to integers) it was before."""
+    container version ``compact`` names (9.0 for ``progressive``, 7.0 for 7.0's tests), or without
+    ``compact`` (a tile of a 5.0 file) the 3.x, 4.0 or 6.0 (``rounded``: decoded values rounded to
+    integers) it was before."""
     if compact:
         return FLIPS_VERSION if compact is True else tuple(compact)
     if rounded:
@@ -582,15 +619,16 @@ def encode_grid(grid, **options):
     return encode_grid_with_decoded(grid, **options)[0]
 
 
-def encode_grid_with_decoded(grid, tile=None, compact=True, **options):
+def encode_grid_with_decoded(grid, tile=None, compact=True, progressive=None, **options):
     """(bytes, the heights a decoder gets from them) of a ZGrid (options checked by CODEC): whole
-    (``encode_whole``; without ``compact`` in the text-header versions) or, when ``tile`` or its size
-    says so, in tiles (mzc.codecs.dwt2d.tiles)."""
+    (``encode_whole``; without ``compact`` in the text-header versions, with ``progressive`` in 9.0)
+    or, when ``tile`` or its size says so, in tiles (mzc.codecs.dwt2d.tiles)."""
     from mzc.codecs.dwt2d import tiles
 
     side = tiles.tile_side(grid.shape, tile, charted=grid.charts is not None)
+    check_whole(progressive, side)
     if side is None:
-        return encode_whole(grid, compact=compact, **options)
+        return encode_whole(grid, compact=PROGRESSIVE_VERSION if progressive else compact, **options)
     data = tiles.encode(tiles.GridSource(grid), side, options)
     return data, tiles.read(data).z
 
@@ -604,9 +642,17 @@ def window_writer(source, options, scheduler=None):
 
     options = dict(options)
     side = tiles.tile_side(source.frame.shape, options.pop("tile", None))
+    check_whole(options.pop("progressive", None), side)
     if side is None:
         return None
     return tiles.file_chunks(source, side, options, getattr(source, "spill_dir", None), scheduler)
+
+
+def check_whole(progressive, side):
+    """Refuse ``progressive`` for a grid coded in tiles of ``side`` (not None): 9.0 codes a grid whole."""
+    if progressive and side is not None:
+        raise MzcError(f"a progressive file (mzc-dwt2d 9.0) codes the grid whole, and this one is coded in tiles of "
+                       f"{side} x {side} nodes: give --tile 0 (or leave out --progressive)", field="progressive")
 
 
 def encode_whole(grid, max_error=None, rmse=None, size=None, wavelet=DEFAULT_WAVELET, level=None, slope_limit=None,
@@ -790,45 +836,55 @@ def read_codec_fields(header, shape, transform):
     return wavelet, levels, expand_steps(steps, 1 + 3 * levels), slope_limit, correction
 
 
-def read(data, source="<bytes>"):
-    """Decode dwt2d bytes (7.0, 3.x, 4.0, 6.0, 2.0 with its periodised transform, or the tiles of 5.0)
-    into a ZGrid; any bad input raises MzcError."""
+def read(data, source="<bytes>", wanted=None):
+    """Decode dwt2d bytes (9.0, 8.0, 7.0, 3.x, 4.0, 6.0, 2.0 with its periodised transform, or the tiles of
+    5.0) into a ZGrid; any bad input raises MzcError. ``wanted`` K (a 9.0 file's alone) decodes band 0
+    and the K coarsest detail levels, the finer bands zero (all of them from K = the file's levels on);
+    a 9.0 file cut short decodes to its whole levels, with a warning (``warn_cut``)."""
     from mzc.codecs.dwt2d import tiles
 
+    progressive = compact.major(data) == PROGRESSIVE_VERSION[0]
+    if wanted is not None and not progressive:
+        raise MzcError("decoding some levels takes a progressive file (mzc-dwt2d 9.0, written by encode "
+                       "--progressive), and this is not one: decode it whole", source=source, field="levels")
     if tiles.is_tiled(data):
         return tiles.read(data, source)
     parametric = compact.is_compact(data)   # 7.0's table records
     colour = None
-    if parametric:
+    if progressive:
+        header, bodies, colour, _cut, _ends = compact.read_progressive(data, source)
+    elif parametric:
         header, body, colour = compact.read(data, source)
+        bodies = [body]
     else:
-        header, body, _first = read_header(data, source, KIND, FLIPS_VERSION[0], oldest_major=OLDEST_MAJOR,
+        header, body, _first = read_header(data, source, KIND, PROGRESSIVE_VERSION[0], oldest_major=OLDEST_MAJOR,
                                            projected_major=PROJECTED_VERSION[0], checksum_since=CHECKSUM_SINCE,
                                            binary=True, georef_since=GEOREF_SINCE, charted_major=CHARTED_VERSION[0])
+        bodies = [body]
     fields, rows, cols = read_grid_fields(header)
     transform = w2.TRANSFORMS[header.major]
     wavelet, levels, steps, slope_limit, correction = read_codec_fields(header, (rows, cols), transform)
     rounding = read_rounding(header, fields, ROUNDED_VERSION)
     geometry = w2.Geometry.of(fields["d1"], fields["d2"], fields["origin"], (rows, cols),
                               fields.get("projection", "planar"), fields.get("radius"))
-    from mzc.codecs.dwt2d.entropy import Decoder
-
-    decoder = Decoder(body, source, SAME_SIZE, parametric)
-    valid = (flips.decode if header.major >= FLIPS_VERSION[0] else decode_mask)(decoder, rows, cols)
+    decoders = section_decoders(bodies, levels, wanted, source, parametric, progressive)
+    valid = (flips.decode if header.major >= FLIPS_VERSION[0] else decode_mask)(decoders[0], rows, cols)
     relevant = w2.flatten(transform.relevance(valid, wavelet, levels, geometry.periodic))
-    qflat = decode_bands(decoder, relevant, steps)
+    qflat = decode_bands(decoders, relevant, steps)
+    whole = len(decoders) == 1 + levels   # every level decoded: the corrections are the last section's
     with np.errstate(over="ignore", invalid="ignore"):
         bands = w2.dequantise(qflat, band_steps(geometry, steps, [q.shape for q in qflat], qflat[0], slope_limit))
         del qflat   # gone before the inverse: f18's decode peaks 4 MB lower, 20% fewer fresh pages faulted in
         z = transform.inverse(bands, (rows, cols), wavelet, levels, geometry.periodic)
-        if correction > 0:
-            k = decoder.read_rows(valid, np.zeros(valid.shape), CORRECTION_THRESHOLDS, correction_model(0))
+        if correction > 0 and whole:
+            k = decoders[-1].read_rows(valid, np.zeros(valid.shape), CORRECTION_THRESHOLDS, correction_model(0))
             z[valid] += correction * k[valid]
         if rounding:
             z[valid] = rounded_values(z[valid], fields["raster"].sample)
     if header.charted and header.has("chart_count"):
-        fields["charts"] = decode_charts(decoder, header.integer("chart_count", 1, MAX_CHARTS))
-    decoder.check_end()
+        fields["charts"] = decode_charts(decoders[0], header.integer("chart_count", 1, MAX_CHARTS))
+    for decoder in {id(d): d for d in decoders}.values():
+        decoder.check_end()
     if not np.isfinite(z[valid]).all():
         raise MzcError("decoded heights are not finite (corrupt steps or payload)", source=source, field="data")
     z[~valid] = np.nan
@@ -836,11 +892,46 @@ def read(data, source="<bytes>"):
         from mzc.codecs.dwt2d.colour import decode_colour
 
         fields["colors"] = decode_colour(colour, valid, source)
-    return ZGrid(z=z, **fields)
+    grid = ZGrid(z=z, **fields)
+    coloured = header.has("colour_psnr") or header.has("colour_max_error")
+    if progressive and (len(bodies) - 1 < levels or coloured and colour is None):   # cut short: said once decoded
+        warn_cut(source, len(bodies) - 1, levels, coloured)
+    return grid
+
+
+def section_decoders(bodies, levels, wanted, source, parametric, progressive):
+    """The entropy decoder of each level of bands (band_level) that is decoded: before 9.0, the one
+    payload's (``bodies``' one; ``parametric``: 7.0's table records) for every level; in 9.0
+    (``progressive``), the base section's and each level section's that the file holds, up to
+    ``wanted`` (None: all of them)."""
+    from mzc.codecs.dwt2d.entropy import Decoder
+
+    if not progressive:
+        return [Decoder(bodies[0], source, SAME_SIZE, parametric)] * (1 + levels)
+    if len(bodies) > 1 + levels:
+        raise MzcError(f"{len(bodies) - 1} level sections for {levels} wavelet levels", source=source, field="data")
+    base = Decoder(bodies[0], source, SAME_SIZE, True)
+    kept = bodies[1:1 + (levels if wanted is None else min(wanted, levels))]
+    return [base, *(Decoder(body, source, SAME_SIZE, True, base.tables) for body in kept)]
+
+
+def warn_cut(source, complete, levels, coloured):
+    """Say in one line that a 9.0 file was cut short: how many of its detail levels it holds whole
+    (and so decodes), and what else is lost with the rest: the colours, the max_error corrections."""
+    import warnings
+
+    from mzc.errors import MzcWarning
+
+    if complete < levels:
+        message = (f"the file is cut short: decoded {complete} of its {levels} detail levels, a coarser surface "
+                   f"(without its finest levels{' and colours' if coloured else ''})")
+    else:
+        message = "the file is cut short in its colour section: the surface is whole, its colours are left out"
+    warnings.warn(MzcWarning(f"{source}: {message}"), stacklevel=3)
 
 
 CODEC = Codec(
-    "dwt2d", encode_grid, read, writer_with_decoded=encode_grid_with_decoded, version=FLIPS_VERSION,
+    "dwt2d", encode_grid, read, writer_with_decoded=encode_grid_with_decoded, version=PROGRESSIVE_VERSION,
     oldest_major=OLDEST_MAJOR, extension=".mzw2", spec="spec/dwt2d.md", window_writer=window_writer,
     summary="2D wavelet of the whole grid, entropy coded, error-bounded", check_options=check_options,
     example={"max_error": 0.05}, keeps_colour=keeps_colour, options=(
@@ -862,6 +953,10 @@ CODEC = Codec(
                help="Code the grid's colours at this PSNR over the valid nodes [default: 36]."),
         Option("colour_max_error", int, None, 0, 127, metavar="LEVELS",
                help="Code the grid's colours within this many 8-bit levels at every valid node (0: lossless)."),
+        Option("progressive", bool, None,
+               help="Write mzc-dwt2d 9.0: the levels in sections, coarsest first, each with its own checksum, "
+                    "so that a cut file (or decode --levels K) decodes to a coarser surface; about 60 bytes "
+                    "more on a face. Grids coded whole only."),
         Option("tile", int, None, 0, metavar="N",
                help="Code the grid in independent N x N tiles (4..4096), each decoded on its own; 0 = whole "
                     "[default: tiles of 1024 above 1024 x 1024 nodes]."),

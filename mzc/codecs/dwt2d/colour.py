@@ -255,7 +255,8 @@ class Prepared:
         encoder = Encoder(same_size=SAME_SIZE)
         relevant = self.bands(transform)[0]
         for qflat, step in zip(qflats, steps):
-            encode_bands(encoder, qflat, relevant, [s / UNIT for s in transform.band_steps(step, self.levels)])
+            scaled = [s / UNIT for s in transform.band_steps(step, self.levels)]
+            encode_bands([encoder] * len(qflat), qflat, relevant, scaled)
         correction = 0
         if max_error is not None and np.abs(decoded - self.rgb)[self.mask].max(initial=0) > max_error:
             correction = 2 * max_error + 1
@@ -394,7 +395,7 @@ def decode_colour(data, mask, source="<bytes>"):
     planes = []
     for step in steps:
         per_band = transform.band_steps(step, levels)
-        qflat = decode_bands(decoder, relevant, [s / UNIT for s in per_band])
+        qflat = decode_bands([decoder] * len(relevant), relevant, [s / UNIT for s in per_band])
         if max(int(np.abs(q).max(initial=0)) for q in qflat) > MAX_QUANTUM:
             raise MzcError("a quantised coefficient is far outside 8-bit colour", source=source, field="colour")
         planes.append(transform.plane(qflat, per_band, levels))

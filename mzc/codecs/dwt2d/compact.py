@@ -1,6 +1,9 @@
-"""The container of ``mzc-dwt2d 7.0`` and ``8.0`` (spec/dwt2d.md, Version 7.0): the magic line, then
-tagged sections, each with its own CRC-32, the first of them the header's fields in binary. 8.0 has one
+"""The container of ``mzc-dwt2d 7.0``, ``8.0`` and ``9.0`` (spec/dwt2d.md, Version 7.0): the magic line,
+then tagged sections, each with its own CRC-32, the first of them the header's fields in binary. 8.0 has one
 more field, the source's vertex count (``source_vertices``), and codes its mask otherwise (Version 8.0).
+9.0 (progressive, Version 9.0) splits 8.0's payload into a base section and one section per detail
+level, coarsest first, each CRC-32 chained to the section before, so that a prefix of whole sections
+decodes (``read_progressive``).
 
 A 3.x header of a face file took about 215 bytes of text; the same fields take about 60 here. The
 fields are the 3.x header lines (keyword and values), so one reader checks them all
@@ -12,14 +15,18 @@ says what it holds, so a later version adds a section (a colour layer) without c
 import struct
 import zlib
 from decimal import Decimal
+from typing import NamedTuple
 
 from mzc.codecs.dwt2d.entropy import read_varint, varint
 from mzc.errors import MzcError
 from mzc.formats.header import CHECKSUM, Header, format_number, split_magic
 
 MAGIC = b"mzc-dwt2d 7.0\n"
-MAJORS = (7, 8)                 # the majors in this container: 8.0 is 7.0 with source_vertices and the mask as flips
+MAJORS = (7, 8, 9)              # the majors in this container: 8.0 is 7.0 with source_vertices and the mask as flips,
+                                # 9.0 is 8.0 in sections of levels
+PROGRESSIVE_MAJOR = 9
 HEADER, PAYLOAD, COLOUR = 1, 2, 3   # section tags, in the order they come (COLOUR only in a file with colours)
+BASE, LEVEL = 4, 5              # 9.0: HEADER, BASE, one LEVEL a detail level (coarsest first), then COLOUR
 CRC = struct.Struct("<I")
 MAX_VARINT_BYTES = 10           # an unsigned 64-bit integer
 MAX_DIGITS = 40                 # a decimal's mantissa (repr of a binary64 has at most 17 digits)
@@ -85,13 +92,28 @@ def magic_line(version):
 
 
 def file_bytes(lines, payload, colour=None, major=7):
-    """The file of ``major`` (7 or 8) of the header ``lines`` (3.x's, without the magic and ``data``
-    lines; fields of that major's), the payload and, for a grid with colours, its colour section
-    (mzc.codecs.dwt2d.colour's bytes)."""
+    """The file of ``major`` (7, 8 or 9) of the header ``lines`` (3.x's, without the magic and ``data``
+    lines; fields of that major's), the payload (9.0: the list of its base and level sections' bodies)
+    and, for a grid with colours, its colour section (mzc.codecs.dwt2d.colour's bytes)."""
     fields = b"".join(field_bytes(line) for line in sorted(lines, key=field_number))   # in the table's order
     magic = magic_line((major, 0))
+    head = magic + section(HEADER, fields, magic)
+    if major >= PROGRESSIVE_MAJOR:
+        tagged = [(BASE, payload[0]), *((LEVEL, body) for body in payload[1:])]
+        return head + chained(tagged + ([] if colour is None else [(COLOUR, colour)]), head[-CRC.size:])
     coloured = b"" if colour is None else section(COLOUR, colour)
-    return magic + section(HEADER, fields, magic) + section(PAYLOAD, payload) + coloured
+    return head + section(PAYLOAD, payload) + coloured
+
+
+def chained(tagged, before):
+    """The sections of (tag, body) pairs, each CRC-32 starting from the CRC-32 bytes of the section
+    before it (``before``: the header's), so that a section moved, dropped or taken from another
+    file does not check."""
+    out = []
+    for tag, body in tagged:
+        out.append(section(tag, body, before))
+        before = out[-1][-CRC.size:]
+    return b"".join(out)
 
 
 def field_number(line):
@@ -100,6 +122,10 @@ def field_number(line):
 
 
 # --------------------------------------------------------------------------- reading
+
+
+class Cut(Exception):
+    """A section's length runs to the end of the file (``Reader.ends_inside``)."""
 
 
 class Reader:
@@ -128,9 +154,12 @@ class Reader:
         value, self.position = read_varint(self.data, self.position, end, MAX_VARINT_BYTES, fault)
         return value
 
-    def section(self, tag, before=b""):
-        """The body of the next section, which must be ``tag``'s, its CRC-32 checked."""
+    def section(self, tag, before=b"", cut=False):
+        """The body of the next section, which must be ``tag``'s, its CRC-32 checked; with ``cut``, None
+        when the file ends before the section does (a prefix of a 9.0 file), which is else refused."""
         start = self.position
+        if cut and self.ends_inside(start):
+            return None
         if start >= len(self.data):
             raise self.error(f"the file ends before its section {tag}")
         if self.data[start] != tag:
@@ -146,6 +175,17 @@ class Reader:
                              CHECKSUM)
         body, self.position = bytes(self.data[self.position:end]), end + CRC.size
         return body
+
+    def ends_inside(self, start):
+        """True when the section at ``start`` does not end within the file (its tag, length, body or CRC-32 cut)."""
+        def fault(kind):
+            return Cut() if kind == "cut" else self.error(f"a number longer than {MAX_VARINT_BYTES} bytes")
+
+        try:
+            length, after = read_varint(self.data, start + 1, len(self.data), MAX_VARINT_BYTES, fault)
+        except Cut:
+            return True
+        return after + length + CRC.size > len(self.data)
 
     def decimal(self, end):
         """A number of ``decimal_bytes`` as the text 3.x writes for it."""
@@ -199,6 +239,10 @@ class Reader:
             raise self.error("a header field runs past its section")
         return [str(self.varint(end)) if kind == "u" else self.decimal(end) for _ in range(count)]
 
+    def last_crc(self):
+        """The CRC-32 bytes of the section just read, where the next one's CRC-32 starts in 9.0 (``chained``)."""
+        return bytes(self.data[self.position - CRC.size:self.position])
+
     def check_end(self):
         """Refuse bytes after the last section (added to the file, which its sections' CRC-32s do not cover)."""
         if self.position != len(self.data):
@@ -223,7 +267,10 @@ def is_compact(data):
 
 
 def read(data, source):
-    """(Header, payload bytes, colour section bytes or None) of a 7.0 or 8.0 file."""
+    """(Header, payload bytes, colour section bytes or None) of a 7.0 or 8.0 file; of a 9.0 file the payload
+    is the list of its base and level sections' bodies (``read_progressive``)."""
+    if major(data) == PROGRESSIVE_MAJOR:
+        return read_progressive(data, source)[:3]
     reader = Reader(data, source)
     header = reader.header()
     payload = reader.section(PAYLOAD)
@@ -232,3 +279,37 @@ def read(data, source):
     reader.check_end()
     return header, payload, colour
 
+
+
+class Sections(NamedTuple):
+    """What ``read_progressive`` reads of a 9.0 file: its Header, the bodies of its base section and
+    level sections (coarsest first), its colour section's body or None, whether the file is ``cut``
+    short, and ``ends``, the file's length up to the end of each base and level section read."""
+
+    header: Header
+    bodies: list
+    colour: bytes | None
+    cut: bool
+    ends: list
+
+
+def read_progressive(data, source):
+    """The Sections of a 9.0 file or a prefix of one: ``cut`` when the file ends inside or before a
+    level or colour section, which is then left out (a cut in the header or base section is refused)."""
+    reader = Reader(data, source)
+    header = reader.header()
+    bodies = [reader.section(BASE, reader.last_crc())]
+    ends = [reader.position]
+    while reader.position < len(reader.data) and reader.data[reader.position] == LEVEL:
+        body = reader.section(LEVEL, reader.last_crc(), cut=True)
+        if body is None:
+            return Sections(header, bodies, None, True, ends)
+        bodies.append(body)
+        ends.append(reader.position)
+    colour = None
+    if reader.position < len(reader.data):
+        colour = reader.section(COLOUR, reader.last_crc(), cut=True)
+        if colour is None:
+            return Sections(header, bodies, None, True, ends)
+    reader.check_end()
+    return Sections(header, bodies, colour, False, ends)

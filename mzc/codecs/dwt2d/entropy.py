@@ -22,6 +22,7 @@ from mzc.codecs.dwt2d import _rows
 from mzc.errors import MzcError
 
 TABLE_BITS = 14
+KEPT = b"\x01"            # 9.0's level sections: a table record keeping the base section's table of its model
 MAX_CLASSES = 48          # |v| < 2**47: far beyond any quantised height
 ANS_PRECISION = 24
 
@@ -217,6 +218,8 @@ class Encoder:
         self.same_size = [list(group) for group in same_size]
         self.parametric = parametric   # 7.0's table records (parametric or weight codes), else 3.x's
         self.leading = None            # 8.0: pushes the mask's binary decisions onto the coder, to decode first
+        self.prior = None              # 9.0's level sections: the base section's tables, which ``01`` keeps
+        self.tables = None             # the tables written, once finished
 
     def add(self, model, values, signed=True):
         """Append ``values`` (ints) coded with context ``model``: one id, or one id per value.
@@ -227,22 +230,38 @@ class Encoder:
         self.values.append(values)
         self.signed.append(np.full(values.shape, int(signed), dtype=np.int64))
 
-    def finish(self):
-        """Payload bytes: tables, rANS words, raw bits (layout in spec/dwt2d.md section 'payload')."""
+    def symbols(self):
+        """(model ids, values, magnitude classes) of everything added, in order."""
         models = np.concatenate(self.models or [np.zeros(0, np.int64)])
         values = np.concatenate(self.values or [np.zeros(0, np.int64)])
-        cls = classes(values)
-        count = int(models.max()) + 1 if len(models) else 0
-        counts = np.bincount(models * MAX_CLASSES + cls, minlength=count * MAX_CLASSES).reshape(count, MAX_CLASSES)
-        sizes = self.table_sizes(counts)
+        return models, values, classes(values)
+
+    def class_counts(self, count=0):
+        """The count of each class under each model (a row per model id, at least ``count`` rows)."""
+        models, _values, cls = self.symbols()
+        count = max(count, int(models.max()) + 1 if len(models) else 0)
+        return np.bincount(models * MAX_CLASSES + cls, minlength=count * MAX_CLASSES).reshape(count, MAX_CLASSES)
+
+    def finish(self, shared=None):
+        """Payload bytes: tables, rANS words, raw bits (layout in spec/dwt2d.md section 'payload').
+        ``shared``: the class counts to choose the tables by instead of the payload's own (9.0's base
+        section: the whole file's, so that its level sections can keep them, ``keeps_all``)."""
+        models, values, cls = self.symbols()
+        counts = self.class_counts(0 if shared is None else len(shared))
+        chosen = counts if shared is None else shared
+        sizes = self.table_sizes(chosen)
         if self.parametric:
-            tables, table_bytes = choose_records(counts, sizes)
+            tables, table_bytes = choose_records(chosen, sizes, self.prior)
         else:
-            codes = choose_tables(counts, sizes)
+            codes = choose_tables(chosen, sizes)
             tables = [frequencies(c) for c in codes]
             table_bytes = b"".join(b"\x00" if shared else encode_table(c) for c, shared in table_records(codes))
+        head = varint(len(tables)) + table_bytes
+        if self.prior is not None and keeps_all(self.prior, counts, tables, len(head)):
+            tables, head = self.prior, varint(0)
+        self.tables = tables
         words = ans_encode(tables, models, cls, self.leading)
-        return (varint(count) + table_bytes + varint(len(words)) + words.astype("<u4").tobytes()
+        return (head + varint(len(words)) + words.astype("<u4").tobytes()
                 + np.packbits(raw_bits(values, cls, np.concatenate(self.signed or [np.zeros(0, np.int64)]))).tobytes())
 
     def table_sizes(self, counts):
@@ -274,13 +293,14 @@ def choose_tables(counts, sizes):
     return tables
 
 
-def choose_records(counts, sizes):
+def choose_records(counts, sizes, prior=None):
     """(frequencies, bytes) of 7.0's table records, one per model: each the cheapest, by the ideal bits
     of its symbols plus the record's own, of a repeat of the previous model's table (``00``), a
     parametric table (varint 2S + 1, then z and t, a byte each) and a table of weight codes (varint 2S,
-    then the codes as in 3.x)."""
+    then the codes as in 3.x); with ``prior`` (9.0's level sections: the base section's tables), also
+    that section's table of the same model (``01``), where it has as many classes."""
     tables, out = [], []
-    for model_counts, size in zip(counts, sizes):
+    for model, (model_counts, size) in enumerate(zip(counts, sizes)):
         model_counts = model_counts[:size]
         codes = table_codes(model_counts)
         zero, ratio = fit_parametric(model_counts)
@@ -288,10 +308,23 @@ def choose_records(counts, sizes):
                    (frequencies(codes), varint(2 * size) + encode_table(codes)[1:])]
         if tables and len(tables[-1]) == size:
             options.append((tables[-1], b"\x00"))
+        if prior is not None and model < len(prior) and len(prior[model]) == size:
+            options.append((prior[model], KEPT))
         freq, record = min(options, key=lambda option: ideal_bits(option[0], model_counts) + 8 * len(option[1]))
         tables.append(freq)
         out.append(record)
     return tables, b"".join(out)
+
+
+def keeps_all(prior, counts, own, own_bytes):
+    """True when a 9.0 level section had better keep every table of the base section (``prior``; its
+    table count 0) than write its ``own`` (``own_bytes`` of count and records): ``prior`` has a table
+    of enough classes for every model it uses, and its symbols cost fewer bits with them."""
+    used = np.flatnonzero(counts.any(axis=1))
+    if any(m >= len(prior) or counts[m, len(prior[m]):].any() for m in used):
+        return False
+    kept = sum(ideal_bits(prior[m], counts[m, :len(prior[m])]) for m in used)
+    return kept + 8 <= sum(ideal_bits(own[m], counts[m, :len(own[m])]) for m in used) + 8 * own_bytes
 
 
 def ideal_bits(freq, counts):
@@ -340,11 +373,11 @@ class Decoder:
     (``state``, uint64) and the ``cursor`` (words left, next raw bit, an error detail) in place.
     """
 
-    def __init__(self, payload, source, same_size=(), parametric=False):
+    def __init__(self, payload, source, same_size=(), parametric=False, prior=None):
         self.source = source
         self.data = memoryview(payload)
         self.position = 0
-        self.tables = self.read_tables(parametric)
+        self.tables = self.read_tables(parametric, prior)
         word_count = self.read_varint()
         end = self.position + 4 * word_count
         if end > len(self.data):
@@ -405,10 +438,13 @@ class Decoder:
             "payload ends inside a varint" if kind == "cut" else "varint longer than 5 bytes"))
         return value
 
-    def read_tables(self, parametric=False):
+    def read_tables(self, parametric=False, prior=None):
         """The model tables; a 0 class count repeats the previous table. ``parametric`` (7.0): a record's
-        varint is 2S + 1 for a parametric table (z and t follow) or 2S for weight codes."""
+        varint is 2S + 1 for a parametric table (z and t follow) or 2S for weight codes; with ``prior``
+        (9.0's level sections: the base section's tables), 1 keeps that section's table of the model."""
         count = self.read_varint()
+        if count == 0 and prior is not None:   # 9.0's level section keeping every table of the base section
+            return list(prior)
         if count > 4096:
             raise self.error(f"{count} model tables is more than 4096")
         tables = []
@@ -418,6 +454,11 @@ class Decoder:
                 if not tables:
                     raise self.error("the first model table cannot repeat a previous one")
                 tables.append(tables[-1])
+                continue
+            if size == KEPT[0] and prior is not None:
+                if len(tables) >= len(prior):
+                    raise self.error(f"model table {len(tables)} keeps the base section's, which has none")
+                tables.append(prior[len(tables)])
                 continue
             if parametric:
                 size, kind = divmod(size, 2)
