@@ -306,14 +306,17 @@ def test_a_multi_chart_grids_default_spacing_is_coarser_than_its_sources_and_one
     np.testing.assert_array_equal(again.z, one.z)
 
 
-def test_a_mesh_of_few_large_triangles_keeps_its_capped_chart_spacing():
+def test_a_mesh_of_few_large_triangles_takes_a_finer_cap_for_its_charts():
     """Where half the median edge is above 1/200 of the longest side (a CAD part's few large
-    triangles; the coarse torus) the charts keep that cap: the objects measured lose a floor
-    target of issue 28 at any coarser spacing (benchmarks/chart-spacing-results.md)."""
-    from mzc.ops.slicing import MIN_NODES_ACROSS
+    triangles; the coarse torus) the charts take 1/300 of it: the objects measured lose a floor
+    target of issue 28 at any coarser spacing (benchmarks/chart-spacing-results.md), the cycloidal
+    and the dragon at 1/200 (mesh_chart_spacing)."""
+    from mzc.ops.slicing import CHART_CAP_NODES_ACROSS, DATA_SPACING_FRACTION, MIN_NODES_ACROSS, median_edge, shortened
 
     mesh = torus()
-    assert slice_surface(mesh).d1 == float(np.ptp(mesh.points, axis=0).max()) / MIN_NODES_ACROSS
+    longest = float(np.ptp(mesh.points, axis=0).max())
+    assert slice_surface(mesh).d1 == shortened(longest / CHART_CAP_NODES_ACROSS)
+    assert DATA_SPACING_FRACTION * median_edge(mesh.points, mesh.triangles) >= longest / MIN_NODES_ACROSS
 
 
 def test_a_mesh_dense_in_a_few_places_takes_its_spacing_from_its_area_per_vertex():
