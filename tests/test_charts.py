@@ -466,3 +466,21 @@ def test_the_low_poly_objects_meet_issue_28s_floor(name):
     samples = sample_surface(mesh.points, mesh.triangles, 20_000, np.random.default_rng(0))[0]
     there = distance_to_mesh(samples, rebuilt.points, rebuilt.triangles)
     assert np.mean(there <= 0.001 * diagonal) >= 0.995 and there.max() <= 0.0075 * diagonal
+
+
+def test_a_piece_left_alone_beyond_60_degrees_of_its_view_takes_the_view_that_faces_it():
+    """A small piece takes a neighbour's view up to 80 degrees off to join its chart; left a chart of
+    its own (the dragon's, 76 degrees off +z, 0.6% D from its rebuild) it turns to the view that sees
+    it within 60 degrees, and a piece its view sees within 60 degrees keeps it."""
+    from mzc.ops.charts import VIEWS, facing_cosines, refaced, view_frames
+
+    points = np.array([[0.0, 0.0, 0.0], [0.0, 0.24, -0.97], [1.0, 0.0, 0.0]]) * 10
+    triangles = np.array([[0, 2, 1]])
+    corners = points[triangles]
+    normal = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
+    normal /= np.linalg.norm(normal, axis=1, keepdims=True)
+    cosine, frames, area = facing_cosines(normal), view_frames(points), np.array([50.0])
+    assert 0.17 < cosine[0, VIEWS.index("+z")] < FACING
+    view, members = refaced(VIEWS.index("+z"), np.array([0]), frames, triangles, cosine, area, 1.0)
+    assert VIEWS[view] == "+y" and list(members) == [0]
+    assert refaced(VIEWS.index("+y"), np.array([0]), frames, triangles, cosine, area, 1.0)[0] == VIEWS.index("+y")
