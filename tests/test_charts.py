@@ -484,3 +484,31 @@ def test_a_piece_left_alone_beyond_60_degrees_of_its_view_takes_the_view_that_fa
     view, members = refaced(VIEWS.index("+z"), np.array([0]), frames, triangles, cosine, area, 1.0)
     assert VIEWS[view] == "+y" and list(members) == [0]
     assert refaced(VIEWS.index("+y"), np.array([0]), frames, triangles, cosine, area, 1.0)[0] == VIEWS.index("+y")
+
+
+def test_a_thin_pieces_widened_nodes_are_those_within_a_spacing_of_its_nearest_triangle():
+    """``widened`` measures each node only against the triangles whose grown box holds it: the same
+    heights as measuring every node against every triangle, the nearest triangle's plane at each."""
+    from mzc.ops.charts import widened
+
+    rng = np.random.default_rng(3)
+    corners = np.concatenate([rng.uniform(0, 12, (9, 3, 2)), rng.uniform(1, 3, (9, 3, 1))], axis=2)
+    xs, ys = np.arange(-2, 15) * 1.0, np.arange(-1, 14) * 1.0
+    heights = widened(corners, xs, ys, 1.0)
+    for row, y in enumerate(ys):
+        for col, x in enumerate(xs):
+            reach = [min(segment_distance((x, y), t[k, :2], t[(k + 1) % 3, :2]) for k in range(3)) for t in corners]
+            t = corners[int(np.argmin(reach))]
+            normal = np.cross(t[1] - t[0], t[2] - t[0])
+            if min(reach) > 1.0 or normal[2] <= 0:
+                assert np.isnan(heights[row, col])
+            else:
+                expected = t[0, 2] - (normal[0] * (x - t[0, 0]) + normal[1] * (y - t[0, 1])) / normal[2]
+                assert heights[row, col] == pytest.approx(expected, abs=1e-9)
+
+
+def segment_distance(point, a, b):
+    """The distance from a 2D point to the segment a-b, plainly."""
+    point, a, b = (np.asarray(v, dtype=float) for v in (point, a, b))
+    along = np.clip(np.dot(point - a, b - a) / max(np.dot(b - a, b - a), 1e-300), 0, 1)
+    return float(np.linalg.norm(point - (a + along * (b - a))))

@@ -115,28 +115,45 @@ def makes_cells(valid):
 
 def widened(corners, xs, ys, spacing):
     """(len(ys), len(xs)): at each node within a spacing of the triangles ``corners`` (t, 3, 3) seen
-    along z, the height of the plane of the nearest of them there (NaN elsewhere, and for a triangle
-    seen edge-on): a thin piece's surface carried to the nodes about it, off it by at most a spacing."""
-    x, y = np.meshgrid(xs, ys)
-    node = np.column_stack([x.ravel(), y.ravel()])[:, None, :]
-    flat = corners[None, :, :, :2]
-    distance = np.min([segment_distances(node, flat[:, :, k], flat[:, :, (k + 1) % 3]) for k in range(3)], axis=0)
-    nearest, reach = distance.argmin(axis=1), distance.min(axis=1)
-    normal = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])[nearest]
-    origin = corners[nearest, 0]
-    across = normal[:, 0] * (node[:, 0, 0] - origin[:, 0]) + normal[:, 1] * (node[:, 0, 1] - origin[:, 1])
-    seen = (reach <= spacing) & (normal[:, 2] > 0)
-    height = np.full(len(node), np.nan)
-    height[seen] = origin[seen, 2] - across[seen] / normal[seen, 2]
-    return height.reshape(x.shape)
+    along z, the height of the plane of the nearest of them there (the first of equally near ones;
+    NaN elsewhere, and for a triangle seen edge-on): a thin piece's surface carried to the nodes
+    about it, off it by at most a spacing. Only the nodes in each triangle's box grown by a spacing
+    are measured against it (``box_pairs``): a long thin piece's box may hold many nodes."""
+    triangle, row, col = box_pairs(corners[..., :2], xs, ys, spacing)
+    point, flat = np.column_stack([xs[col], ys[row]]), corners[triangle, :, :2]
+    reach = np.min([segment_distances(point, flat[:, k], flat[:, (k + 1) % 3]) for k in range(3)], axis=0)
+    node = row * len(xs) + col
+    order = np.lexsort((triangle, reach, node))
+    first = order[np.flatnonzero(np.diff(node[order], prepend=-1) != 0)]   # each node's nearest triangle
+    first = first[reach[first] <= spacing]
+    chosen = corners[triangle[first]]
+    normal = np.cross(chosen[:, 1] - chosen[:, 0], chosen[:, 2] - chosen[:, 0])
+    seen = normal[:, 2] > 0
+    first, chosen, normal = first[seen], chosen[seen], normal[seen]
+    across = normal[:, 0] * (point[first, 0] - chosen[:, 0, 0]) + normal[:, 1] * (point[first, 1] - chosen[:, 0, 1])
+    height = np.full(len(ys) * len(xs), np.nan)
+    height[node[first]] = chosen[:, 0, 2] - across / normal[:, 2]
+    return height.reshape(len(ys), len(xs))
+
+
+def box_pairs(flat, xs, ys, spacing):
+    """(triangle, row, col) of every node (xs[col], ys[row]) in the box of each triangle ``flat``
+    (t, 3, 2), grown by ``spacing`` on every side."""
+    low, high = flat.min(axis=1) - spacing, flat.max(axis=1) + spacing
+    col0, col1 = np.searchsorted(xs, low[:, 0], "left"), np.searchsorted(xs, high[:, 0], "right")
+    row0, row1 = np.searchsorted(ys, low[:, 1], "left"), np.searchsorted(ys, high[:, 1], "right")
+    cols, count = col1 - col0, (col1 - col0) * (row1 - row0)
+    triangle = np.repeat(np.arange(len(flat)), count)
+    within = np.arange(len(triangle)) - np.repeat(np.cumsum(count) - count, count)
+    return triangle, row0[triangle] + within // cols[triangle], col0[triangle] + within % cols[triangle]
 
 
 def segment_distances(point, a, b):
-    """(n, t): the distance from each 2D point (n, 1, 2) to each segment a-b (1, t, 2)."""
+    """(n,): the distance from each 2D point (n, 2) to its segment a-b (n, 2 each)."""
     ab = b - a
-    along = np.einsum("ntk,ntk->nt", point - a, ab) / np.maximum(np.einsum("ntk,ntk->nt", ab, ab), 1e-300)
-    off = point - (a + np.clip(along, 0, 1)[..., None] * ab)
-    return np.sqrt(np.sum(off * off, axis=-1))
+    along = np.sum((point - a) * ab, axis=1) / np.maximum(np.sum(ab * ab, axis=1), 1e-300)
+    off = point - (a + np.clip(along, 0, 1)[:, None] * ab)
+    return np.sqrt(np.sum(off * off, axis=1))
 
 
 # --------------------------------------------------------------------------- when one grid will do
