@@ -306,14 +306,17 @@ def test_a_multi_chart_grids_default_spacing_is_coarser_than_its_sources_and_one
     np.testing.assert_array_equal(again.z, one.z)
 
 
-def test_a_mesh_of_few_large_triangles_keeps_its_capped_chart_spacing():
+def test_a_mesh_of_few_large_triangles_takes_a_finer_cap_for_its_charts():
     """Where half the median edge is above 1/200 of the longest side (a CAD part's few large
-    triangles; the coarse torus) the charts keep that cap: the objects measured lose a floor
-    target of issue 28 at any coarser spacing (benchmarks/chart-spacing-results.md)."""
-    from mzc.ops.slicing import MIN_NODES_ACROSS
+    triangles; the coarse torus) the charts take 1/300 of it: the objects measured lose a floor
+    target of issue 28 at any coarser spacing (benchmarks/chart-spacing-results.md), the cycloidal
+    and the dragon at 1/200 (mesh_chart_spacing)."""
+    from mzc.ops.slicing import CHART_CAP_NODES_ACROSS, DATA_SPACING_FRACTION, MIN_NODES_ACROSS, median_edge, shortened
 
     mesh = torus()
-    assert slice_surface(mesh).d1 == float(np.ptp(mesh.points, axis=0).max()) / MIN_NODES_ACROSS
+    longest = float(np.ptp(mesh.points, axis=0).max())
+    assert slice_surface(mesh).d1 == shortened(longest / CHART_CAP_NODES_ACROSS)
+    assert DATA_SPACING_FRACTION * median_edge(mesh.points, mesh.triangles) >= longest / MIN_NODES_ACROSS
 
 
 def test_a_mesh_dense_in_a_few_places_takes_its_spacing_from_its_area_per_vertex():
@@ -419,3 +422,93 @@ def test_diff_measures_a_multi_chart_grids_nodes_by_their_distance_to_the_other_
     moved = grid.with_z(grid.z + 0.25)   # each node 0.25 further along its chart's line
     report = compare(moved, mesh)
     assert 0.1 < report["grid_rmse"] <= 0.25 + 1e-9
+
+
+def thin_strip(width):
+    """A Piece of two triangles seen along +z: a strip from x = 0.1 to 10.1 and y = 0.3 to
+    0.3 + width on the plane z = 2 + 0.1 x, of a lattice of spacing 1."""
+    from mzc.ops.charts import Piece
+
+    x, y = np.array([0.1, 10.1, 10.1, 0.1]), np.array([0.3, 0.3, 0.3 + width, 0.3 + width])
+    points = np.column_stack([x, y, 2 + 0.1 * x])
+    return Piece(0, points, np.array([[0, 1, 2], [0, 2, 3]]))
+
+
+def test_a_piece_thinner_than_a_cell_takes_its_plane_at_the_nodes_about_it():
+    """No node line meets a strip 0.4 cells wide between two lattice rows: its chart would hold no
+    triangle (the dragon's fins, missing from its rebuild). Its plane is carried to the nodes within
+    a spacing of it, so its chart has cells, every node on the strip's plane."""
+    view, i0, j0, z = thin_strip(0.4).block(1.0)
+    valid = ~np.isnan(z)
+    assert view == "+z" and j0 == 0 and z.shape[0] == 2 and valid.sum() >= 18
+    cols = i0 + np.nonzero(valid)[1]
+    np.testing.assert_allclose(z[valid], 2 + 0.1 * cols, rtol=0, atol=1e-12)
+
+
+def test_a_piece_wide_enough_keeps_only_the_nodes_its_lines_meet():
+    """A strip 3.4 cells wide has cells of its own: its block holds the lattice's hits, no more."""
+    view, i0, j0, z = thin_strip(3.4).block(1.0)
+    rows, cols = np.nonzero(~np.isnan(z))
+    assert (j0 + rows).min() == 1 and (j0 + rows).max() == 3 and (i0 + cols).min() == 1 and (i0 + cols).max() == 10
+
+
+@pytest.mark.parametrize("name", ["dragon.ply", "cycloidal.ply"])
+def test_the_low_poly_objects_meet_issue_28s_floor(name):
+    """The objects of few large triangles, charted at 1/300 of their longest side (the cycloidal's
+    long stitches, the dragon's coarse bends missed the floor at 1/200) with their thin fins kept:
+    whole-surface RMS within 0.02% of D, 99.5% of the area within 0.1% D, and nothing of the
+    original (the dragon's fins were 1.35% D from its rebuild) beyond 0.75% D."""
+    from mzc.measure.metrics import distance_to_mesh, sample_surface, surface_distance
+
+    mesh, rebuilt, diagonal = sliced_shared_object(name)
+    assert surface_distance((mesh.points, mesh.triangles), (rebuilt.points, rebuilt.triangles),
+                            samples=20_000)["rms"] <= 0.0002 * diagonal
+    samples = sample_surface(mesh.points, mesh.triangles, 20_000, np.random.default_rng(0))[0]
+    there = distance_to_mesh(samples, rebuilt.points, rebuilt.triangles)
+    assert np.mean(there <= 0.001 * diagonal) >= 0.995 and there.max() <= 0.0075 * diagonal
+
+
+def test_a_piece_left_alone_beyond_60_degrees_of_its_view_takes_the_view_that_faces_it():
+    """A small piece takes a neighbour's view up to 80 degrees off to join its chart; left a chart of
+    its own (the dragon's, 76 degrees off +z, 0.6% D from its rebuild) it turns to the view that sees
+    it within 60 degrees, and a piece its view sees within 60 degrees keeps it."""
+    from mzc.ops.charts import VIEWS, facing_cosines, refaced, view_frames
+
+    points = np.array([[0.0, 0.0, 0.0], [0.0, 0.24, -0.97], [1.0, 0.0, 0.0]]) * 10
+    triangles = np.array([[0, 2, 1]])
+    corners = points[triangles]
+    normal = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
+    normal /= np.linalg.norm(normal, axis=1, keepdims=True)
+    cosine, frames, area = facing_cosines(normal), view_frames(points), np.array([50.0])
+    assert 0.17 < cosine[0, VIEWS.index("+z")] < FACING
+    view, members = refaced(VIEWS.index("+z"), np.array([0]), frames, triangles, cosine, area, 1.0)
+    assert VIEWS[view] == "+y" and list(members) == [0]
+    assert refaced(VIEWS.index("+y"), np.array([0]), frames, triangles, cosine, area, 1.0)[0] == VIEWS.index("+y")
+
+
+def test_a_thin_pieces_widened_nodes_are_those_within_a_spacing_of_its_nearest_triangle():
+    """``widened`` measures each node only against the triangles whose grown box holds it: the same
+    heights as measuring every node against every triangle, the nearest triangle's plane at each."""
+    from mzc.ops.charts import widened
+
+    rng = np.random.default_rng(3)
+    corners = np.concatenate([rng.uniform(0, 12, (9, 3, 2)), rng.uniform(1, 3, (9, 3, 1))], axis=2)
+    xs, ys = np.arange(-2, 15) * 1.0, np.arange(-1, 14) * 1.0
+    heights = widened(corners, xs, ys, 1.0)
+    for row, y in enumerate(ys):
+        for col, x in enumerate(xs):
+            reach = [min(segment_distance((x, y), t[k, :2], t[(k + 1) % 3, :2]) for k in range(3)) for t in corners]
+            t = corners[int(np.argmin(reach))]
+            normal = np.cross(t[1] - t[0], t[2] - t[0])
+            if min(reach) > 1.0 or normal[2] <= 0:
+                assert np.isnan(heights[row, col])
+            else:
+                expected = t[0, 2] - (normal[0] * (x - t[0, 0]) + normal[1] * (y - t[0, 1])) / normal[2]
+                assert heights[row, col] == pytest.approx(expected, abs=1e-9)
+
+
+def segment_distance(point, a, b):
+    """The distance from a 2D point to the segment a-b, plainly."""
+    point, a, b = (np.asarray(v, dtype=float) for v in (point, a, b))
+    along = np.clip(np.dot(point - a, b - a) / max(np.dot(b - a, b - a), 1e-300), 0, 1)
+    return float(np.linalg.norm(point - (a + along * (b - a))))
