@@ -96,13 +96,20 @@ def mzc_header(row, data, source, decode):
 
 
 def colour_lines(header, colour):
-    """The line of a 7.0 file's colour section (None: no line): its bytes and the target its encoder
-    aimed at (the header's ``colour_psnr`` or ``colour_max_error``)."""
+    """The lines of a 7.0 file's colour section (none without one): its bytes and the target its
+    encoder aimed at (the header's ``colour_psnr`` or ``colour_max_error``), and the colour scale of
+    colours finer than the nodes (a version 2 section's header)."""
     if colour is None:
         return []
+    from mzc.codecs.dwt2d.colour import read_header
+
     targets = [f"{keyword} {' '.join(header.tokens(keyword))}" for keyword in ("colour_psnr", "colour_max_error")
                if header.has(keyword)]
-    return [f"colour    {len(colour)} bytes (section 3), {', '.join(targets) or 'no target given'}"]
+    lines = [f"colour    {len(colour)} bytes (section 3), {', '.join(targets) or 'no target given'}"]
+    _magic, _version, rows, cols, *_fields, scale = read_header(colour, header.source)
+    if scale > 1:
+        lines.append(f"          colour scale {scale} ({rows} x {cols} samples, {scale} a node spacing)")
+    return lines
 
 
 def tiled_header(data, source, decode):
