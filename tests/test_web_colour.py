@@ -125,3 +125,21 @@ def test_random_images_decode_as_mzc_decodes_them(seed):
                                            levels=levels, scale=scale), nodes))
     for (section, mask), got in zip(cases, web_decoded(cases), strict=True):
         assert got is not None and got == mzc_decoded(section, mask)
+
+
+def test_a_dwt2d_file_with_fine_colours_decodes_to_the_zgrid_6_mzc_writes(tmp_path):
+    """web/'s decode of a whole dwt2d file whose colour section is of version 2 (colours twice finer
+    than the nodes, a hole in the grid): the same z-grid 6.0 bytes as `mzc decode`."""
+    from test_web import mzc_decode, node_decode
+
+    from mzc.codecs.dwt2d import encode_grid
+    from mzc.grid import ZGrid
+
+    rng = np.random.default_rng(5)
+    z = rng.normal(0, 1, (9, 12))
+    z[3:5, 4:7] = np.nan
+    grid = ZGrid(z, 0.5, 0.5, units="mm", fine_colors=rng.integers(0, 256, (17, 23, 3)))
+    (tmp_path / "fine.mzw2").write_bytes(encode_grid(grid, max_error=0.01, colour_max_error=2))
+    result = node_decode(tmp_path / "fine.mzw2")
+    assert result.returncode == 0, result.stderr.decode()
+    assert result.stdout.startswith(b"mzc-zgrid 6.0\n") and result.stdout == mzc_decode(tmp_path / "fine.mzw2")
