@@ -300,10 +300,17 @@ def test_the_cli_pipeline_on_fran_gives_a_finer_texture_closer_to_the_source(tmp
     assert errors[2] < 0.95 * errors[1], errors
 
 
-def test_info_shows_a_dwt2d_files_colour_scale(tmp_path):
+def test_info_shows_the_colour_scale_of_a_dwt2d_file_and_a_zgrid(tmp_path):
     from mzc.codecs.dwt2d import encode_grid
 
     grid = ZGrid(np.arange(20.0).reshape(4, 5), 1, 1, fine_colors=np.full((7, 9, 3), 90))
     (tmp_path / "g.mzw2").write_bytes(encode_grid(grid, max_error=0.01))
-    result = run_mzc("info", tmp_path / "g.mzw2", check=True)
-    assert b"colour scale 2 (7 x 9 samples, 2 a node spacing)" in result.stdout
+    (tmp_path / "g.zg").write_bytes(zgrid.write(grid, raw="float64"))
+    plain = ZGrid(grid.z, 1, 1, colors=grid.colors)
+    (tmp_path / "plain.zg").write_bytes(zgrid.write(plain, raw="float64"))
+    (tmp_path / "plain.mzw2").write_bytes(encode_grid(plain, max_error=0.01))
+    for name in ("g.mzw2", "g.zg"):
+        result = run_mzc("info", tmp_path / name, check=True)
+        assert result.stdout.count(b"colour scale 2 (7 x 9 samples, 2 a node spacing)") == 1, name
+    for name in ("plain.mzw2", "plain.zg"):
+        assert b"colour scale" not in run_mzc("info", tmp_path / name, check=True).stdout

@@ -48,10 +48,10 @@ def fine_colours(grid, mesh, scale):
     if grid.charts is not None:
         raise MzcError("a colour scale above 1 needs one grid, not a multi-chart grid (give --charts 1)",
                        field="colour_scale")
-    (rows, row_high, t), (cols, col_high, s) = (fine_lattice(n, scale) for n in grid.shape)
+    (row_low, row_high, t), (col_low, col_high, s) = (fine_lattice(n, scale) for n in grid.shape)
     t, s, z = t[:, None], s[None, :], grid.z
-    values = ((1 - t) * ((1 - s) * z[np.ix_(rows, cols)] + s * z[np.ix_(rows, col_high)])
-              + t * ((1 - s) * z[np.ix_(row_high, cols)] + s * z[np.ix_(row_high, col_high)]))
+    values = ((1 - t) * ((1 - s) * z[np.ix_(row_low, col_low)] + s * z[np.ix_(row_low, col_high)])
+              + t * ((1 - s) * z[np.ix_(row_high, col_low)] + s * z[np.ix_(row_high, col_high)]))
     us = grid.origin[0] + grid.d2 * (np.arange(values.shape[1]) / scale)
     vs = grid.origin[1] + grid.d1 * (np.arange(values.shape[0]) / scale)
     points = projections.to_points(grid.projection, grid.radius, us[None, :], vs[:, None], values)
