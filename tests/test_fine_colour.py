@@ -202,6 +202,23 @@ def test_a_window_keeps_the_samples_of_its_cells():
     assert window.colors.tolist() == grid.colors[1:3, 2:5].tolist()
 
 
+def test_densify_keeps_the_nodes_colours_and_names_the_finer_ones_it_drops():
+    import warnings
+
+    from mzc.errors import MzcWarning
+    from mzc.ops.densify import densify_grid
+
+    grid = ZGrid(np.add.outer(np.arange(4.0), np.arange(5.0)), 1, 1, fine_colors=np.full((7, 9, 3), 90))
+    assert densify_grid(grid, 0).colour_scale == 2
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        dense = densify_grid(grid, 1)
+    assert dense.fine_colors is None and dense.colors.shape == (7, 5, 3) and (dense.colors == 90).all()
+    assert [str(w.message) for w in caught if issubclass(w.category, MzcWarning)] == [
+        "not kept: the colours 2 times finer than the nodes (densify keeps the nodes' colours, mixed for the rows "
+        "it inserts)"]
+
+
 # --------------------------------------------------------------------------- slicing
 
 
