@@ -16,6 +16,7 @@ from typing import TYPE_CHECKING, Any, Literal, TypedDict
 
 from mzc.codecs import DEFAULT_CODEC
 from mzc.errors import MzcError
+from mzc.limits import check_colour_scale
 
 if TYPE_CHECKING:
     from collections.abc import Sequence
@@ -190,13 +191,15 @@ def slice(surface: Any, d1: float | None = None, d2: float | None = None, *, row
           cols: int | None = None, align: str = "none", projection: str = "auto", view: str = "auto",
           center: tuple[float, float, float] | None = None, axis: tuple[float, float, float] | None = None,
           units: str | None = None, thesis_grid: bool = False, classes: Sequence[int] | None = None,
-          cloud: str = "auto", charts: str | int = "auto", tap: bool = False) -> ZGrid:
+          cloud: str = "auto", charts: str | int = "auto", tap: bool = False, colour_scale: int = 1) -> ZGrid:
     """Cut a surface into a z-grid (``mzc slice``): spacings d1 (rows) and d2 (columns) default to
     the data's own, the cutting surfaces (``projection``) to the ones that see it best; ``classes``
     keeps those ASPRS classes of a LAS/LAZ cloud (2: ground), ``cloud`` (auto, bin, delaunay)
     says how a point cloud becomes a surface; ``charts`` (1, N or auto) whether a closed or
     many-part object is cut into charts, planar grids each seeing its own piece (``ZGrid.charts``);
-    ``tap`` aligns the cells of a map grid on whole multiples of the spacing (gdalwarp's -tap).
+    ``tap`` aligns the cells of a map grid on whole multiples of the spacing (gdalwarp's -tap);
+    ``colour_scale`` K (1..8) samples a coloured surface's colour K times finer than the nodes, for
+    texture detail (one grid; ``ZGrid.fine_colors``).
 
     A grid (a ZGrid, or a path of a z-grid, a compressed file or a raster: a GeoTIFF or ESRI ASCII
     grid) already is one: it is returned as it is, node for node (with ``units`` when given), and
@@ -207,11 +210,11 @@ def slice(surface: Any, d1: float | None = None, d2: float | None = None, *, row
     from mzc.ops.slicing import slice_surface
 
     numbers = slicing_numbers({"d1": d1, "d2": d2, "rows": rows, "cols": cols, "center": center, "axis": axis,
-                               "classes": classes, "tap": tap})
+                               "classes": classes, "tap": tap, "colour_scale": colour_scale})
     surface = given(surface)
     read = read_file(surface) if isinstance(surface, str) else surface
     grid = slice_surface(read, align=align, units=units, projection=projection, view=view, thesis_grid=thesis_grid,
-                         cloud=cloud, charts=charts, **numbers)
+                         cloud=cloud, charts=charts, colour_scale=numbers.pop("colour_scale", 1), **numbers)
     warn_dropped(read)   # once the grid is made: a refused slice is one line, its error alone
     return grid
 
@@ -228,6 +231,8 @@ def slicing_numbers(options: dict[str, Any]) -> dict[str, Any]:
             checked[name] = number(value, name, int)
         elif name in ("center", "axis"):
             checked[name] = vector(value, name)
+        elif name == "colour_scale":
+            checked[name] = check_colour_scale(value, 1, 1, field=name)
         elif name == "tap" and not isinstance(value, bool):
             raise MzcError(f"must be True or False, not {value!r}", field="tap")
         elif name == "classes" and value is not None:

@@ -127,6 +127,38 @@ def node_colours(values, valid):
     return colours
 
 
+def fine_lattice(count, scale):
+    """(low, high, t) of the ``(count - 1) scale + 1`` samples of a node line ``scale`` times finer:
+    sample a lies at node position a / scale, between nodes low and high (the same node when a is
+    a multiple of scale) at the fraction t of the step (0 on a node)."""
+    low, rest = np.divmod(np.arange((count - 1) * scale + 1), scale)
+    return low, low + (rest > 0), rest / scale
+
+
+def fine_mask(valid, scale):
+    """The validity of the colour samples of a grid ``scale`` times finer than its ``valid`` nodes:
+    a sample is valid where every node of the cell (edge, node) it lies in is (spec/zgrid.md,
+    Colours finer than the nodes), so that nothing beside the node mask need be stored."""
+    (row_low, row_high, _), (col_low, col_high, _) = (fine_lattice(n, scale) for n in valid.shape)
+    mask = valid[np.ix_(row_low, col_low)] & valid[np.ix_(row_high, col_high)]
+    return mask & valid[np.ix_(row_low, col_high)] & valid[np.ix_(row_high, col_low)]
+
+
+def fine_scale(shape, node_shape):
+    """The colour scale K of a colour image of ``shape`` (rows, cols[, 3]) on a grid of ``node_shape``:
+    ((rows - 1) K + 1, (cols - 1) K + 1) samples, K in 1..MAX_COLOUR_SCALE (1 for a 1 x 1 grid), or
+    an MzcError."""
+    from mzc.limits import MAX_COLOUR_SCALE
+
+    spans = [(n - 1, m - 1) for n, m in zip(node_shape, shape[:2]) if n > 1]
+    scale = spans[0][1] // spans[0][0] if spans else 1
+    if len(shape) != 3 or shape[2] != 3 or not 1 <= scale <= MAX_COLOUR_SCALE or any(
+            m != n * scale for n, m in spans) or (not spans and tuple(shape[:2]) != (1, 1)):
+        raise MzcError(f"a colour image of shape {tuple(shape)} is no grid of {node_shape[0]} x {node_shape[1]} "
+                       f"nodes sampled 1..{MAX_COLOUR_SCALE} times finer", field="fine_colors")
+    return scale
+
+
 def check_shape(shape):
     """Refuse the shape of heights that make no z-grid: 2D, within mzc.limits' sizes (a file
     has at least one row and column), checked before they are converted."""
@@ -195,7 +227,11 @@ class ZGrid:
     planar grids); ``units`` names the length unit when known; ``nodata`` is the token
     written for invalid nodes. ``colors`` (rows, cols, 3) uint8 is each node's colour, sampled
     from the surface where it has one (``mzc.ops.colouring``), 0 at invalid nodes; None when
-    the surface has none. A planar grid read from a raster (or to be written as one) has
+    the surface has none. ``fine_colors`` is the colour image sampled ``colour_scale`` K (2..8)
+    times finer than the nodes, ((rows - 1) K + 1, (cols - 1) K + 1, 3) uint8, sample (a, b) at
+    node position (a / K, b / K), 0 where invalid (``fine_mask``); ``colors`` are then its
+    samples at the nodes. None when the colours are the nodes' alone (K = 1).
+    A planar grid read from a raster (or to be written as one) has
     ``crs``, the coordinate reference system of the input frame as one line of WKT, and
     ``raster`` (a Raster): both None otherwise. ``source_vertices`` is the vertex (or point)
     count of the mesh or cloud the grid was sliced from, which the rebuild comes back near
@@ -217,9 +253,12 @@ class ZGrid:
     charts: tuple[Chart, ...] | None = None
     colors: np.ndarray | None = None
     source_vertices: int | None = None
+    fine_colors: np.ndarray | None = None
 
     def __post_init__(self) -> None:
         self.z = real_array(self.z, "heights", check_shape)
+        if self.fine_colors is not None:
+            self.take_fine_colours()
         if self.colors is not None:
             self.colors = node_colours(self.colors, self.valid)
         self.transform = finite(self.transform, "transform", 12).reshape(3, 4)
@@ -253,6 +292,28 @@ class ZGrid:
                            field="crs" if self.crs else "raster")
         if self.charts is not None:
             self.check_charts()
+
+    def take_fine_colours(self) -> None:
+        """Check ``fine_colors`` and make ``colors`` its node samples: the one image holds both, so
+        they cannot disagree; at scale 1 it is the nodes' colours alone."""
+        values = np.asarray(self.fine_colors)
+        fine = colour_array(values, values.shape, "fine_colors")
+        scale = fine_scale(fine.shape, self.z.shape)
+        if scale == 1:
+            self.colors, self.fine_colors = fine, None
+            return
+        if self.charts is not None:
+            raise MzcError("a multi-chart grid has colours at its nodes alone (colour scale 1)", field="fine_colors")
+        mask = fine_mask(self.valid, scale)
+        if fine[~mask].any():
+            fine = fine.copy()
+            fine[~mask] = 0
+        self.fine_colors, self.colors = fine, fine[::scale, ::scale]
+
+    @property
+    def colour_scale(self) -> int:
+        """K: the colour samples a node spacing (``fine_colors``), 1 for colours at the nodes alone."""
+        return 1 if self.fine_colors is None else fine_scale(self.fine_colors.shape, self.z.shape)
 
     def check_charts(self) -> None:
         """Refuse charts that a multi-chart grid cannot hold: they are planar blocks of its values,
@@ -329,8 +390,12 @@ class ZGrid:
     def with_z(self, z: np.ndarray, **changes) -> "ZGrid":
         """A copy with new values (and any other fields changed); values of another shape leave
         the copy without colours unless ``colors`` is among the changes (a strip of rows, a
-        densified grid: the caller that has them for the new nodes gives them)."""
+        densified grid: the caller that has them for the new nodes gives them); values of another
+        shape, or new colours, leave it without ``fine_colors`` unless they are among the changes."""
         z = np.asarray(z, dtype=float)
         if self.colors is not None and "colors" not in changes and z.shape != self.z.shape:
             changes["colors"] = None
+        if self.fine_colors is not None and "fine_colors" not in changes and (
+                "colors" in changes or z.shape != self.z.shape):
+            changes["fine_colors"] = None
         return replace(self, z=z, **changes)

@@ -9,6 +9,7 @@ a finite 1e308 would be written as inf or NaN that no reader takes back.
 """
 
 import math
+import operator
 
 from mzc.errors import MzcError
 
@@ -21,6 +22,7 @@ MAX_ITERATIONS = 100_000      # sweeps of the thesis's Jacobi densify (100 by de
 MAX_SAMPLES = 2_000_000       # diff --surface samples per surface (10^7 ran out of 8 GB)
 LOSSY_GROWTH = 1e6            # a lossy codec's decoded heights stay within this factor of its input's
 MAX_FIELD_VALUES = 1_000_000  # values of one PCD field a point (COUNT; descriptors hold a few hundred)
+MAX_COLOUR_SCALE = 8          # colour samples a node spacing (slice --colour-scale): 64 a cell
 
 
 def check_grid_size(rows: int, cols: int, advice: str = "", **where) -> None:
@@ -32,6 +34,22 @@ def check_grid_size(rows: int, cols: int, advice: str = "", **where) -> None:
         raise MzcError(f"{rows} x {cols} nodes is empty: a grid has at least 1 row and 1 column", **where)
     raise MzcError(f"{rows} x {cols} nodes is too large: this mzc accepts 1..{MAX_DIMENSION} per side and "
                    f"at most {MAX_NODES} nodes{'; ' + advice if advice else ''}", **where)
+
+
+def check_colour_scale(scale, rows: int, cols: int, **where) -> int:
+    """``scale`` as an int in 1..MAX_COLOUR_SCALE whose colour image of a ``rows`` x ``cols`` grid,
+    ((rows - 1) scale + 1) x ((cols - 1) scale + 1) samples, is within the grid limits; refused
+    otherwise."""
+    try:
+        scale = None if isinstance(scale, bool) else operator.index(scale)   # an int or numpy integer
+    except TypeError:
+        scale = None
+    if scale is None:
+        raise MzcError(f"must be a whole number 1..{MAX_COLOUR_SCALE}", **where)
+    if not 1 <= scale <= MAX_COLOUR_SCALE:
+        raise MzcError(f"{scale} is not a whole number 1..{MAX_COLOUR_SCALE}", **where)
+    check_grid_size((rows - 1) * scale + 1, (cols - 1) * scale + 1, "a smaller colour scale", **where)
+    return scale
 
 
 def check_magnitude(values, what: str, **where) -> float:

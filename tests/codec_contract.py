@@ -190,6 +190,8 @@ def assert_same_grid(got, want):
     assert got.charts == want.charts
     assert (got.colors is None) == (want.colors is None)
     assert got.colors is None or got.colors.tobytes() == want.colors.tobytes()
+    assert got.colour_scale == want.colour_scale
+    assert got.fine_colors is None or got.fine_colors.tobytes() == want.fine_colors.tobytes()
     assert got.source_vertices == want.source_vertices
 
 

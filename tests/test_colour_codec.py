@@ -24,7 +24,7 @@ sys.path.insert(0, str(REPO / "benchmarks"))
 import colour as benchmark  # noqa: E402
 
 FIXTURES = REPO / "tests" / "fixtures" / "colour"
-FIXTURE_NAMES = {"colour-section-1": 1, "colour-section-1-integer": 0}   # name: its transform
+FIXTURE_NAMES = {"colour-section-1": 1, "colour-section-1-integer": 0, "colour-section-2": 1}   # name: its transform
 SPEC = REPO / "spec" / "colour.md"
 
 

@@ -58,12 +58,14 @@ def written_versions(module):
     """The versions a format's writer writes: planar and projected grids, the z-grid's raw
     body (RAW_VERSION), a third version above both, the georeferenced planar grids of rasters
     (GEOREF_SINCE: a minor version of a major), multi-chart grids (CHARTED_VERSION), grids with
-    colours (COLOURED_VERSION), tiled rasters of integers (ROUNDED_TILED_VERSION) and grids that
+    colours (COLOURED_VERSION) or colours finer than the nodes (FINE_COLOURED_VERSION),
+    tiled rasters of integers (ROUNDED_TILED_VERSION) and grids that
     record their source's vertex count (COUNTED_SINCE: a minor version of a major)."""
     return {module.VERSION, module.PROJECTED_VERSION, getattr(module, "RAW_VERSION", module.VERSION),
             *module.GEOREF_SINCE.items(), *getattr(module, "COUNTED_SINCE", {}).items(),
             getattr(module, "CHARTED_VERSION", module.VERSION),
             getattr(module, "COLOURED_VERSION", module.VERSION),
+            getattr(module, "FINE_COLOURED_VERSION", module.VERSION),
             getattr(module, "ROUNDED_TILED_VERSION", module.VERSION)}
 
 
@@ -263,9 +265,9 @@ def test_a_newer_major_is_refused_with_an_upgrade_hint(kind):
     assert "upgrade mzc" in error.message
 
 
-def test_zgrid_6_is_refused_as_newer():
-    error = refusal(zgrid_text(magic="mzc-zgrid 6.0"))
-    assert error.line == 1 and "newer than this mzc reads (5.x)" in error.message
+def test_zgrid_7_is_refused_as_newer():
+    error = refusal(zgrid_text(magic="mzc-zgrid 7.0"))
+    assert error.line == 1 and "newer than this mzc reads (6.x)" in error.message
 
 
 # --- the version rule for projections: what writers write ---------------------------------

@@ -24,7 +24,7 @@ def spec_examples(_path):
     """(example bytes, expected array) pairs of the spec page's worked z-grid examples, plain
     and raw (codec_contract.spec_examples reads both kinds of block)."""
     examples = contract_examples("zgrid")
-    assert len(examples) == 11
+    assert len(examples) == 12
     return [(data, expected) for data, expected, _id in examples]
 
 
@@ -47,6 +47,23 @@ def test_spec_colour_example_decodes_to_its_expected_colours():
     expected = np.array([[int(v) for v in line.split()] for line in colours.strip().splitlines()])
     assert grid.colors.tolist() == expected.reshape(*grid.shape, 3).tolist()
     assert zgrid.write(grid, raw="float64") == codec_contract.example_bytes(example, True)   # byte for byte
+
+
+def test_spec_fine_colour_example_decodes_to_its_expected_samples():
+    """The 6.0 example's colour samples are the bytes after its heights, (rows - 1) 2 + 1 rows of
+    (cols - 1) 2 + 1; the nodes' colours are every second sample, those of the 5.0 example."""
+    import codec_contract
+
+    found = re.findall(r"```mzc-example-hex\n([^`]*)```\s*```expected\n[^`]*```\s*```expected-fine-colours\n([^`]*)```",
+                       SPEC.read_text())
+    assert len(found) == 1
+    example, colours = found[0]
+    data = codec_contract.example_bytes(example, True)
+    grid = read_any(data, "spec")
+    expected = np.array([[int(v) for v in line.split()] for line in colours.strip().splitlines()])
+    assert grid.colour_scale == 2 and grid.fine_colors.tolist() == expected.reshape(3, 5, 3).tolist()
+    assert grid.colors.tolist() == [[[255, 0, 0], [0, 255, 0], [0, 0, 255]], [[128, 128, 128], [0, 0, 0], [255] * 3]]
+    assert zgrid.write(grid, raw="float64") == data   # byte for byte
 
 
 def spec_points(path):
@@ -124,7 +141,7 @@ GOOD = b"mzc-zgrid 1.0\nrows 2\ncols 2\nd1 1\nd2 1\ndata\n1 2\n3 4\n"
 @pytest.mark.parametrize("data, message, line", [
     (b"rows 2\n", "missing magic", 1),
     (b"", "missing magic", 1),
-    (GOOD.replace(b"mzc-zgrid 1.0", b"mzc-zgrid 6.0"), "newer than this mzc reads", 1),
+    (GOOD.replace(b"mzc-zgrid 1.0", b"mzc-zgrid 7.0"), "newer than this mzc reads", 1),
     (GOOD.replace(b"mzc-zgrid 1.0", b"mzc-zgrid one"), "bad version", 1),
     (GOOD.replace(b"mzc-zgrid", b"mzc-other"), "expected an mzc-zgrid file", 1),
     (GOOD.replace(b"d2 1\n", b""), "required header line missing", None),

@@ -1,15 +1,18 @@
-// The colour section, version 1 (spec/colour.md): the R x C x 3 8-bit image of a grid's nodes
+// The colour section, versions 1 and 2 (spec/colour.md): the R x C x 3 8-bit image of a grid's
+// nodes (version 2: of its colours sampled K times finer, ((R - 1) K + 1) x ((C - 1) K + 1) x 3)
 // from its bytes and the grid's validity mask. A dwt2d payload of the three YCoCg-R channels'
 // bands (the integer LeGall 5/3 or dwt2d 3.0's CDF 9/7), then an optional correction layer.
 //
 //   import { decodeColour } from "./colour.mjs";
-//   const rgb = decodeColour(bytes, { rows, cols, valid });   // Uint8Array, rows * cols * 3
+//   const rgb = decodeColour(bytes, { rows, cols, valid });   // Uint8Array, rows * cols * 3 (version 1)
 
 import { fail, crc32 } from "./header.mjs";
 import { Payload, bandShapes, relevance3, decodeBand0, decodeDetail, decodeCorrection, inverse3 } from "./dwt2d.mjs";
 
 const MAGIC = [0x6d, 0x7a, 0x63, 0x43];   // "mzcC"
-const HEADER = 30;
+const HEADERS = { 1: 30, 2: 31 };         // a version's header bytes (version 2 adds the scale K after cols)
+const MAX_SCALE = 8;
+const MAX_NODES = 100_000_000;
 const UNIT = 16;                          // a step's sixteenths of a level
 const MAX_SIDE = 2 ** 24;
 const MAX_QUANTUM = 2 ** 24;
@@ -18,11 +21,46 @@ const STEP_FACTORS = [[177, 116, 63], [177, 116, 63], [256, 199, 116]];   // H, 
 const BAND0_FACTOR = 248;
 
 /** A grid decoded by `decodeCompact` with its colours: its `colourSection` decoded over its valid
- * nodes into `colors` (spec/dwt2d.md, Colours of 7.0); a grid without one as it is. */
+ * nodes into `colors` (spec/dwt2d.md, Colours of 7.0), and for a version 2 section the finer image
+ * as `fineColors` with its `colourScale`, `colors` then its node samples; a grid without one as it is. */
 export function withColours({ colourSection, ...grid }) {
   if (!colourSection) return grid;
   const valid = Uint8Array.from(grid.z, (v) => (Number.isNaN(v) ? 0 : 1));
-  return { ...grid, colors: decodeColour(colourSection, { rows: grid.rows, cols: grid.cols, valid }) };
+  const image = decodeColour(colourSection, { rows: grid.rows, cols: grid.cols, valid });
+  const scale = colourScale(colourSection);
+  if (scale === 1) return { ...grid, colors: image };
+  return { ...grid, colors: nodeSamples(image, grid.rows, grid.cols, scale), fineColors: image, colourScale: scale };
+}
+
+/** K of a colour section (1 for version 1). */
+function colourScale(bytes) {
+  return bytes[4] === 2 ? bytes[13] : 1;
+}
+
+/** The nodes' colours (rows * cols * 3) of an image of colours `scale` times finer: samples (rK, cK). */
+export function nodeSamples(image, rows, cols, scale) {
+  const width = (cols - 1) * scale + 1;
+  const out = new Uint8Array(rows * cols * 3);
+  for (let r = 0; r < rows; r++) {
+    for (let c = 0; c < cols; c++) out.set(image.subarray(3 * (r * scale * width + c * scale), 3 * (r * scale * width + c * scale) + 3), 3 * (r * cols + c));
+  }
+  return out;
+}
+
+/** The validity (0/1, row by row) of the colour samples `scale` times finer than a grid's `valid`
+ * nodes: a sample is valid where every node of the cell, edge or node it lies in is (spec/zgrid.md,
+ * Colours finer than the nodes). */
+export function fineMask(valid, rows, cols, scale) {
+  const fineRows = (rows - 1) * scale + 1, fineCols = (cols - 1) * scale + 1;
+  const out = new Uint8Array(fineRows * fineCols);
+  for (let a = 0; a < fineRows; a++) {
+    const r0 = Math.floor(a / scale), r1 = Math.ceil(a / scale);
+    for (let b = 0; b < fineCols; b++) {
+      const c0 = Math.floor(b / scale), c1 = Math.ceil(b / scale);
+      out[a * fineCols + b] = valid[r0 * cols + c0] && valid[r0 * cols + c1] && valid[r1 * cols + c0] && valid[r1 * cols + c1] ? 1 : 0;
+    }
+  }
+  return out;
 }
 
 /** The image (Uint8Array, rows * cols * 3: red, green, blue a node, 0 at invalid nodes) of a colour
@@ -31,8 +69,9 @@ export function withColours({ colourSection, ...grid }) {
 export function decodeColour(bytes, mask) {
   if (!(bytes instanceof Uint8Array)) bytes = new Uint8Array(bytes);
   const h = sectionHeader(bytes, mask);
-  const valid = Uint8Array.from(mask.valid, (v) => (v ? 1 : 0));
-  const payload = new Payload(bytes.subarray(HEADER), false);
+  const nodes = Uint8Array.from(mask.valid, (v) => (v ? 1 : 0));
+  const valid = h.scale === 1 ? nodes : fineMask(nodes, mask.rows, mask.cols, h.scale);
+  const payload = new Payload(bytes.subarray(HEADERS[h.version]), false);
   const p = { v3: true, levels: h.levels, wavelet: WAVELETS[h.transform] };
   const shapes = bandShapes(h.rows, h.cols, p);
   const relevant = relevance3(valid, h.rows, h.cols, p, false);
@@ -55,24 +94,32 @@ export function decodeColour(bytes, mask) {
   return Uint8Array.from(image);
 }
 
-/** The header's fields (Layout), each checked, with the section's length and CRC-32. */
+/** The header's fields (Layout; of version 2, Layout of version 2), each checked, with the
+ * section's length and CRC-32. */
 function sectionHeader(bytes, mask) {
-  if (bytes.length < HEADER) fail("colour", `colour section of ${bytes.length} bytes ends inside its ${HEADER}-byte header`);
-  if (MAGIC.some((b, i) => bytes[i] !== b)) fail("colour", "not a colour section (no mzcC)");
-  if (bytes[4] !== 1) fail("colour", `colour section version ${bytes[4]} (this decoder reads 1)`);
-  const view = new DataView(bytes.buffer, bytes.byteOffset, HEADER);
+  if (bytes.length >= 4 && MAGIC.some((b, i) => bytes[i] !== b)) fail("colour", "not a colour section (no mzcC)");
+  const version = bytes[4];
+  if (bytes.length >= 5 && !HEADERS[version]) fail("colour", `colour section version ${version} (this decoder reads 1 and 2)`);
+  const size = HEADERS[version] ?? HEADERS[1];
+  if (bytes.length < size) fail("colour", `colour section of ${bytes.length} bytes ends inside its ${size}-byte header`);
+  const at = size - 30;   // version 2's fields after cols lie a byte further
+  const view = new DataView(bytes.buffer, bytes.byteOffset, size);
   const h = {
-    rows: view.getUint32(5, true), cols: view.getUint32(9, true), levels: bytes[13], transform: bytes[14],
-    steps: [view.getUint16(15, true), view.getUint16(17, true), view.getUint16(19, true)], correction: bytes[21],
+    version, rows: view.getUint32(5, true), cols: view.getUint32(9, true), scale: at ? bytes[13] : 1,
+    levels: bytes[13 + at], transform: bytes[14 + at],
+    steps: [view.getUint16(15 + at, true), view.getUint16(17 + at, true), view.getUint16(19 + at, true)], correction: bytes[21 + at],
   };
-  const length = view.getUint32(22, true);
-  if (h.rows !== mask.rows || h.cols !== mask.cols) fail("colour", `the section's grid is ${h.rows} x ${h.cols} nodes, the mask ${mask.rows} x ${mask.cols}`);
+  const length = view.getUint32(22 + at, true);
+  if (at && !(h.scale >= 2 && h.scale <= MAX_SCALE)) fail("colour", `colour scale ${h.scale} (allowed 2..${MAX_SCALE})`);
+  const fineRows = (mask.rows - 1) * h.scale + 1, fineCols = (mask.cols - 1) * h.scale + 1;
+  if (fineRows > 1_000_000 || fineCols > 1_000_000 || fineRows * fineCols > MAX_NODES) fail("colour", `colour scale ${h.scale}: ${fineRows} x ${fineCols} samples is too large`);
+  if (h.rows !== fineRows || h.cols !== fineCols) fail("colour", `the section's image is ${h.rows} x ${h.cols} samples, the mask's ${fineRows} x ${fineCols}`);
   if (Math.min(h.rows, h.cols) < 1 || Math.max(h.rows, h.cols) > MAX_SIDE) fail("colour", `a colour grid of ${h.rows} x ${h.cols} nodes`);
   if (h.levels > 12) fail("colour", `${h.levels} wavelet levels (allowed 0..12)`);
   if (h.transform > 1) fail("colour", `transform ${h.transform} (0 or 1)`);
   if (Math.min(...h.steps) < UNIT) fail("colour", "a step below 1 level");
-  if (bytes.length !== HEADER + length) fail("colour", `the section declares ${HEADER + length} bytes and has ${bytes.length}`);
-  if (crc32(bytes.subarray(0, 26), bytes.subarray(HEADER)) !== view.getUint32(26, true)) fail("colour", "the colour section's CRC-32 does not match");
+  if (bytes.length !== size + length) fail("colour", `the section declares ${size + length} bytes and has ${bytes.length}`);
+  if (crc32(bytes.subarray(0, size - 4), bytes.subarray(size)) !== view.getUint32(size - 4, true)) fail("colour", "the colour section's CRC-32 does not match");
   return h;
 }
 

@@ -328,17 +328,18 @@ function zgridHeaderLines(grid) {
   return lines;
 }
 
-/** The version of z-grid `mzc decode` writes for a grid: 5.0 with colours (5.1 with `crs` or
- * `raster` too), 4.0 for a multi-chart grid, 3.1 with `crs` or `raster`, else 3.0; with
- * `source_vertices`, the minor that reads it (COUNTED_SINCE: 3.2, 4.1, 5.2). */
+/** The version of z-grid `mzc decode` writes for a grid: 6.0 with colours finer than the nodes,
+ * 5.0 with colours (5.1 with `crs` or `raster` too), 4.0 for a multi-chart grid, 3.1 with `crs` or
+ * `raster`, else 3.0; with `source_vertices`, the minor that reads it (COUNTED_SINCE: 3.2, 4.1, 5.2). */
 function zgridVersion(grid) {
+  if (grid.fineColors) return "6.0";
   const georeferenced = grid.crs !== undefined || grid.raster !== undefined;
   const [major, minor] = grid.colors ? [5, georeferenced ? 1 : 0] : grid.charts ? [4, 0] : [3, georeferenced ? 1 : 0];
   return `${major}.${grid.sourceVertices === undefined ? minor : COUNTED_SINCE[major]}`;
 }
 
 /** Major -> the minor of a z-grid that adds the `source_vertices` line (Header lines). */
-export const COUNTED_SINCE = { 1: 2, 2: 1, 3: 2, 4: 1, 5: 2 };
+export const COUNTED_SINCE = { 1: 2, 2: 1, 3: 2, 4: 1, 5: 2, 6: 0 };
 const MAX_SOURCE_VERTICES = 2n ** 53n;
 
 /** The `source_vertices` line of a version that reads it: an integer 1 .. 2^53, compared exactly. */
@@ -351,13 +352,15 @@ function sourceVertices(h) {
 }
 
 /** The grid as the raw float64 z-grid `mzc decode` writes by default (zgridVersion), every
- * NaN the one quiet NaN, the colours (rows x cols x 3 bytes) after the heights when it has them. */
+ * NaN the one quiet NaN, the colours (rows x cols x 3 bytes, or the finer samples with their
+ * `colour_scale`) after the heights when it has them. */
 export function writeZgrid(grid) {
-  const colours = grid.colors ? ["colours rgb8"] : [];
+  const image = grid.fineColors ?? grid.colors;
+  const colours = image ? ["colours rgb8", ...(grid.fineColors ? [`colour_scale ${grid.colourScale}`] : [])] : [];
   const enc = new TextEncoder();
   const head = enc.encode([`mzc-zgrid ${zgridVersion(grid)}`, ...zgridHeaderLines(grid), "raw float64", ...colours, ""].join("\n"));
-  const body = new Uint8Array(grid.rows * grid.cols * (grid.colors ? 11 : 8));
-  if (grid.colors) body.set(grid.colors, grid.rows * grid.cols * 8);
+  const body = new Uint8Array(grid.rows * grid.cols * 8 + (image ? image.length : 0));
+  if (image) body.set(image, grid.rows * grid.cols * 8);
   const view = new DataView(body.buffer);
   grid.z.forEach((v, i) => {
     if (Number.isNaN(v)) view.setUint32(i * 8 + 4, 0x7ff80000, true);

@@ -2,7 +2,8 @@
 //
 //   import { decode, writeZgrid } from "./mzc.mjs";
 //   const grid = decode(bytes);     // {kind, version, rows, cols, z: Float64Array, d1, d2, ...,
-//                                   //  colors: Uint8Array rows * cols * 3 of a z-grid 5.x}
+//                                   //  colors: Uint8Array rows * cols * 3 of a z-grid 5.x or 6.0,
+//                                   //  fineColors, colourScale: a 6.0's samples K times finer}
 //   const zg = writeZgrid(grid);    // the raw float64 z-grid `mzc decode` writes
 //
 // decode() reads the formats of DECODERS below. Every bad file throws an MzcError with one
@@ -20,7 +21,7 @@ export { MzcError, writeZgrid, formatNumber };
 const DECODERS = { dwt2d: decodeDwt2d, zgrid: decodeZgrid, ...ROW_CODECS };
 
 /** The major versions read of each kind, [oldest, newest] (tests/test_web.py asks for them). */
-export const READS = { dwt2d: [2, 9], zgrid: [1, 5], poly: [1, 2], dft: [1, 2], dct: [1, 2], dwt: [1, 2] };
+export const READS = { dwt2d: [2, 9], zgrid: [1, 6], poly: [1, 2], dft: [1, 2], dct: [1, 2], dwt: [1, 2] };
 
 /** Decodes the bytes of an mzc file into its grid; throws MzcError on any bad file. */
 export function decode(bytes) {

@@ -1,6 +1,8 @@
 // The z-grid itself (spec/zgrid.md): `mzc decode` reads it as any grid and writes it again,
-// so decode() reads its plain (1.x, 2.x) and raw (3.x, 4.0, 5.x with colours) bodies too.
+// so decode() reads its plain (1.x, 2.x) and raw (3.x, 4.0, 5.x with colours, 6.0 with colours
+// finer than the nodes) bodies too.
 
+import { fineMask, nodeSamples } from "./colour.mjs";
 import { fail, headerFields, fieldReader, gridFields, checkChecksum, checkCharts, VIEWS, words, bodyLines, COUNTED_SINCE } from "./header.mjs";
 
 const NUMBER = /^[+-]?(\d+\.?\d*|\.\d+)([eE][+-]?\d+)?$/;
@@ -12,24 +14,41 @@ export function decodeZgrid(bytes, lines, body, magic) {
   const fields = headerFields(lines, !raw);
   const h = fieldReader(fields);
   checkChecksum(bytes, lines, fields, raw);
-  const grid = gridFields(h, { projected: magic.major >= 2, georef: magic.minor >= 1 && [1, 3, 5].includes(magic.major),
+  const grid = gridFields(h, { projected: magic.major >= 2,
+    georef: magic.minor >= 1 && [1, 3, 5].includes(magic.major) || magic.major === 6,
     counted: magic.minor >= (COUNTED_SINCE[magic.major] ?? Infinity) });
   const charts = h.has("charts") ? chartsLine(h, magic) : undefined;
   let data = bytes.subarray(body);
   let colors;
-  if (magic.major >= 5) [data, colors] = colourBytes(h, data, grid);
+  const scale = magic.major >= 6 ? colourScaleLine(h, grid) : 1;
+  if (magic.major >= 5) [data, colors] = colourBytes(h, data, grid, scale);
   const z = raw ? rawBody(h, data, grid) : plainBody(data, grid);
   if (charts) checkCharts(charts, grid, z);
+  if (scale > 1) {
+    if (charts) fail("colour_scale", "a multi-chart grid has colours at its nodes alone");
+    const samples = fineMask(Uint8Array.from(z, (v) => (Number.isNaN(v) ? 0 : 1)), grid.rows, grid.cols, scale);
+    samples.forEach((v, i) => v || colors.fill(0, 3 * i, 3 * i + 3));
+    return { ...grid, z, charts, colors: nodeSamples(colors, grid.rows, grid.cols, scale), fineColors: colors, colourScale: scale };
+  }
   if (colors) z.forEach((v, i) => Number.isNaN(v) && colors.fill(0, 3 * i, 3 * i + 3));
   return { ...grid, z, charts, colors };
 }
 
-/** A 5.x body split into its heights and a copy of its colours (Colours): the `colours rgb8` line,
- * then the body's last rows x cols x 3 bytes, red, green, blue a node; an invalid node's are made 0. */
-function colourBytes(h, data, grid) {
+/** The `colour_scale` line of a 6.0 file (required): K in 2..8, its image of samples within the limits. */
+function colourScaleLine(h, grid) {
+  const scale = h.integer("colour_scale", 2, 8);
+  const rows = (grid.rows - 1) * scale + 1, cols = (grid.cols - 1) * scale + 1;
+  if (rows > 1_000_000 || cols > 1_000_000 || rows * cols > 100_000_000) fail("colour_scale", `${rows} x ${cols} colour samples is too large`);
+  return scale;
+}
+
+/** A 5.x or 6.0 body split into its heights and a copy of its colours (Colours): the `colours rgb8`
+ * line, then the body's last bytes, red, green, blue a node (6.0: a sample, ((rows - 1) K + 1) x
+ * ((cols - 1) K + 1) of them); an invalid node's (sample's) are made 0 by the caller. */
+function colourBytes(h, data, grid, scale) {
   h.word("colours", ["rgb8"]);
-  const size = grid.rows * grid.cols * 3;
-  if (data.length < size) fail("data", `the raw body has ${data.length} bytes, fewer than the ${size} of the nodes' colours alone`);
+  const size = ((grid.rows - 1) * scale + 1) * ((grid.cols - 1) * scale + 1) * 3;
+  if (data.length < size) fail("data", `the raw body has ${data.length} bytes, fewer than the ${size} of the colours alone`);
   return [data.subarray(0, data.length - size), data.slice(data.length - size)];
 }
 

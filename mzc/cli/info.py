@@ -97,7 +97,10 @@ def mzc_header(row, data, source, decode):
     grid = read_as(row, data, source) if decode else ZGrid(z=np.broadcast_to(np.nan, (rows, cols)), **fields)
     lines = [f"{keyword} {' '.join(values)}" for keyword, (values, _) in header.fields.items()]
     chart_count = " ".join(header.tokens("chart_count")) if header.charted and header.has("chart_count") else None
-    return grid, f"mzc-{kind} {major}.{minor}", lines, chart_count, levels + colour_lines(header, colour)
+    scaled = kind == "zgrid" and major >= 6   # a z-grid 6.0's colour_scale line
+    lines_of_colour = (scale_lines(header.integer("colour_scale"), rows, cols, "colour    rgb8 samples, ") if scaled
+                       else colour_lines(header, colour, rows, cols))
+    return grid, f"mzc-{kind} {major}.{minor}", lines, chart_count, levels + lines_of_colour
 
 
 def level_lines(sections, shape):
@@ -118,14 +121,28 @@ def level_lines(sections, shape):
     return lines
 
 
-def colour_lines(header, colour):
-    """The line of a 7.0 file's colour section (None: no line): its bytes and the target its encoder
-    aimed at (the header's ``colour_psnr`` or ``colour_max_error``)."""
+def colour_lines(header, colour, rows, cols):
+    """The lines of a 7.0 file's colour section (none without one): its bytes and the target its
+    encoder aimed at (the header's ``colour_psnr`` or ``colour_max_error``), and the colour scale of
+    colours finer than the ``rows`` x ``cols`` nodes (a version 2 section's header)."""
     if colour is None:
         return []
+    from mzc.codecs.dwt2d.colour import read_header
+
     targets = [f"{keyword} {' '.join(header.tokens(keyword))}" for keyword in ("colour_psnr", "colour_max_error")
                if header.has(keyword)]
-    return [f"colour    {len(colour)} bytes (section 3), {', '.join(targets) or 'no target given'}"]
+    fields = read_header(colour, header.source)
+    return [f"colour    {len(colour)} bytes (section 3), {', '.join(targets) or 'no target given'}",
+            *scale_lines(fields[-1], rows, cols)]
+
+
+def scale_lines(scale, rows, cols, lead="          "):
+    """The line (after ``lead``) of colours sampled ``scale`` times finer than a ``rows`` x ``cols``
+    grid's nodes (none at 1)."""
+    if scale == 1:
+        return []
+    return [f"{lead}colour scale {scale} ({(rows - 1) * scale + 1} x {(cols - 1) * scale + 1} samples, "
+            f"{scale} a node spacing)"]
 
 
 def tiled_header(data, source, decode):

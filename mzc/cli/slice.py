@@ -85,6 +85,9 @@ SLICE_OPTIONS = [   # the grid's options, shared with 'mzc batch encode'
                  help="How a point cloud becomes a surface: bin (a local plane fit at each node, for dense clouds) "
                       "or delaunay (triangles between its points); auto bins clouds of over 100,000 points that "
                       "are dense at the grid's spacing."),
+    click.option("--colour-scale", type=click.IntRange(1, 8), default=1, show_default=True, metavar="K",
+                 help="Sample a coloured surface's colour K times finer than the nodes (1..8), for texture detail "
+                      "(triangulate --texture); one grid only (--charts 1)."),
 ]
 
 
@@ -118,7 +121,7 @@ that would cut it otherwise are refused.
 @slice_options
 @grid_output_options
 def command(input, output, d1, d2, rows, cols, thesis_grid, align, projection, view, center, axis, units,
-            classes, charts, tap, cloud, file_format, plain, float32, precision):
+            classes, charts, tap, cloud, colour_scale, file_format, plain, float32, precision):
     from mzc.api import slice as slice_surface
     from mzc.errors import about
     from mzc.streams import check_not_input, display_name
@@ -129,5 +132,6 @@ def command(input, output, d1, d2, rows, cols, thesis_grid, align, projection, v
     with about(display_name(input), "slicing it"):
         grid = slice_surface(input, d1=d1, d2=d2, rows=rows, cols=cols, align=align, units=units,
                              projection=projection, center=center, axis=axis, view=view,
-                             thesis_grid=thesis_grid, classes=classes, charts=charts, cloud=cloud, tap=tap)
+                             thesis_grid=thesis_grid, classes=classes, charts=charts, cloud=cloud, tap=tap,
+                             colour_scale=colour_scale)
     write(grid)

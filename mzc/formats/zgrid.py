@@ -16,7 +16,9 @@ colours at its nodes is ``mzc-zgrid 5.0``: 4.0 (any projection, charts, crs and 
 come) with the ``colours rgb8`` line, its raw body's heights followed by each node's red, green
 and blue bytes, row by row; 5.1 when it has the ``crs`` and ``raster`` lines. The count of
 the source's vertices (``source_vertices``) is a minor version of each (1.2, 2.1, 3.2, 4.1, 5.2),
-written only for a grid that has it.
+written only for a grid that has it. A grid whose colours are sampled finer than its nodes
+(``fine_colors``, colour scale K > 1) is ``mzc-zgrid 6.0``: 5.2 with the ``colour_scale K`` line,
+its colour bytes the ((rows - 1) K + 1) x ((cols - 1) K + 1) samples; K = 1 keeps 5.x.
 """
 
 import numpy as np
@@ -48,9 +50,12 @@ RAW_GEOREFERENCED_VERSION = (3, 1)   # 3.0 with them
 CHARTED_VERSION = (4, 0)     # 3.0 with the charts line of a multi-chart grid
 COLOURED_VERSION = (5, 0)    # 4.0 with the colours line and each node's colour after the heights
 COLOURED_GEOREFERENCED_VERSION = (5, 1)   # 5.0 with the crs and raster lines (a coloured LAS cloud's grid)
-GEOREF_SINCE = dict([GEOREFERENCED_VERSION, RAW_GEOREFERENCED_VERSION, COLOURED_GEOREFERENCED_VERSION])   # crs from
-COUNTED_SINCE = {1: 2, 2: 1, 3: 2, 4: 1, 5: 2}   # major -> the minor that adds the source_vertices line
-CHECKSUM_SINCE = {RAW_VERSION[0]: 0, CHARTED_VERSION[0]: 0, COLOURED_VERSION[0]: 0}   # a raw body: never without crc32
+FINE_COLOURED_VERSION = (6, 0)   # 5.2 with the colour_scale line, the colours sampled that much finer
+GEOREF_SINCE = {**dict([GEOREFERENCED_VERSION, RAW_GEOREFERENCED_VERSION, COLOURED_GEOREFERENCED_VERSION]),
+                FINE_COLOURED_VERSION[0]: 0}   # major -> the minor that adds the crs and raster lines
+COUNTED_SINCE = {1: 2, 2: 1, 3: 2, 4: 1, 5: 2, 6: 0}   # major -> the minor that adds the source_vertices line
+CHECKSUM_SINCE = {RAW_VERSION[0]: 0, CHARTED_VERSION[0]: 0, COLOURED_VERSION[0]: 0,
+                  FINE_COLOURED_VERSION[0]: 0}   # a raw body: never without crc32
 COLOUR_LAYOUTS = {"rgb8": 3}   # the colours line's value -> bytes a node (red, green, blue, 8 bits each)
 SAMPLES = {"float64": "<f8", "float32": "<f4"}   # the raw line's value -> numpy dtype of the body
 
@@ -84,22 +89,31 @@ def read(data, source="<bytes>"):
     and field on bad input."""
     major = split_magic(data, source)[1]
     raw = major >= RAW_VERSION[0]
-    header, body, first_line = read_header(data, source, KIND, COLOURED_VERSION[0],
+    header, body, first_line = read_header(data, source, KIND, FINE_COLOURED_VERSION[0],
                                            projected_major=PROJECTED_VERSION[0], checksum_since=CHECKSUM_SINCE,
                                            binary=raw, georef_since=GEOREF_SINCE, charted_major=CHARTED_VERSION[0],
                                            counted_since=COUNTED_SINCE)
     fields, rows, cols = read_grid_fields(header)
     if major >= COLOURED_VERSION[0]:
-        body, fields["colors"] = read_colours(body, header, rows, cols)
+        scale = colour_scale(header, rows, cols) if major >= FINE_COLOURED_VERSION[0] else 1
+        body, fields["fine_colors"] = read_colours(body, header, (rows - 1) * scale + 1, (cols - 1) * scale + 1)
     z = read_raw(body, header, rows, cols) if raw else read_plain(body, first_line, fields["nodata"], rows, cols,
                                                                   source)
     return ZGrid(z=z, **fields)
 
 
+def colour_scale(header, rows, cols):
+    """The ``colour_scale`` line of a 6.0 header (required): K in 2..8, its image within the limits."""
+    from mzc.limits import MAX_COLOUR_SCALE, check_colour_scale
+
+    scale = header.integer("colour_scale", 2, MAX_COLOUR_SCALE)
+    return check_colour_scale(scale, rows, cols, source=header.source, field="colour_scale")
+
+
 def read_colours(body, header, rows, cols):
-    """(the heights' part of a 5.0 raw body, its (rows, cols, 3) uint8 colours): the ``colours``
-    line (required) names their layout, and the body's last rows x cols x 3 bytes hold them, the
-    length checked (with the heights', ``read_raw``) before anything is allocated."""
+    """(the heights' part of a 5.0 or 6.0 raw body, its (rows, cols, 3) uint8 colour samples): the
+    ``colours`` line (required) names their layout, and the body's last rows x cols x 3 bytes hold
+    them, the length checked (with the heights', ``read_raw``) before anything is allocated."""
     size = rows * cols * COLOUR_LAYOUTS[header.word("colours", tuple(COLOUR_LAYOUTS))]
     if len(body) < size:
         raise MzcError(f"the raw body has {len(body)} bytes, fewer than the {size} of the nodes' colours alone "
@@ -182,6 +196,10 @@ def write(grid, precision=None, raw=None):
     if precision is not None:
         raise MzcError("precision rounds the text of a plain body; a raw body holds the values exactly",
                        field="precision")
+    if grid.fine_colors is not None:
+        lines = [magic_line(KIND, FINE_COLOURED_VERSION), *grid_header_lines(grid, counted=True), f"raw {raw}",
+                 "colours rgb8", f"colour_scale {grid.colour_scale}", "data"]
+        return file_bytes(lines, bytes(raw_body(grid.z, raw)) + grid.fine_colors.tobytes())
     if grid.colors is not None:
         version = counted_version(grid, COLOURED_GEOREFERENCED_VERSION if grid.georeferenced else COLOURED_VERSION,
                                   COUNTED_SINCE)

@@ -315,17 +315,21 @@ def write(mesh: Mesh) -> bytes:
 def textured(grid_mesh, obj_path, png_path):
     """[(path, bytes)] of a grid's mesh (a ``triangulation.GridMesh`` of a grid with colours) as
     an OBJ at ``obj_path`` whose vertex k has the texture coordinate of its node (r, c), the
-    centre of pixel (rows - 1 - r, c) of the grid's colours written as the PNG at ``png_path``
-    (its first row the grid's last: v runs up), and the material file beside the OBJ (its name
-    with .mtl) that names the PNG by its path from the OBJ's folder."""
-    from mzc.meshes.texture import png_bytes
+    centre of pixel (R - 1 - rK, cK) of the grid's R x C colour image, K its colour scale (the
+    nodes' colours, K = 1, or ``fine_colors``), written as the PNG at ``png_path`` (its first row
+    the grid's last: v runs up; its invalid pixels padded, ``texture.padded``), and the material
+    file beside the OBJ (its name with .mtl) that names the PNG by its path from the OBJ's folder."""
+    from mzc.grid import fine_mask
+    from mzc.meshes.texture import padded, png_bytes
 
     grid = grid_mesh.grid
     if grid.colors is None:
         raise MzcError("the grid has no colours to write as a texture", field="texture")
-    rows, cols = grid.shape
-    row, col = np.divmod(np.flatnonzero(grid_mesh.used), cols)
-    uv = np.column_stack([(col + 0.5) / cols, (row + 0.5) / rows])
+    scale = grid.colour_scale
+    colours = padded(grid.colors if scale == 1 else grid.fine_colors, fine_mask(grid.valid, scale))
+    rows, cols = colours.shape[:2]
+    row, col = np.divmod(np.flatnonzero(grid_mesh.used), grid.shape[1])
+    uv = np.column_stack([(col * scale + 0.5) / cols, (row * scale + 0.5) / rows])
     folder = os.path.dirname(os.path.abspath(obj_path))
     material = os.path.splitext(os.path.basename(obj_path))[0] + ".mtl"
     image = os.path.relpath(os.path.abspath(png_path), folder).replace(os.sep, "/")
@@ -336,4 +340,4 @@ def textured(grid_mesh, obj_path, png_path):
     obj = f"mtllib {material}\nusemtl grid_colours\n{vertices}{texture}{corners}"
     mtl = f"newmtl grid_colours\nKa 1 1 1\nKd 1 1 1\nmap_Kd {image}\n"
     return [(obj_path, obj.encode("ascii")), (os.path.join(os.path.dirname(obj_path), material), mtl.encode("utf-8")),
-            (png_path, png_bytes(grid.colors[::-1]))]
+            (png_path, png_bytes(colours[::-1]))]

@@ -6,7 +6,9 @@ triangle nearest the node's point (the one its line hit, at distance 0 but for r
 edge or vertex the triangles that share it agree), interpolated from its corners' colours with
 the point's barycentric weights (of a textured mesh, its image at the texture coordinates so
 interpolated: detail finer than the triangles); for a cloud, the colour of the point nearest the
-node's point. Densified rows mix their rows' colours (``densified_colours``).
+node's point. Densified rows mix their rows' colours (``densified_colours``). With a colour
+scale K > 1 (``slice --colour-scale``) the colour is sampled K times finer than the nodes
+(``fine_colours``): at each sample's point between the nodes, on the surface's nearest point.
 The nearest triangle is found by mzc's exact search (``mzc.measure.metrics.nearest_triangles``,
 the one ``mzc diff`` uses), a point of a cloud as the triangle of one corner repeated thrice,
 so projections, charts, binned and Delaunay clouds all are sampled one way. Vectorised, with
@@ -15,14 +17,50 @@ IEEE arithmetic only (no BLAS, no SIMD-dependent loops): the same bytes on every
 
 import numpy as np
 
+from mzc import projections
+from mzc.errors import MzcError
 from mzc.vectors import dotted
 
 
-def coloured(mesh, grid):
-    """``grid`` with its nodes' colours sampled from ``mesh`` (``sampled_colours``), or as it is
-    when the mesh has none."""
+def coloured(mesh, grid, scale=1):
+    """``grid`` with its nodes' colours sampled from ``mesh`` (``sampled_colours``), or with
+    ``scale`` > 1 its colour image that much finer (``fine_colours``), or as it is when the mesh
+    has none."""
+    if scale > 1:
+        return grid.with_z(grid.z, fine_colors=fine_colours(grid, mesh, scale))
     colours = sampled_colours(grid, mesh)
     return grid if colours is None else grid.with_z(grid.z, colors=colours)
+
+
+def fine_colours(grid, mesh, scale):
+    """((rows - 1) K + 1, (cols - 1) K + 1, 3) uint8 colours of one grid's surface sampled K =
+    ``scale`` times finer than its nodes, 0 where invalid (``mzc.grid.fine_mask``): sample (a, b)
+    at node position (a / K, b / K), whose value is the bilinear mix of its cell's nodes' values
+    (along the node lines: a point between the grid mesh's, on any projection), coloured as a
+    node is at the surface's point nearest it (``surface_colours``). Node (r, c)'s is sample (rK, cK),
+    the colour ``sampled_colours`` gives it."""
+    from mzc.grid import fine_lattice
+    from mzc.limits import check_colour_scale
+
+    check_colour_scale(scale, *grid.shape, field="colour_scale")
+    if mesh.colors is None:
+        raise MzcError("a colour scale samples the source's colours, and it has none", field="colour_scale")
+    if grid.charts is not None:
+        raise MzcError("a colour scale above 1 needs one grid, not a multi-chart grid (give --charts 1)",
+                       field="colour_scale")
+    (row_low, row_high, t), (col_low, col_high, s) = (fine_lattice(n, scale) for n in grid.shape)
+    t, s, z = t[:, None], s[None, :], grid.z
+    values = ((1 - t) * ((1 - s) * z[np.ix_(row_low, col_low)] + s * z[np.ix_(row_low, col_high)])
+              + t * ((1 - s) * z[np.ix_(row_high, col_low)] + s * z[np.ix_(row_high, col_high)]))
+    us = grid.origin[0] + grid.d2 * (np.arange(values.shape[1]) / scale)
+    vs = grid.origin[1] + grid.d1 * (np.arange(values.shape[0]) / scale)
+    points = projections.to_points(grid.projection, grid.radius, us[None, :], vs[:, None], values)
+    valid = ~np.isnan(values)
+    colours = np.zeros((*values.shape, 3), dtype=np.uint8)
+    if valid.any():
+        mixed = surface_colours(grid.to_input_frame(points[valid]), mesh)
+        colours[valid] = np.clip(np.round(mixed), 0, 255).astype(np.uint8)
+    return colours
 
 
 def sampled_colours(grid, mesh):

@@ -87,7 +87,22 @@ def densify_grid(grid, n, method=DEFAULT_METHOD, iterations=DEFAULT_ITERATIONS, 
     dense = densify(z, n, grid.d1, grid.d2, method=method, iterations=iterations, tol=tol, breaks=breaks, strip=strip)
     dense = dense[:, pad:pad + cols]
     return original.with_z(dense, d1=original.d1 / (n + 1), colors=dense_colours(original, dense, n),
-                           source_vertices=kept_count(original, n))
+                           fine_colors=kept_fine_colours(original, n), source_vertices=kept_count(original, n))
+
+
+def kept_fine_colours(grid, n):
+    """The colours finer than the nodes (``ZGrid.fine_colors``) that a grid densified by ``n`` keeps:
+    its own when no row was inserted; else none, named in one MzcWarning (the inserted rows cut its
+    cells unevenly; the nodes keep their colours, mixed for the new rows)."""
+    if grid.fine_colors is None or not n:
+        return grid.fine_colors
+    import warnings
+
+    from mzc.errors import MzcWarning
+
+    warnings.warn(MzcWarning(f"not kept: the colours {grid.colour_scale} times finer than the nodes (densify "
+                             "keeps the nodes' colours, mixed for the rows it inserts)"), stacklevel=3)
+    return None
 
 
 def dense_colours(grid, dense, n):

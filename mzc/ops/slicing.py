@@ -81,7 +81,7 @@ def facing_direction(points, triangles):
 
 def slice_surface(surface, d1=None, d2=None, rows=None, cols=None, align="none", units=None,
                   projection="auto", center=None, axis=None, view="auto", thesis_grid=False, classes=None,
-                  cloud="auto", charts="auto", tap=False):
+                  cloud="auto", charts="auto", tap=False, colour_scale=1):
     """Cut ``surface`` (a Mesh; no triangles = point cloud) into a ZGrid; a ZGrid (a raster's, or
     one read from a z-grid or compressed file) is its own grid (``grid_as_sliced``).
 
@@ -98,7 +98,8 @@ def slice_surface(surface, d1=None, d2=None, rows=None, cols=None, align="none",
     a cloud without one that is terrain in longitude and latitude (``lonlat_lattice``) is
     gridded at its own steps in WGS 84, and a cloud whose CRS is geographic (a LAS cloud in
     EPSG:4326) in its CRS, both as terrain in degrees (``lonlat_grid``). A cloud gridded to fewer than
-    MIN_NODES nodes along an axis is refused (``check_cloud_grid``).
+    MIN_NODES nodes along an axis is refused (``check_cloud_grid``). ``colour_scale`` K > 1 samples
+    a coloured surface's colour K times finer than the nodes (one grid only: ``colouring.fine_colours``).
 
     ``charts``: 1 for one grid, N for a multi-chart grid of at most N charts (``mzc.ops.charts``),
     ``auto`` for one grid when it holds SINGLE_COVER of the surface's area (a face, terrain, a
@@ -120,7 +121,8 @@ def slice_surface(surface, d1=None, d2=None, rows=None, cols=None, align="none",
                                 thesis_grid=thesis_grid or None, align=None if align == "none" else align,
                                 projection=None if projection in ("auto", "planar") else projection,
                                 view=None if view in ("auto", "+z") else view,
-                                charts=None if charts in ("auto", 1) else charts, tap=tap or None)
+                                charts=None if charts in ("auto", 1) else charts, tap=tap or None,
+                                colour_scale=None if colour_scale == 1 else colour_scale)
     mesh = surface if classes is None else surface.with_classes(classes)
     check_magnitude(mesh.points, "coordinates")
     if tap:
@@ -132,14 +134,14 @@ def slice_surface(surface, d1=None, d2=None, rows=None, cols=None, align="none",
     if lonlat is not None or geographic_cloud(mesh):
         return from_source(mesh, lonlat_grid(mesh, lonlat, units, d1=d1, d2=d2, rows=rows, cols=cols, tap=tap,
                                           thesis_grid=thesis_grid, align=align, projection=projection, view=view,
-                                          center=center, axis=axis, charts=charts, cloud=cloud))
+                                          center=center, axis=axis, charts=charts, cloud=cloud), colour_scale)
     one_grid = one_grid_option(projection=projection != "auto", view=view != "auto", center=center is not None,
                                axis=axis is not None, thesis_grid=thesis_grid, rows=rows is not None,
                                cols=cols is not None, tap=tap)
     count = chart_count(charts, one_grid)
     if count is not None and count > 1:
         charted = chart_surface(mesh, *frame_for(mesh, align), chart_spacing(d1, d2, mesh), units, count)
-        return from_source(mesh, charted)
+        return from_source(mesh, charted, colour_scale)
     chosen = choose_view(mesh, frame_for(mesh, align), projection, center, axis, view)
     grid = slice_in_frame(mesh, chosen.rotation, chosen.shift, d1=d1, d2=d2, rows=rows, cols=cols, units=units,
                           projection=chosen.projection, radius=chosen.radius, full_turn=chosen.full_turn,
@@ -149,7 +151,8 @@ def slice_surface(surface, d1=None, d2=None, rows=None, cols=None, align="none",
     if np.isnan(grid.z).all():
         raise MzcError("no grid node meets the surface (seen edge-on? try --view or --align pca)")
     if count is None and not one_grid and (single_grid_cover(grid, mesh) or 1.0) < SINGLE_COVER:
-        return from_source(mesh, chart_surface(mesh, *frame_for(mesh, align), chart_spacing(d1, d2, mesh), units))
+        return from_source(mesh, chart_surface(mesh, *frame_for(mesh, align), chart_spacing(d1, d2, mesh), units),
+                           colour_scale)
     crs = grid_crs(mesh.crs) if grid.projection == "planar" else None
     if crs is not None:
         grid = grid.with_z(grid.z, crs=crs)   # the transform maps the grid to the cloud's frame, the CRS's
@@ -162,15 +165,16 @@ def slice_surface(surface, d1=None, d2=None, rows=None, cols=None, align="none",
             f"the {chosen.projection} grid meets only {100 * chosen.seen:.0f}% of the surface's area within "
             f"60 degrees of its node lines; the rest comes back coarse or not at all (try --projection auto, "
             f"--view or --align pca)"), stacklevel=2)
-    return from_source(mesh, grid)
+    return from_source(mesh, grid, colour_scale)
 
 
-def from_source(mesh, grid):
-    """``grid``, sliced from ``mesh``, with what it keeps of it: the colours at its nodes
-    (``mzc.ops.colouring``) and the count of its vertices, which the rebuild comes back near."""
+def from_source(mesh, grid, colour_scale=1):
+    """``grid``, sliced from ``mesh``, with what it keeps of it: the colours at its nodes, or
+    ``colour_scale`` times finer (``mzc.ops.colouring``), and the count of its vertices, which the
+    rebuild comes back near."""
     from mzc.ops.colouring import coloured
 
-    grid = coloured(mesh, grid)
+    grid = coloured(mesh, grid, colour_scale)
     return grid.with_z(grid.z, source_vertices=len(mesh.points))
 
 

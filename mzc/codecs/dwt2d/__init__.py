@@ -703,15 +703,18 @@ def encode_whole(grid, max_error=None, rmse=None, size=None, wavelet=DEFAULT_WAV
 def colour_section(grid, psnr=None, max_error=None):
     """(the header line of its target, the colour section's bytes) of a grid's colours, None without
     them: coded within ``max_error`` levels, else at ``psnr`` dB (default DEFAULT_COLOUR_PSNR) over the
-    valid nodes (mzc.codecs.dwt2d.colour, spec/colour.md)."""
+    valid nodes (mzc.codecs.dwt2d.colour, spec/colour.md); colours finer than the nodes
+    (``ZGrid.fine_colors``) are coded whole, with their scale."""
     if grid.colors is None:
         return None
     from mzc.codecs.dwt2d.colour import encode_colour
 
+    image = grid.colors if grid.fine_colors is None else grid.fine_colors
+    coded = functools.partial(encode_colour, image, grid.valid, scale=grid.colour_scale)
     if max_error is not None:
-        return f"colour_max_error {int(max_error)}", encode_colour(grid.colors, grid.valid, max_error=max_error)
+        return f"colour_max_error {int(max_error)}", coded(max_error=max_error)
     psnr = DEFAULT_COLOUR_PSNR if psnr is None else psnr
-    return f"colour_psnr {format_number(psnr)}", encode_colour(grid.colors, grid.valid, psnr=psnr)
+    return f"colour_psnr {format_number(psnr)}", coded(psnr=psnr)
 
 
 def keeps_colour(grid, options):
@@ -891,7 +894,7 @@ def read(data, source="<bytes>", wanted=None):
     if colour is not None:
         from mzc.codecs.dwt2d.colour import decode_colour
 
-        fields["colors"] = decode_colour(colour, valid, source)
+        fields["fine_colors"] = decode_colour(colour, valid, source)   # at the nodes alone when its scale is 1
     grid = ZGrid(z=z, **fields)
     coloured = header.has("colour_psnr") or header.has("colour_max_error")
     if progressive and (len(bodies) - 1 < levels or coloured and colour is None):   # cut short: said once decoded

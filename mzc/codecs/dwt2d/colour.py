@@ -3,7 +3,11 @@ pure functions over arrays (spec/colour.md gives every byte).
 
 ``encode_colour(rgb, mask, max_error=..., psnr=...)`` returns self-delimiting bytes (a container
 appends them as a section; ``section_length`` says where they end), ``decode_colour(data, mask)``
-the image, 0 at invalid nodes. The encoder takes the reversible YCoCg-R colour transform, fills
+the image, 0 at invalid nodes. With ``scale`` K > 1 the image is the grid's colours sampled K
+times finer than the nodes of ``mask`` (``mzc.grid.fine_mask`` says which samples are valid),
+coded the same way in a version 2 section, whose header adds K; K = 1 writes version 1.
+
+The encoder takes the reversible YCoCg-R colour transform, fills
 invalid nodes with the harmonic fill of dwt2d (so no bits go on a jump at the mask's edge),
 lifts each channel with dwt2d's CDF 9/7 in binary64 (lossy) or the integer LeGall 5/3
 (lossless), quantises each band with a step in sixteenths of a level (chroma coarser than luma),
@@ -34,10 +38,13 @@ from mzc.codecs.dwt2d import wavelet as w2
 from mzc.errors import MzcError
 
 MAGIC = b"mzcC"
-VERSION = 1
-HEADER = struct.Struct("<4sBIIBBHHHBII")   # magic, version, rows, cols, levels, transform, 3 steps, correction,
-                                            # length, crc32
-CRC_OFFSET = HEADER.size - 4              # the CRC-32 covers the header before it and the payload
+VERSION = 1                               # colours at the nodes
+FINE_VERSION = 2                          # colours sampled K times finer than the nodes: the header adds K
+HEADERS = {VERSION: struct.Struct("<4sBIIBBHHHBII"),   # magic, version, rows, cols, levels, transform, 3 steps,
+           FINE_VERSION: struct.Struct("<4sBIIBBBHHHBII")}   # correction, length, crc32; 2: K after cols
+LENGTH = 10                               # read_header's index of the payload's length
+LEAD = struct.Struct("<4sB")              # magic and version: which header follows
+CRC_BYTES = 4                             # the CRC-32 (last in the header) covers the header before it and the payload
 UNIT = 16                                 # steps are written in sixteenths of a level
 MAX_SIDE = 1 << 24                        # rows and columns the decoder accepts (far beyond any grid)
 MAX_QUANTUM = 1 << 24                     # |q| beyond this cannot come from 8-bit colour: a damaged payload
@@ -212,8 +219,9 @@ class Prepared:
     """An image ready to be coded at any steps: its three filled YCoCg-R channels, and their bands
     by each transform tried (taken once: the searches quantise them at every step they try)."""
 
-    def __init__(self, rgb, mask, levels=None):
+    def __init__(self, rgb, mask, levels=None, scale=1):
         rgb, self.mask = check_image(rgb, mask)
+        self.scale = scale
         self.rgb = rgb.astype(np.int64)
         self.levels = w2.default_levels(self.mask.shape, COARSEST) if levels is None else levels
         self.planes = [filled(channel, self.mask) for channel in ycocg(rgb)]
@@ -266,7 +274,7 @@ class Prepared:
             for channel in range(3):
                 encode_corrections(encoder, k[..., channel], self.mask)
             decoded = clipped(decoded + correction * k, self.mask)   # as the decoder adds them
-        return section_bytes(self.mask.shape, self.levels, transform.number, steps, correction,
+        return section_bytes(self.mask.shape, self.scale, self.levels, transform.number, steps, correction,
                              encoder.finish()), decoded
 
 
@@ -300,8 +308,10 @@ def check_image(rgb, mask):
     return rgb, mask
 
 
-def encode_colour(rgb, mask, *, max_error=None, psnr=None, levels=None):
-    """Section bytes of an (R, C, 3) uint8 image at the True nodes of ``mask``.
+def encode_colour(rgb, mask, *, max_error=None, psnr=None, levels=None, scale=1):
+    """Section bytes of an (R, C, 3) uint8 image at the True nodes of ``mask``; with ``scale`` K > 1,
+    of the ((R - 1) K + 1, (C - 1) K + 1, 3) image of colours K times finer than the nodes of the
+    R x C ``mask``, at its valid samples (``mzc.grid.fine_mask``).
 
     ``max_error`` E (whole 8-bit levels, 0..127): |decoded - rgb| <= E at every valid node (E = 0:
     lossless); ``psnr`` (dB): the largest luma step found whose PSNR over the valid nodes meets it;
@@ -319,7 +329,14 @@ def encode_colour(rgb, mask, *, max_error=None, psnr=None, levels=None):
     target = DEFAULT_PSNR if psnr is None else float(psnr)
     if not 0 < target < 200:
         raise MzcError(f"psnr {psnr} is not in 0..200 dB", field="psnr", options=("psnr",))
-    prepared = Prepared(rgb, mask, levels)
+    if scale != 1:
+        from mzc.grid import fine_mask
+        from mzc.limits import check_colour_scale
+
+        mask = np.asarray(mask)
+        scale = check_colour_scale(scale, *mask.shape, field="scale")
+        mask = fine_mask(mask, scale) if mask.ndim == 2 and mask.dtype == bool else mask   # else check_image says
+    prepared = Prepared(rgb, mask, levels, scale)
     if max_error is not None:
         return bounded_section(prepared, int(max_error))
     return psnr_section(prepared, target)
@@ -348,11 +365,14 @@ def psnr_section(prepared, target):
     return section if prepared.squared_error(decoded) <= limit else bounded_section(prepared, 0)
 
 
-def section_bytes(shape, levels, transform, steps, correction, payload):
-    """The header (with the CRC-32 of it and the payload) and the payload."""
-    head = HEADER.pack(MAGIC, VERSION, shape[0], shape[1], levels, transform, *steps, correction, len(payload), 0)
-    crc = zlib.crc32(payload, zlib.crc32(head[:CRC_OFFSET]))
-    return head[:CRC_OFFSET] + struct.pack("<I", crc) + payload
+def section_bytes(shape, scale, levels, transform, steps, correction, payload):
+    """The header (with the CRC-32 of it and the payload) and the payload: version 1 at ``scale`` 1,
+    byte for byte as before colour scales, else version 2 with the scale after the columns."""
+    fields = (levels, transform, *steps, correction, len(payload), 0)
+    head = (HEADERS[VERSION].pack(MAGIC, VERSION, *shape, *fields) if scale == 1
+            else HEADERS[FINE_VERSION].pack(MAGIC, FINE_VERSION, *shape, scale, *fields))
+    crc = zlib.crc32(payload, zlib.crc32(head[:-CRC_BYTES]))
+    return head[:-CRC_BYTES] + struct.pack("<I", crc) + payload
 
 
 # --------------------------------------------------------------------------- decoder
@@ -360,22 +380,26 @@ def section_bytes(shape, levels, transform, steps, correction, payload):
 
 def section_length(data, source="<bytes>"):
     """The length of the colour section at the start of ``data`` (a container's next section follows)."""
-    return HEADER.size + read_header(data, source)[-2]
+    fields = read_header(data, source)
+    return HEADERS[fields[1]].size + fields[LENGTH]
 
 
 def read_header(data, source):
-    """The header's fields (magic and version checked) or an MzcError."""
-    if len(data) < HEADER.size:
-        raise MzcError(f"colour section of {len(data)} bytes ends inside its {HEADER.size}-byte header",
+    """The header's fields (magic and version checked) in version 1's order, then the colour scale
+    (version 2's field after the columns; 1 in version 1), or an MzcError."""
+    magic, version = LEAD.unpack_from(data) if len(data) >= LEAD.size else (bytes(data[:4]), None)
+    if magic != MAGIC:
+        raise MzcError(f"not a colour section (starts {bytes(magic)!r}, not {MAGIC!r})", source=source,
+                       field="colour")
+    if version not in HEADERS:
+        raise MzcError(f"colour section version {version} (this mzc reads {VERSION} and {FINE_VERSION})",
                        source=source, field="colour")
-    fields = HEADER.unpack_from(data)
-    if fields[0] != MAGIC:
-        raise MzcError(f"not a colour section (starts {bytes(fields[0])!r}, not {MAGIC!r})", source=source,
-                       field="colour")
-    if fields[1] != VERSION:
-        raise MzcError(f"colour section version {fields[1]} (this mzc reads {VERSION})", source=source,
-                       field="colour")
-    return fields
+    header = HEADERS[version]
+    if len(data) < header.size:
+        raise MzcError(f"colour section of {len(data)} bytes ends inside its {header.size}-byte header",
+                       source=source, field="colour")
+    fields = header.unpack_from(data)
+    return fields + (1,) if version == VERSION else fields[:4] + fields[5:] + fields[4:5]
 
 
 def decode_colour(data, mask, source="<bytes>"):
@@ -384,13 +408,19 @@ def decode_colour(data, mask, source="<bytes>"):
     from mzc.codecs.dwt2d.entropy import Decoder
 
     data = bytes(data)
-    _magic, _version, rows, cols, levels, number, *rest = read_header(data, source)
-    steps, (correction, length, crc) = rest[:3], rest[3:]
-    fault = section_fault(data, (rows, cols), np.shape(mask), levels, number, steps, length, crc)
+    _magic, version, rows, cols, levels, number, *rest = read_header(data, source)
+    steps, (correction, length, crc, scale) = rest[:3], rest[3:]
+    mask = np.asarray(mask, dtype=bool)
+    fault = scale_fault(scale, version, mask.shape) or section_fault(
+        data, HEADERS[version].size, (rows, cols), fine_shape(mask.shape, scale), levels, number, steps, length, crc)
     if fault:
         raise MzcError(fault, source=source, field="colour")
-    mask, transform = np.asarray(mask, dtype=bool), TRANSFORMS[number]
-    decoder = Decoder(data[HEADER.size:], source, SAME_SIZE)
+    if scale > 1:
+        from mzc.grid import fine_mask
+
+        mask = fine_mask(mask, scale)
+    transform = TRANSFORMS[number]
+    decoder = Decoder(data[HEADERS[version].size:], source, SAME_SIZE)
     relevant = w2.flatten(lifting.relevance(mask, transform.wavelet, levels))
     planes = []
     for step in steps:
@@ -410,10 +440,31 @@ def decode_colour(data, mask, source="<bytes>"):
     return image.astype(np.uint8)
 
 
-def section_fault(data, shape, mask_shape, levels, transform, steps, length, crc):
+def fine_shape(shape, scale):
+    """The shape of a colour image ``scale`` times finer than a grid of ``shape`` nodes."""
+    return tuple((n - 1) * scale + 1 for n in shape)
+
+
+def scale_fault(scale, version, mask_shape):
+    """What is wrong with a version 2 section's scale (None when nothing is): 2..MAX_COLOUR_SCALE, its
+    image within the grid limits (checked before the shapes are compared, and anything allocated)."""
+    from mzc.limits import MAX_COLOUR_SCALE, check_colour_scale
+
+    if version == VERSION:
+        return None
+    if not 2 <= scale <= MAX_COLOUR_SCALE:
+        return f"colour scale {scale} (allowed 2..{MAX_COLOUR_SCALE})"
+    try:
+        check_colour_scale(scale, *mask_shape)
+    except MzcError as error:
+        return f"colour scale {scale}: {error.message}"
+    return None
+
+
+def section_fault(data, header_size, shape, mask_shape, levels, transform, steps, length, crc):
     """What is wrong with a section's header fields and length (None when nothing is)."""
     if tuple(mask_shape) != shape:
-        return f"the section's grid is {shape[0]} x {shape[1]} nodes, the mask {mask_shape}"
+        return f"the section's image is {shape[0]} x {shape[1]} samples, the mask's {mask_shape}"
     if not 1 <= min(shape) <= max(shape) <= MAX_SIDE:
         return f"a colour grid of {shape[0]} x {shape[1]} nodes (allowed 1..{MAX_SIDE} a side)"
     if levels > w2.MAX_LEVELS:
@@ -422,8 +473,8 @@ def section_fault(data, shape, mask_shape, levels, transform, steps, length, crc
         return f"transform {transform} (this mzc knows 0..{len(TRANSFORMS) - 1})"
     if min(steps) < UNIT:
         return f"a step of {min(steps)}/16 level is below 1 level"
-    if len(data) != HEADER.size + length:
-        return f"the section declares {HEADER.size + length} bytes and has {len(data)}"
-    if zlib.crc32(data[HEADER.size:], zlib.crc32(data[:CRC_OFFSET])) != crc:
+    if len(data) != header_size + length:
+        return f"the section declares {header_size + length} bytes and has {len(data)}"
+    if zlib.crc32(data[header_size:], zlib.crc32(data[:header_size - CRC_BYTES])) != crc:
         return "the colour section's CRC-32 does not match (damaged bytes)"
     return None

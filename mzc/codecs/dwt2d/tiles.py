@@ -419,13 +419,13 @@ def check_window(shape, window, source=None):
                     field="window")
 
 
-def window_grid(frame, z, row, col, colors=None):
-    """The ZGrid of the values ``z`` (and ``colors``, when the grid has them) of the window at node
-    (``row``, ``col``) of ``frame``: its fields, its own origin."""
+def window_grid(frame, z, row, col, colors=None, fine_colors=None):
+    """The ZGrid of the values ``z`` (and ``colors`` or ``fine_colors``, when the grid has them) of
+    the window at node (``row``, ``col``) of ``frame``: its fields, its own origin."""
     from mzc.grid import ZGrid
 
     fields = {**frame.fields, "origin": frame.block_fields(row, col)["origin"]}
-    return ZGrid(z=z, colors=colors, **fields)
+    return ZGrid(z=z, colors=colors, fine_colors=fine_colors, **fields)
 
 
 def window_of(grid, window):
@@ -435,7 +435,9 @@ def window_of(grid, window):
     row, col, rows, cols = window
     check_window(grid.shape, window)
     colours = None if grid.colors is None else grid.colors[row:row + rows, col:col + cols]
-    return window_grid(frame_of(grid), grid.z[row:row + rows, col:col + cols], row, col, colours)
+    fine, k = grid.fine_colors, grid.colour_scale   # the samples of the window's cells, K a spacing
+    fine = None if fine is None else fine[row * k:(row + rows - 1) * k + 1, col * k:(col + cols - 1) * k + 1]
+    return window_grid(frame_of(grid), grid.z[row:row + rows, col:col + cols], row, col, colours, fine)
 
 
 def open_tiled(path):
