@@ -20,21 +20,16 @@ Writes chart-spacing-results.md and .json into --out (default: this directory).
 
 import datetime
 import json
-import os
 import sys
 import time
 import warnings
 from pathlib import Path
 
-for _name in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
-    os.environ.setdefault(_name, "1")  # one core per worker
+from startup import HERE  # first: one thread per process, set before numpy loads
 
-import numpy as np  # noqa: E402 - after the thread settings
-
-HERE = Path(__file__).resolve().parent
-sys.path.insert(0, str(HERE))
-
-from objects import (  # noqa: E402
+# isort: split
+import numpy as np
+from objects import (
     COVERAGE,
     DRACO,
     FLOOR_HAUSDORFF,
@@ -45,7 +40,7 @@ from objects import (  # noqa: E402
     errors,
     timed,
 )
-from report import benchmark_parser, bytes_at, fmt, git_commit, item_ratios, machine, pareto  # noqa: E402
+from report import benchmark_parser, bytes_at, fmt, git_commit, item_ratios, machine, pareto
 
 FACTORS, QUICK_FACTORS = (1, 1.5, 2, 3, 4, 6), (1, 2, 4)   # k: the spacing is k * s0
 LADDER = (0.01, 0.015, 0.02, 0.03, 0.05, 0.07, 0.1, 0.15)    # dwt2d rmse targets, % of D

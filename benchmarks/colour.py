@@ -26,23 +26,15 @@ Writes colour-results.md and colour-results.json into --out (default: this direc
 
 import datetime
 import json
-import os
-import sys
 import time
-from pathlib import Path
 
-for _name in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
-    os.environ.setdefault(_name, "1")  # single-threaded timings
+from startup import HERE  # first: one thread per process, set before numpy loads
 
-import numpy as np  # noqa: E402
+# isort: split
+import numpy as np
+from report import benchmark_parser, bytes_at, fmt, git_commit, machine, pareto, terminal_progress, versions
 
-HERE = Path(__file__).resolve().parent
-sys.path.insert(0, str(HERE))
-sys.path.insert(0, str(HERE.parent))
-
-from report import benchmark_parser, bytes_at, fmt, git_commit, machine, pareto, terminal_progress, versions  # noqa: E402
-
-from mzc.codecs.dwt2d import colour  # noqa: E402
+from mzc.codecs.dwt2d import colour
 
 PUBLIC = HERE.parent / "tests" / "data" / "public"
 FUZE = PUBLIC / "fuze"

@@ -29,24 +29,16 @@ interpolated log-log on its Pareto front (report.bytes_at).
 Writes coloured-scans-results.md and coloured-scans-results.json into --out.
 """
 
-import os
-import sys
 import time
 import warnings
-from pathlib import Path
 
-for _name in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
-    os.environ.setdefault(_name, "1")  # single-threaded timings
+from startup import HERE  # first: one thread per process, set before numpy loads
 
-import numpy as np  # noqa: E402
-
-HERE = Path(__file__).resolve().parent
-sys.path.insert(0, str(HERE))
-sys.path.insert(0, str(HERE.parent))
-
-from contenders import load  # noqa: E402
-from objects import QUICK_SAMPLES, SAMPLES, Surface, errors  # noqa: E402
-from report import benchmark_parser, bytes_at, fmt, pareto, stamped, write_report  # noqa: E402
+# isort: split
+import numpy as np
+from contenders import load
+from objects import QUICK_SAMPLES, SAMPLES, Surface, errors
+from report import benchmark_parser, bytes_at, fmt, pareto, stamped, write_report
 
 PUBLIC = HERE.parent / "tests" / "data" / "public"
 SCANS = {"fuze": PUBLIC / "fuze" / "fuze.obj", "fran": PUBLIC / "fran" / "fran.obj",

@@ -23,22 +23,15 @@ Writes dems-results.md and dems-results.json into --out (default: this directory
 import datetime
 import json
 import math
-import os
-import sys
 import time
 from dataclasses import replace
-from pathlib import Path
 
-for _name in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
-    os.environ.setdefault(_name, "1")  # single-threaded timings
+from startup import HERE  # first: one thread per process, set before numpy loads
 
-import numpy as np  # noqa: E402
-
-HERE = Path(__file__).resolve().parent
-sys.path.insert(0, str(HERE))
-
-from contenders import GRID_HEADER, filled, grid_file, read_grid_file  # noqa: E402
-from report import benchmark_parser, bytes_at, fmt, git_commit, machine, pareto, terminal_progress, versions  # noqa: E402
+# isort: split
+import numpy as np
+from contenders import GRID_HEADER, filled, grid_file, read_grid_file
+from report import benchmark_parser, bytes_at, fmt, git_commit, machine, pareto, terminal_progress, versions
 
 PUBLIC = HERE.parent / "tests" / "data" / "public"
 PACKAGES = ("numpy", "PyWavelets", "constriction", "imagecodecs", "lerc", "rasterio")

@@ -24,21 +24,15 @@ encoder-gains-results.md and encoder-gains-results.json into --out (default: thi
 import contextlib
 import datetime
 import json
-import os
 import sys
 import time
-from pathlib import Path
 from unittest import mock
 
-for _name in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
-    os.environ.setdefault(_name, "1")  # single-threaded timings
+from startup import HERE  # first: one thread per process, set before numpy loads
 
-import numpy as np  # noqa: E402
-
-HERE = Path(__file__).resolve().parent
-sys.path.insert(0, str(HERE))
-
-from report import benchmark_parser, bytes_at, git_commit, machine, pareto, terminal_progress, versions  # noqa: E402
+# isort: split
+import numpy as np
+from report import benchmark_parser, bytes_at, git_commit, machine, pareto, terminal_progress, versions
 
 FACES = HERE.parent.parent / "shared" / "data" / "faces"
 PACKAGES = ("numpy", "PyWavelets", "constriction")

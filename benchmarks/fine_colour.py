@@ -21,24 +21,17 @@ is looked up through the rebuilt surface, so a finer shape also places it better
 Writes fine-colour-results.md and fine-colour-results.json into --out.
 """
 
-import os
-import sys
 import tempfile
 import time
 import warnings
 from pathlib import Path
 
-for _name in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
-    os.environ.setdefault(_name, "1")  # single-threaded timings
+from startup import HERE  # first: one thread per process, set before numpy loads
 
-import numpy as np  # noqa: E402
-
-HERE = Path(__file__).resolve().parent
-sys.path.insert(0, str(HERE))
-sys.path.insert(0, str(HERE.parent))
-
-from objects import Surface, samples_on  # noqa: E402
-from report import benchmark_parser, fmt, stamped, write_report  # noqa: E402
+# isort: split
+import numpy as np
+from objects import Surface, samples_on
+from report import benchmark_parser, fmt, stamped, write_report
 
 PUBLIC = HERE.parent / "tests" / "data" / "public"
 SCANS = {"fran": PUBLIC / "fran" / "fran.obj", "fuze": PUBLIC / "fuze" / "fuze.obj"}

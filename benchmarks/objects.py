@@ -28,17 +28,13 @@ import warnings
 from dataclasses import dataclass
 from pathlib import Path
 
-for _name in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
-    os.environ.setdefault(_name, "1")  # one core per worker: the two workers share the machine's two
+from startup import HERE  # first: one thread per process, set before numpy loads
 
-import numpy as np  # noqa: E402 - after the thread settings, which numpy reads on import
-
-HERE = Path(__file__).resolve().parent
-sys.path.insert(0, str(HERE))
-
-from contenders import Contender, draco_contender, load  # noqa: E402
-from rd import TARGETS  # noqa: E402
-from report import (  # noqa: E402
+# isort: split
+import numpy as np
+from contenders import Contender, draco_contender, load
+from rd import TARGETS
+from report import (
     benchmark_parser,
     bytes_at,
     curves_of,

@@ -24,23 +24,16 @@ Pareto front (report.bytes_at) at 0.05, 0.1 and 0.2 mm. The prior itself (a mean
 dictionary) is shared by every file and not counted. Writes prior-study-results.md and .json.
 """
 
-import os
 import sys
 import time
 import warnings
-from pathlib import Path
 
-for _name in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
-    os.environ.setdefault(_name, "1")
+from startup import HERE  # first: one thread per process, set before numpy loads
 
-import numpy as np  # noqa: E402
-
-HERE = Path(__file__).resolve().parent
-sys.path.insert(0, str(HERE))
-sys.path.insert(0, str(HERE.parent))
-
-from objects import QUICK_SAMPLES, Surface, errors  # noqa: E402
-from report import benchmark_parser, bytes_at, fmt, pareto, stamped, write_report  # noqa: E402
+# isort: split
+import numpy as np
+from objects import QUICK_SAMPLES, Surface, errors
+from report import benchmark_parser, bytes_at, fmt, pareto, stamped, write_report
 
 FACES = HERE.parent.parent / "shared" / "data" / "faces"
 TARGETS = (0.05, 0.1, 0.2)   # mm, whole-surface RMS

@@ -12,21 +12,14 @@ this directory). Progress goes to stderr only when it is a terminal.
 """
 
 import functools
-import os
-import sys
 import time
 from dataclasses import replace
-from pathlib import Path
 
-for _name in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
-    os.environ.setdefault(_name, "1")  # one core per worker: timings are single-threaded
+from startup import HERE  # first: one thread per process, set before numpy loads
 
-import numpy as np  # noqa: E402 - after the thread settings, which numpy reads on import
-
-HERE = Path(__file__).resolve().parent
-sys.path.insert(0, str(HERE))
-
-from contenders import THESIS_GRID, NotApplicable, all_contenders, mask_bytes, mesh_pair  # noqa: E402
+# isort: split
+import numpy as np
+from contenders import THESIS_GRID, NotApplicable, all_contenders, mask_bytes, mesh_pair
 
 FACES = HERE.parent.parent / "shared" / "data" / "faces"
 GRID_STEP = 0.5            # mm, the grid of the grid contenders
