@@ -36,7 +36,7 @@ from mzc.errors import MzcError
 from mzc.grid import Chart, ZGrid
 from mzc.ops.raster import rasterize
 from mzc.projections import PLANAR_VIEWS, view_rotation
-from mzc.vectors import dotted, lengths, rotated
+from mzc.vectors import dotted, lengths, of_each_row, rotated
 
 VIEWS = tuple(PLANAR_VIEWS)
 FACING = 0.5            # a surface element belongs only to a direction within 60 degrees of its normal
@@ -151,9 +151,8 @@ def box_pairs(flat, xs, ys, spacing):
 def segment_distances(point, a, b):
     """(n,): the distance from each 2D point (n, 2) to its segment a-b (n, 2 each)."""
     ab = b - a
-    along = np.sum((point - a) * ab, axis=1) / np.maximum(np.sum(ab * ab, axis=1), 1e-300)
-    off = point - (a + np.clip(along, 0, 1)[:, None] * ab)
-    return np.sqrt(np.sum(off * off, axis=1))
+    along = of_each_row(np.sum, (point - a) * ab) / np.maximum(of_each_row(np.sum, ab * ab), 1e-300)
+    return lengths(point - (a + np.clip(along, 0, 1)[:, None] * ab))
 
 
 # --------------------------------------------------------------------------- when one grid will do
@@ -223,9 +222,9 @@ def mesh_pieces(points, triangles, spacing):
     keep = area > 0
     triangles, normal, area = triangles[keep], normal[keep] / (2 * area[keep, None]), area[keep]
     pairs = neighbour_pairs(triangles)
-    labels = joined_small(facing_labels(normal, pairs), facing_cosines(normal), pairs, area, spacing)
-    frames = view_frames(points)
     cosine = facing_cosines(normal)
+    labels = joined_small(facing_labels(normal, pairs), cosine, pairs, area, spacing)
+    frames = view_frames(points)
     groups = merged_into_neighbours(list(layers(frames, triangles, labels, pairs, spacing)), frames, triangles,
                                     cosine, pairs, area, spacing)
     groups = [refaced(view, members, frames, triangles, cosine, area, spacing) for view, members in groups]

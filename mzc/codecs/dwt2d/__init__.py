@@ -541,8 +541,9 @@ def section_payloads(encoders):
     tables are chosen by the whole file's class counts, as 8.0's one payload's are, so that each level
     section can keep them all (a table count of 0) or some (entropy.KEPT) where that costs less than
     tables of its own, each section choosing for itself."""
-    count = max(len(encoder.class_counts()) for encoder in encoders)
-    payloads = [encoders[0].finish(sum(encoder.class_counts(count) for encoder in encoders))]
+    counts = [encoder.class_counts() for encoder in encoders]
+    rows = max(len(c) for c in counts)
+    payloads = [encoders[0].finish(sum(np.pad(c, ((0, rows - len(c)), (0, 0))) for c in counts))]
     for encoder in encoders[1:]:
         encoder.prior = encoders[0].tables
         payloads.append(encoder.finish())
@@ -854,11 +855,9 @@ def read(data, source="<bytes>", wanted=None):
         return tiles.read(data, source)
     parametric = compact.is_compact(data)   # 7.0's table records
     colour = None
-    if progressive:
-        header, bodies, colour, _cut, _ends = compact.read_progressive(data, source)
-    elif parametric:
-        header, body, colour = compact.read(data, source)
-        bodies = [body]
+    if parametric:
+        header, payload, colour = compact.read(data, source)
+        bodies = payload if progressive else [payload]
     else:
         header, body, _first = read_header(data, source, KIND, PROGRESSIVE_VERSION[0], oldest_major=OLDEST_MAJOR,
                                            projected_major=PROJECTED_VERSION[0], checksum_since=CHECKSUM_SINCE,

@@ -10,6 +10,7 @@ import numpy as np
 
 from mzc.codecs.dwt2d import encode_mask, flips
 from mzc.codecs.dwt2d import entropy as en
+from mzc.errors import MzcError
 
 
 def parts(data):
@@ -18,6 +19,9 @@ def parts(data):
     from mzc.codecs.dwt2d import compact
     from mzc.formats.header import read_header
 
+    if compact.major(data) == compact.PROGRESSIVE_MAJOR:
+        raise MzcError("a progressive file (9.0) has a payload a level: measure the 8.0 file of the grid",
+                       field="data")
     grid = decode(data)
     if compact.is_compact(data):   # the sections' tags, lengths and CRCs count as header
         body = compact.read(data, "<bytes>")[1]

@@ -280,7 +280,6 @@ def read(data, source):
     return header, payload, colour
 
 
-
 class Sections(NamedTuple):
     """What ``read_progressive`` reads of a 9.0 file: its Header, the bodies of its base section and
     level sections (coarsest first), its colour section's body or None, whether the file is ``cut``

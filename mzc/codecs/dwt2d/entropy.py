@@ -206,6 +206,13 @@ def weights_by_size(tables):
 # --------------------------------------------------------------------------- encoder
 
 
+def model_class_counts(models, cls, count=0):
+    """The count of each magnitude class ``cls`` under each model id ``models`` (a row per model id,
+    at least ``count`` rows)."""
+    count = max(count, int(models.max()) + 1 if len(models) else 0)
+    return np.bincount(models * MAX_CLASSES + cls, minlength=count * MAX_CLASSES).reshape(count, MAX_CLASSES)
+
+
 class Encoder:
     """Collects integers with their model ids in decoding order, then writes one payload.
 
@@ -239,15 +246,14 @@ class Encoder:
     def class_counts(self, count=0):
         """The count of each class under each model (a row per model id, at least ``count`` rows)."""
         models, _values, cls = self.symbols()
-        count = max(count, int(models.max()) + 1 if len(models) else 0)
-        return np.bincount(models * MAX_CLASSES + cls, minlength=count * MAX_CLASSES).reshape(count, MAX_CLASSES)
+        return model_class_counts(models, cls, count)
 
     def finish(self, shared=None):
         """Payload bytes: tables, rANS words, raw bits (layout in spec/dwt2d.md section 'payload').
         ``shared``: the class counts to choose the tables by instead of the payload's own (9.0's base
         section: the whole file's, so that its level sections can keep them, ``keeps_all``)."""
         models, values, cls = self.symbols()
-        counts = self.class_counts(0 if shared is None else len(shared))
+        counts = model_class_counts(models, cls, 0 if shared is None else len(shared))
         chosen = counts if shared is None else shared
         sizes = self.table_sizes(chosen)
         if self.parametric:
