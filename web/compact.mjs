@@ -48,30 +48,48 @@ class Cursor {
   }
 }
 
+/** The body of the section `tag` at `cursor` (moved past it), its CRC-32 checked: that of `before`
+ * (the magic line, for the first section; in 9.0 the CRC-32 bytes of the section before) and the
+ * section's bytes up to its own CRC-32. */
+function readSection(bytes, cursor, tag, before) {
+  const start = cursor.at;
+  if (start >= bytes.length) fail("data", `the file ends before its section ${tag}`);
+  if (bytes[start] !== tag) fail("data", `section tag ${bytes[start]} where section ${tag} belongs`);
+  cursor.at++;
+  const length = cursor.varint();
+  const end = cursor.at + Number(length);
+  if (end + 4 > bytes.length) fail("data", `the file ends inside section ${tag} (cut short?)`);
+  const stated = new DataView(bytes.buffer, bytes.byteOffset + end, 4).getUint32(0, true);
+  if (crc32(before, bytes.subarray(start, end)) !== stated) fail("crc32", `checksum mismatch: section ${tag} of the file is corrupt`);
+  const body = bytes.subarray(cursor.at, end);
+  cursor.at = end + 4;
+  return body;
+}
+
+/** Refuses a file whose magic line ends in CRLF (copied as text). */
+function checkBinary(bytes, magicEnd) {
+  if (bytes[magicEnd - 2] === 13) fail("crc32", "the magic line ends in CRLF: the file was copied as text; copy mzc files as binary");
+}
+
+/** Refuses bytes after the last section (added to the file, which no CRC-32 covers). */
+function checkEnd(bytes, cursor) {
+  if (cursor.at !== bytes.length) fail("crc32", `checksum mismatch: ${bytes.length - cursor.at} byte(s) after the last section (added to the file)`);
+}
+
 /** The sections of a container file after its magic line (`magicEnd` bytes, which the first
  * section's CRC-32 covers): each tag in `tags` in order, its body checked, then the `optional`
  * tag when bytes remain (a grid's colours, Colours of 7.0), and nothing after them. Returns the
  * bodies by tag. */
 export function sections(bytes, magicEnd, tags, optional) {
-  if (bytes[magicEnd - 2] === 13) fail("crc32", "the magic line ends in CRLF: the file was copied as text; copy mzc files as binary");
+  checkBinary(bytes, magicEnd);
   const cursor = new Cursor(bytes, magicEnd);
   const bodies = {};
   const all = optional === undefined ? tags : [...tags, optional];
   all.forEach((tag, i) => {
     if (i >= tags.length && cursor.at === bytes.length) return;   // no optional section
-    const start = cursor.at;
-    if (start >= bytes.length) fail("data", `the file ends before its section ${tag}`);
-    if (bytes[start] !== tag) fail("data", `section tag ${bytes[start]} where section ${tag} belongs`);
-    cursor.at++;
-    const length = cursor.varint();
-    const end = cursor.at + Number(length);
-    if (end + 4 > bytes.length) fail("data", `the file ends inside section ${tag} (cut short?)`);
-    const stated = new DataView(bytes.buffer, bytes.byteOffset + end, 4).getUint32(0, true);
-    if (crc32(bytes.subarray(i ? start : 0, end)) !== stated) fail("crc32", `checksum mismatch: section ${tag} of the file is corrupt`);
-    bodies[tag] = bytes.subarray(cursor.at, end);
-    cursor.at = end + 4;
+    bodies[tag] = readSection(bytes, cursor, tag, i ? new Uint8Array(0) : bytes.subarray(0, magicEnd));
   });
-  if (cursor.at !== bytes.length) fail("crc32", `checksum mismatch: ${bytes.length - cursor.at} byte(s) after the last section (added to the file)`);
+  checkEnd(bytes, cursor);
   return bodies;
 }
 
@@ -80,23 +98,13 @@ export function sections(bytes, magicEnd, tags, optional) {
  * bytes of the section before (the header's from the magic line); a file that ends inside or before a
  * level or colour section is `cut` there (a cut in the header or base section is refused). */
 export function progressiveSections(bytes, magicEnd) {
-  if (bytes[magicEnd - 2] === 13) fail("crc32", "the magic line ends in CRLF: the file was copied as text; copy mzc files as binary");
+  checkBinary(bytes, magicEnd);
   const cursor = new Cursor(bytes, magicEnd);
   let before = bytes.subarray(0, magicEnd);
   const read = (tag, cut) => {
-    const start = cursor.at;
-    if (cut && endsInside(bytes, start)) return null;
-    if (start >= bytes.length) fail("data", `the file ends before its section ${tag}`);
-    if (bytes[start] !== tag) fail("data", `section tag ${bytes[start]} where section ${tag} belongs`);
-    cursor.at++;
-    const length = Number(cursor.varint());   // before cursor.at is read: the varint moves it
-    const end = cursor.at + length;
-    if (end + 4 > bytes.length) fail("data", `the file ends inside section ${tag} (cut short?)`);
-    const stated = new DataView(bytes.buffer, bytes.byteOffset + end, 4).getUint32(0, true);
-    if (crc32(before, bytes.subarray(start, end)) !== stated) fail("crc32", `checksum mismatch: section ${tag} of the file is corrupt`);
-    const body = bytes.subarray(cursor.at, end);
-    before = bytes.subarray(end, end + 4);
-    cursor.at = end + 4;
+    if (cut && endsInside(bytes, cursor.at)) return null;
+    const body = readSection(bytes, cursor, tag, before);
+    before = bytes.subarray(cursor.at - 4, cursor.at);   // this section's CRC-32: where the next one's starts
     return body;
   };
   const header = read(HEADER, false);
@@ -111,7 +119,7 @@ export function progressiveSections(bytes, magicEnd) {
     colour = read(COLOUR, true);
     if (!colour) return { header, bodies, colour, cut: true };
   }
-  if (cursor.at !== bytes.length) fail("crc32", `checksum mismatch: ${bytes.length - cursor.at} byte(s) after the last section (added to the file)`);
+  checkEnd(bytes, cursor);
   return { header, bodies, colour, cut: false };
 }
 
