@@ -32,9 +32,9 @@ import numpy as np
 HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE))
 
+from corpora import FACES, mesh_files  # noqa: E402
 from report import machine  # noqa: E402 - after the path to this folder
 
-FACES = HERE.parent.parent / "shared" / "data" / "faces"
 ENCODE = ("--dwt2d", "--rmse", "0.05")
 STAGES = ("read", "slice", "encode", "write")
 TARGET_RATIO = 4.0      # the issue: batch at least 4x the shell loop ...
@@ -50,7 +50,7 @@ done"""
 
 def face_sources():
     """The 13 faces: the PLY files, then example.obj; [] when the folder is absent."""
-    return sorted(FACES.glob("*.ply")) + sorted(FACES.glob("*.obj")) if FACES.is_dir() else []
+    return mesh_files(FACES)
 
 
 def link_faces(sources, count, folder):

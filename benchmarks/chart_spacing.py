@@ -29,13 +29,13 @@ from startup import HERE  # first: one thread per process, set before numpy load
 
 # isort: split
 import numpy as np
+from corpora import OBJECTS, mesh_files
 from objects import (
     COVERAGE,
     DRACO,
     FLOOR_HAUSDORFF,
     FLOOR_RMS,
     ISSUE_RANGE,
-    OBJECTS,
     Surface,
     errors,
     timed,
@@ -197,7 +197,7 @@ def main(argv=None):
     import multiprocessing
 
     args = benchmark_parser(__doc__, "hand and dragon, k in 1, 2, 4, fewer samples", workers=True).parse_args(argv)
-    paths = sorted(str(p) for p in OBJECTS.glob("*") if p.suffix in (".ply", ".obj")) if OBJECTS.is_dir() else []
+    paths = [str(p) for p in mesh_files(OBJECTS)]
     if args.quick:
         paths = [p for p in paths if Path(p).stem in ("hand", "dragon")]
     if not paths:

@@ -24,9 +24,9 @@ import time
 from pathlib import Path
 
 import numpy as np
+from corpora import FACES, mesh_files
 
 HERE = Path(__file__).resolve().parent
-FACES = HERE.parent.parent / "shared" / "data" / "faces"
 NOISE = 0.03          # m of height noise on the synthetic terrain's points
 VEGETATION = 0.35     # the share of points above the ground (class 5) in lidar_cloud
 
@@ -75,7 +75,7 @@ def face_rows():
     from mzc.ops.slicing import slice_in_frame, slice_surface
 
     rows = []
-    for path in sorted(FACES.glob("*.ply")):
+    for path in (p for p in mesh_files(FACES) if p.suffix == ".ply"):
         mesh = read_mesh(path)
         cloud = Mesh(mesh.points)
         for default in ("delaunay", "bin"):

@@ -28,13 +28,13 @@ import sys
 import time
 from unittest import mock
 
-from startup import HERE  # first: one thread per process, set before numpy loads
+import startup  # noqa: F401 - first: one thread per process, set before numpy loads
 
 # isort: split
 import numpy as np
+from corpora import FACES, mesh_files
 from report import benchmark_parser, bytes_at, git_commit, machine, pareto, terminal_progress, versions
 
-FACES = HERE.parent.parent / "shared" / "data" / "faces"
 PACKAGES = ("numpy", "PyWavelets", "constriction")
 TARGETS = (0.05, 0.1, 0.2)                             # mm of whole-surface RMS
 LADDER = (0.035, 0.05, 0.07, 0.1, 0.14, 0.2, 0.28)     # the --rmse ladder (whole-surface RMS lies above the grid's)
@@ -219,7 +219,7 @@ def main(argv=None):
     arguments = benchmark_parser(__doc__, f"the first {QUICK_FACES} faces").parse_args(argv)
     from mzc.codecs import dwt2d
 
-    paths = sorted(FACES.glob("*.ply")) + sorted(FACES.glob("*.obj")) if FACES.is_dir() else []
+    paths = mesh_files(FACES)
     if not paths:
         sys.exit(f"encoder_gains: no faces in {FACES}")
     paths = paths[:QUICK_FACES] if arguments.quick else paths

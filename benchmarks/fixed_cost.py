@@ -11,11 +11,12 @@ import argparse
 import sys
 from pathlib import Path
 
+from corpora import FACES, mesh_files
+
 import mzc
 from mzc.codecs.dwt2d.anatomy import parts
 
 TARGETS = (0.05, 0.1, 0.2)
-FACES = Path("/work/shared/data/faces")
 COLUMNS = ("header", "mask", "tables", "coefficients", "total")
 
 
@@ -49,7 +50,7 @@ def main():
     parser.add_argument("--faces", type=Path, default=FACES)
     parser.add_argument("--quick", action="store_true", help="f18 and m56 only")
     args = parser.parse_args()
-    faces = sorted([*args.faces.glob("*.ply"), *args.faces.glob("*.obj")])
+    faces = mesh_files(args.faces)
     if args.quick:
         faces = [f for f in faces if f.stem in ("f18", "m56")]
     if not faces:

@@ -42,11 +42,11 @@ import numpy as np
 HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE))
 
+from corpora import FACES, OBJECTS, mesh_files  # noqa: E402
 from report import benchmark_parser, git_commit, machine, versions  # noqa: E402
 
-DATA = HERE.parent.parent / "shared" / "data"
 PUBLIC = HERE.parent / "tests" / "data" / "public"
-OBJECTS = ("hand.ply", "armadillo.ply", "featuretype.ply", "dragon.ply", "ogre.obj", "cycloidal.ply")
+OBJECT_NAMES = ("hand.ply", "armadillo.ply", "featuretype.ply", "dragon.ply", "ogre.obj", "cycloidal.ply")
 QUICK = ("f18", "m56", "hand")
 TARGETS = (0.05, 0.1, 0.2)
 PACKAGES = ("numpy", "constriction")
@@ -174,12 +174,11 @@ def masks(quick):
     import mzc
     from mzc import samples
 
-    faces = DATA / "faces"
-    for path in sorted([*faces.glob("*.ply"), *faces.glob("*.obj")]):
+    for path in mesh_files(FACES):
         if not quick or path.stem in QUICK:
             yield "faces", path.stem, mzc.slice(str(path)).valid
-    for name in OBJECTS:
-        path = DATA / "objects" / name
+    for name in OBJECT_NAMES:
+        path = OBJECTS / name
         if path.exists() and (not quick or path.stem in QUICK):
             yield "objects", path.stem, mzc.slice(str(path)).valid
     for name in ("jacksboro", "topobathy"):
@@ -274,7 +273,7 @@ def main(argv=None):
     for corpus, name, valid in masks(arguments.quick):
         rows.append(measure(corpus, name, valid))
         print(f"{corpus}/{name}: " + ", ".join(f"{k} {v:.0f}" for k, v in rows[-1]["bytes"].items()), flush=True)
-    f18 = DATA / "faces" / "f18.ply"
+    f18 = FACES / "f18.ply"
     document = {"settings": settings, "machine": machine(), "versions": versions(PACKAGES),
                 "summary": summary(rows), "masks": rows, "f18": whole_file(f18) if f18.exists() else []}
     settings["wall_s"] = time.perf_counter() - started

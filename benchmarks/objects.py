@@ -28,11 +28,12 @@ import warnings
 from dataclasses import dataclass
 from pathlib import Path
 
-from startup import HERE  # first: one thread per process, set before numpy loads
+import startup  # noqa: F401 - first: one thread per process, set before numpy loads
 
 # isort: split
 import numpy as np
 from contenders import Contender, draco_contender, load
+from corpora import DATA, FACES, OBJECTS, mesh_files
 from rd import TARGETS
 from report import (
     benchmark_parser,
@@ -49,8 +50,6 @@ from report import (
     versions,
 )
 
-DATA = HERE.parent.parent / "shared" / "data"
-OBJECTS, FACES = DATA / "objects", DATA / "faces"
 GROUPS = {"armadillo": "scanned", "dragon": "scanned", "hand": "scanned", "ogre": "modelled",
           "cycloidal": "CAD", "featuretype": "CAD"}   # an object not named here is "other"
 QUICK_OBJECTS = ("armadillo", "hand")   # the cloud and the smallest closed scan
@@ -186,8 +185,8 @@ def errors(original, rebuild, samples, seed=SEED):
 
 def item_specs(quick):
     """(group, name, path) of every item: the objects, then the faces; [] for a missing folder."""
-    objects = sorted(p for p in OBJECTS.glob("*") if p.suffix in (".ply", ".obj")) if OBJECTS.is_dir() else []
-    faces = sorted(FACES.glob("*.ply")) + sorted(FACES.glob("*.obj")) if FACES.is_dir() else []
+    objects = mesh_files(OBJECTS)
+    faces = mesh_files(FACES)
     if quick:
         objects = [p for p in objects if p.stem in QUICK_OBJECTS]
         faces = [p for p in faces if p.stem == QUICK_FACE]

@@ -18,14 +18,14 @@ import sys
 import time
 import warnings
 
-from startup import HERE  # first: one thread per process, set before numpy loads
+import startup  # noqa: F401 - first: one thread per process, set before numpy loads
 
 # isort: split
 import numpy as np
+from corpora import FACES, mesh_files
 from objects import QUICK_SAMPLES, Surface, errors
 from report import benchmark_parser, stamped, write_report
 
-FACES = HERE.parent.parent / "shared" / "data" / "faces"
 TARGETS = (0.05, 0.1, 0.2)   # mm, --rmse
 PREFIX_TARGET = 0.05
 PACKAGES = ("numpy", "constriction")
@@ -154,7 +154,7 @@ def markdown(document):
 def main():
     args = benchmark_parser(__doc__, "four faces, fewer samples").parse_args()
     global SAMPLES
-    faces = sorted([*FACES.glob("*.ply"), *FACES.glob("*.obj")])
+    faces = mesh_files(FACES)
     if args.quick:
         faces, SAMPLES = faces[:4], QUICK_SAMPLES
     if not faces:

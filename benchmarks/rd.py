@@ -15,13 +15,13 @@ import functools
 import time
 from dataclasses import replace
 
-from startup import HERE  # first: one thread per process, set before numpy loads
+import startup  # noqa: F401 - first: one thread per process, set before numpy loads
 
 # isort: split
 import numpy as np
 from contenders import THESIS_GRID, NotApplicable, all_contenders, mask_bytes, mesh_pair
+from corpora import FACES, mesh_files
 
-FACES = HERE.parent.parent / "shared" / "data" / "faces"
 GRID_STEP = 0.5            # mm, the grid of the grid contenders
 SAMPLES = 8_000           # per direction and item; see the sample-count check in the report
 QUICK_SAMPLES = 5_000
@@ -39,7 +39,7 @@ TARGETS = {"whole rms": (0.05, 0.1, 0.2), "whole hausdorff": (1.0, 1.5, 2.0), "h
 
 def corpus_specs(quick, faces):
     """(corpus, name, loader argument) of every item: the faces, then the two DEMs."""
-    paths = sorted(FACES.glob("*.ply")) + sorted(FACES.glob("*.obj")) if FACES.is_dir() else []
+    paths = mesh_files(FACES)
     count = faces if faces is not None else (1 if quick else len(paths))
     specs = [("faces", p.stem, str(p)) for p in paths[:count]]
     dems = ["topobathy"] if quick else ["jacksboro", "topobathy"]

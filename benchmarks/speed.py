@@ -48,11 +48,11 @@ HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE))
 
 import contenders  # noqa: E402 - after the path to this folder
+from corpora import FACES  # noqa: E402
 from report import benchmark_parser, git_commit, machine, run_stages, versions  # noqa: E402
 from scaling import RMSE as TERRAIN_RMSE  # noqa: E402
 from scaling import terrain_grid  # noqa: E402
 
-FACES = HERE.parent.parent / "shared" / "data" / "faces"
 FACE = "f18.ply"
 # The grids of f18: what `mzc slice f18.ply` gives (spacing from the data, default projection),
 # the 0.5 mm in the default projection, and the 420 x 336 grid, which is

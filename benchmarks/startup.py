@@ -5,7 +5,8 @@ this folder and the checkout on ``sys.path``, so that the scripts import one ano
 ``import mzc`` is this checkout's, however a script is started (``python benchmarks/x.py``, or a
 test importing it).
 
-A script imports it first: ``from startup import HERE``, HERE being this folder.
+A script imports it first: ``import startup``, or ``from startup import HERE`` when it needs
+this folder. Where the shared data lies is ``corpora``'s.
 """
 
 import os

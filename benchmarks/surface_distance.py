@@ -35,9 +35,9 @@ import time
 from pathlib import Path
 
 import numpy as np
+from corpora import FACES
 
 ROOT = Path(__file__).resolve().parents[1]
-FACES = ROOT.parent / "shared" / "data" / "faces"
 BEFORE = "29e3375"   # the KD-tree search (cKDTree, workers=-1), before the C search
 SIDE = 1000   # vertices per side of the large meshes: 1,000,000 vertices, about 2,000,000 triangles
 REBUILD = (["slice", "--d1", "0.5", "--d2", "0.5"], ["encode", "--dwt2d", "--rmse", "0.05"], ["decode"],

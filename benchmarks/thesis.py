@@ -22,6 +22,7 @@ from datetime import date
 from pathlib import Path
 
 import numpy as np
+from corpora import FACES
 
 from mzc.formats import module_for
 from mzc.measure.metrics import grid_error_stats
@@ -30,7 +31,6 @@ from mzc.ops.densify import METHODS, densify_grid
 from mzc.ops.slicing import slice_surface
 
 HERE = Path(__file__).resolve().parent
-DEFAULT_FACES = HERE.parent.parent / "shared" / "data" / "faces"
 CODECS = ("dft", "dct", "dwt")
 QUALITIES = (100, 90, 80, 70, 60, 50, 40, 30, 20, 10, 5)
 D1, D2, INSERTED = 3.0, 0.25, 3
@@ -170,7 +170,7 @@ def plot(rows, out):
 
 def main():
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("--faces", type=Path, default=DEFAULT_FACES, help="folder of face meshes")
+    parser.add_argument("--faces", type=Path, default=FACES, help="folder of face meshes")
     parser.add_argument("--out", type=Path, default=HERE, help="where the report, JSON and plots go")
     parser.add_argument("--quick", action="store_true", help="two faces, four qualities")
     args = parser.parse_args()

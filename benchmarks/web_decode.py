@@ -36,9 +36,10 @@ HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE))
 
 import contenders  # noqa: E402 - after the path to this folder
+from corpora import FACES  # noqa: E402
 from report import git_commit, machine  # noqa: E402
 
-FACE = HERE.parent.parent / "shared" / "data" / "faces" / "f18.ply"
+FACE = FACES / "f18.ply"
 WEB = HERE.parent / "web"
 RMSE = 0.05
 DRACO_BITS = 11
