@@ -331,3 +331,24 @@ def test_info_shows_the_colour_scale_of_a_dwt2d_file_and_a_zgrid(tmp_path):
         assert result.stdout.count(b"colour scale 2 (7 x 9 samples, 2 a node spacing)") == 1, name
     for name in ("plain.mzw2", "plain.zg"):
         assert b"colour scale" not in run_mzc("info", tmp_path / name, check=True).stdout
+
+
+def test_batch_encode_takes_the_colour_scale_and_writes_the_bytes_of_slice_then_encode(tmp_path):
+    """``mzc batch encode --colour-scale 2`` on fran: the file is byte for byte what ``mzc slice
+    --colour-scale 2 | mzc encode --dwt2d`` writes, and decodes to its fine colours (the batch
+    takes every slice option, this one included)."""
+    pytest.importorskip("distributed")
+    import mzc
+
+    options = ("--colour-psnr", "40", "--rmse", "0.05")
+    piped = tmp_path / "piped.mzw2"
+    grid = tmp_path / "fran.zg"
+    run_mzc("slice", fran(), "--charts", "1", "--colour-scale", "2", "-o", grid, check=True)
+    run_mzc("encode", grid, "--dwt2d", *options, "-o", piped, check=True)
+    run_mzc("batch", "encode", fran(), "-o", tmp_path / "out", "--charts", "1", "--colour-scale", "2",
+            "--dwt2d", *options, "--workers", "1", check=True)
+    batched = (tmp_path / "out" / "fran.mzw2").read_bytes()
+    assert batched == piped.read_bytes()
+    decoded = mzc.decode(batched)
+    assert decoded.colour_scale == 2 and decoded.fine_colors.shape[:2] == (
+        (decoded.shape[0] - 1) * 2 + 1, (decoded.shape[1] - 1) * 2 + 1)
