@@ -225,7 +225,7 @@ def slice(surface: Any, d1: float | None = None, d2: float | None = None, *, row
         refused = next((name for name, value in shaping.items() if value is not None), None)
         if refused:
             raise MzcError("the prior's lattice shapes the grid, so this option does not apply beside it",
-                           field=refused)
+                           field=refused, options=(refused,))
         from mzc.prior import as_prior, slice_on
 
         mesh = as_mesh(surface)
@@ -242,7 +242,7 @@ def slice(surface: Any, d1: float | None = None, d2: float | None = None, *, row
 
 def train(surfaces: Sequence[Any], d1: float | None = None, d2: float | None = None) -> Any:
     """The prior of a collection of like surfaces (``mzc train``): their mean on one lattice, that of
-    the first one's default slice (spacings ``d1``, ``d2`` when given) grown to cover them all, as a
+    their union's default slice (spacings ``d1``, ``d2`` when given) grown to cover them all, as a
     ``mzc.prior.Prior`` (its file's bytes ``data``, for :func:`write`; ``mean``, the mean grid)."""
     from mzc.prior import train as train_prior
 
@@ -310,7 +310,7 @@ def decode(data: bytes, legacy: str | None = None, *, window: Any = None, levels
     except TypeError:
         raise MzcError(f"must be the bytes of an mzc file, not a {type(data).__name__}", field="data") from None
     window = window_argument(window)
-    if prior is not None and contents.startswith(b"mzc-residual"):
+    if prior is not None and contents.startswith(b"mzc-residual"):   # any other file decodes alone
         from mzc.prior import as_prior
         from mzc.prior import decode as decode_residual
 
@@ -476,14 +476,15 @@ def write(path: PathLike, item: ZGrid | Mesh | bytes, file_format: str | None = 
 def batch_encode(sources: Any, dest: PathLike, codec: str = DEFAULT_CODEC, *,
                  slice_options: dict[str, Any] | None = None, verify: bool = False, scheduler: Any = None,
                  workers: int | None = None, chunk_size: int | None = None, listener: Any = None,
-                 **codec_options: Unpack[EncodeOptions]) -> Any:
+                 prior: PathLike | None = None, **codec_options: Unpack[EncodeOptions]) -> Any:
     """Slice and encode every mesh, cloud and raster of ``sources`` (paths, folders, globs, ``@list``
     files) into the folder ``dest`` on Dask (``mzc batch encode``): ``slice_options`` are :func:`slice`'s,
     ``codec_options`` :func:`encode`'s. It runs on ``scheduler`` (a scheduler's address or a
     ``distributed.Client``, which is left open), else on the current client when there is one and
     no ``workers`` are asked for, else on a local cluster of ``workers`` processes. Returns the
     ``mzc.batch.Summary`` (its ``rows`` are the manifest's, ``dest``/manifest.csv); a bad file is
-    a failed row, never an exception."""
+    a failed row, never an exception. ``prior`` (a prior file's path, which the workers read) cuts
+    every surface on its lattice and codes it against it, as ``slice --prior | encode --prior``."""
     import inspect
 
     from mzc.codecs import get_codec
@@ -499,8 +500,21 @@ def batch_encode(sources: Any, dest: PathLike, codec: str = DEFAULT_CODEC, *,
     given = slicing_numbers(slice_options or {})
     slicing = {k: v for k, v in given.items() if v not in (None, ()) and v != defaults[k]}
     settings = {"codec": chosen.name, "codec_options": chosen.checked(codec_options), "slice_options": slicing}
+    if prior is not None:
+        if chosen.name != "dwt2d":
+            raise MzcError(f"a prior codes with dwt2d, not {chosen.name}", field="prior")
+        settings["prior"] = batch_prior(prior)
     return run_batch_job("encode", sources, dest, settings, sliceable_extensions(), chosen.extension, verify=verify,
                          scheduler=scheduler, workers=workers, chunk_size=chunk_size, listener=listener)
+
+
+def batch_prior(prior: PathLike) -> dict[str, str]:
+    """{path, sha256} of a batch's ``prior`` file, read and checked now: the workers read it from
+    that path (and refuse it if it changed), and the manifest's settings name it by its hash."""
+    from mzc.prior import as_prior
+
+    path = os.path.abspath(path_of(prior, "prior"))
+    return {"path": path, "sha256": as_prior(path).name}
 
 
 def sliceable_extensions() -> list[str]:
@@ -514,14 +528,14 @@ def sliceable_extensions() -> list[str]:
 def batch_decode(sources: Any, dest: PathLike, *, densify: int = 0, method: str = "biharmonic",
                  file_format: str = "ply", jump_angle: float | None = None, creation_options: Any = None,
                  cog: bool = False, scheduler: Any = None, workers: int | None = None,
-                 chunk_size: int | None = None, listener: Any = None) -> Any:
+                 chunk_size: int | None = None, listener: Any = None, prior: PathLike | None = None) -> Any:
     """Decode every mzc file of ``sources`` into a mesh in the folder ``dest`` on Dask (``mzc batch
     decode``): decoded, densified with ``densify`` rows between planes, triangulated into
     ``file_format``, or written as a raster when it is tif or asc (a GeoTIFF with GDAL's
     ``creation_options`` and Cloud Optimized with ``cog``, as ``write``); on Dask as
     :func:`batch_encode` runs (``scheduler``: an address, a ``distributed.Client``, or the current
-    client). Returns the
-    ``mzc.batch.Summary``."""
+    client); ``prior`` (a prior file's path, which the workers read) decodes the residual files
+    coded against it. Returns the ``mzc.batch.Summary``."""
     from mzc.codecs import codec_names, get_codec
     from mzc.formats import SURFACES, extensions, writable
     from mzc.limits import MAX_INSERTED
@@ -532,6 +546,8 @@ def batch_decode(sources: Any, dest: PathLike, *, densify: int = 0, method: str 
     densify = number(densify, "densify", int, 0, MAX_INSERTED)
     settings = {"densify": densify, "method": method, "format": file_format, "jump_angle": jump_angle,
                 **geotiff_settings(creation_options, cog, file_format)}
+    if prior is not None:
+        settings["prior"] = batch_prior(prior)
     decoded = [*extensions(("grid",)), *(get_codec(name).extension for name in codec_names())]
     return run_batch_job("decode", sources, dest, settings, decoded, "." + file_format, scheduler=scheduler,
                          workers=workers, chunk_size=chunk_size, listener=listener)

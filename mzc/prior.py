@@ -3,12 +3,14 @@
 
 A prior is the mean of a collection's surfaces on ONE lattice (a z-grid header: projection, centre,
 axis, spacings, extent), every node holding a value, so that a decoder adds two grids node by node:
-no ray is cast at decode. ``train`` takes the lattice of the first surface's default slice grown by
+no ray is cast at decode. ``train`` takes the lattice of the surfaces' union's default slice grown by
 whole nodes to cover them all, cuts every surface on it (``slice_on``), averages the values each
 node has and fills the nodes none has from the nearest that has one. A grid cut on the lattice is
 coded twice, alone and as its residual (grid - mean, at its valid nodes) in a residual file, and
 the smaller is written: a plain file needs no prior. A residual file names its prior by the
-SHA-256 of the prior file's bytes; its inner stream is any dwt2d file, read by dwt2d's reader.
+SHA-256 of the prior file's bytes; its inner stream is any dwt2d file of the residual as a planar
+grid of the lattice's rows, columns and spacings (the rest of the lattice is the prior's: no bytes
+for it), read by dwt2d's reader.
 """
 
 from __future__ import annotations
@@ -26,7 +28,7 @@ from mzc.grid import ZGrid
 PRIOR_MAGIC = b"mzc-prior 1.0\n"
 RESIDUAL_MAGIC = b"mzc-residual 1.0\n"
 DIGEST_BYTES = 32   # SHA-256
-LATTICE = ("projection", "radius", "transform", "origin", "d1", "d2", "shape", "charts")   # what must match
+LATTICE = ("projection", "radius", "transform", "origin", "d1", "d2", "shape", "charts", "crs")   # what must match
 SURFACES = re.compile(rb"surfaces ([1-9][0-9]{0,8})")
 WHOLE_ONLY = ("tile", "progressive")   # dwt2d options a residual file does not take: it codes the grid whole
 
@@ -98,7 +100,7 @@ def as_prior(prior: Any, name: str = "prior") -> Prior:
 
 
 def train(meshes: list, d1: float | None = None, d2: float | None = None) -> Prior:
-    """The prior of ``meshes`` (Mesh objects): their mean on the lattice of the first one's default
+    """The prior of ``meshes`` (Mesh objects): their mean on the lattice of their union's default
     slice (spacings ``d1``, ``d2`` when given) grown to cover them all (``covering``); a node no
     surface meets takes the value of the nearest node one meets (ties broken by
     scipy.ndimage.distance_transform_edt, deterministically)."""
@@ -108,7 +110,7 @@ def train(meshes: list, d1: float | None = None, d2: float | None = None) -> Pri
 
     if not meshes:
         raise MzcError("training takes at least one surface", field="surfaces")
-    lattice = covering(slice_surface(meshes[0], d1=d1, d2=d2, charts=1), meshes)
+    lattice = covering(slice_surface(union(meshes), d1=d1, d2=d2, charts=1), meshes)
     total, count = np.zeros(lattice.shape), np.zeros(lattice.shape, dtype=np.int64)
     for mesh in meshes:
         z = slice_on(mesh, lattice).z
@@ -121,6 +123,16 @@ def train(meshes: list, d1: float | None = None, d2: float | None = None) -> Pri
     return prior_of(ZGrid(mean[tuple(nearest)], lattice.d1, lattice.d2, origin=lattice.origin,
                           transform=lattice.transform, units=lattice.units, projection=lattice.projection,
                           radius=lattice.radius), len(meshes))
+
+
+def union(meshes: list) -> Any:
+    """One Mesh of all ``meshes``' points and triangles: slice's default choices made on it (view,
+    centre, axis, spacing) suit the collection, not its first surface."""
+    from mzc.meshes import Mesh
+
+    offsets = np.cumsum([0] + [len(mesh.points) for mesh in meshes[:-1]])
+    return Mesh(np.concatenate([mesh.points for mesh in meshes]),
+                np.concatenate([mesh.triangles + offset for mesh, offset in zip(meshes, offsets)]))
 
 
 def covering(grid: ZGrid, meshes: list) -> ZGrid:
@@ -186,11 +198,11 @@ def check_fits(grid: ZGrid, prior: Prior, source: str | None = None) -> None:
     field = lattice_field(grid, prior)
     if field is not None:
         raise MzcError(f"the grid's {field} differs from the prior's ({prior.name[:12]}): cut the surface on its "
-                       "lattice with mzc slice --prior", source=source, field="prior")
+                       "lattice with mzc slice --prior", source=source)
     if grid.colors is not None or grid.raster is not None:
         what = "colours" if grid.colors is not None else "a raster's samples"
         raise MzcError(f"encode --prior codes a sliced surface's heights alone, and this grid holds {what}",
-                       source=source, field="prior")
+                       source=source)
 
 
 def encode(grid: ZGrid, prior: Prior, source: str | None = None, **options: Any) -> bytes:
@@ -210,7 +222,8 @@ def encode(grid: ZGrid, prior: Prior, source: str | None = None, **options: Any)
 
 
 def residual_file(grid: ZGrid, prior: Prior, options: dict[str, Any]) -> bytes | None:
-    """The residual file of ``grid`` against ``prior``: the residual coded by dwt2d with equal steps
+    """The residual file of ``grid`` against ``prior``: the residual, as a planar grid of the lattice's
+    shape and spacings, coded by dwt2d with equal steps
     unless ``slope_limit`` is given (its lean is not the surface's), the rmse target measured on
     ``grid``'s surface, a max_error target tightened by the float rounding of the subtraction and
     the decoder's addition; None when the rebuilt grid would break a max_error target all the same."""
@@ -218,7 +231,8 @@ def residual_file(grid: ZGrid, prior: Prior, options: dict[str, Any]) -> bytes |
     from mzc.limits import check_grid_magnitudes
 
     valid = grid.valid
-    residual = grid.with_z(np.where(valid, grid.z - prior.mean.z, np.nan))
+    residual = ZGrid(np.where(valid, grid.z - prior.mean.z, np.nan), grid.d1, grid.d2, units=grid.units,
+                     nodata=grid.nodata, source_vertices=grid.source_vertices)   # planar: the lattice is the prior's
     check_grid_magnitudes(residual)
     settings = {name: value for name, value in options.items() if name not in WHOLE_ONLY}
     settings["slope_limit"] = options.get("slope_limit", 1.0)
@@ -251,18 +265,35 @@ def decode(data: bytes, source: str, prior: Prior | None) -> ZGrid:
     digest = residual_digest(data, source)
     if prior is None:
         raise MzcError(f"was coded against the prior {digest.hex()}: give that prior file with --prior FILE "
-                       "(mzc.decode(data, prior=...))", source=source, field="prior")
+                       "(mzc.decode(data, prior=...))", source=source)
     if prior.digest != digest:
         raise MzcError(f"was coded against the prior {digest.hex()}, not the one given ({prior.name})",
-                       source=source, field="prior")
+                       source=source)
     inner = read(data[len(RESIDUAL_MAGIC) + DIGEST_BYTES:], source)
-    if lattice_field(inner, prior) is not None:
-        raise MzcError(f"the residual's {lattice_field(inner, prior)} differs from its prior's (corrupt file)",
+    mean = prior.mean
+    planar = ZGrid(np.zeros(mean.shape), mean.d1, mean.d2)
+    field = next((name for name in ("shape", "d1", "d2", "origin", "projection", "transform", "charts", "crs")
+                  if not np.array_equal(getattr(inner, name), getattr(planar, name))), None)
+    if field is not None:
+        raise MzcError(f"the residual's {field} is not the planar grid of its prior's lattice (corrupt file)",
                        source=source, field="data")
     valid = inner.valid
     z = np.full(inner.shape, np.nan)
-    z[valid] = prior.mean.z[valid] + inner.z[valid]
-    return inner.with_z(z)
+    z[valid] = mean.z[valid] + inner.z[valid]
+    return ZGrid(z, mean.d1, mean.d2, origin=mean.origin, transform=mean.transform, units=inner.units,
+                 nodata=inner.nodata, projection=mean.projection, radius=mean.radius,
+                 source_vertices=inner.source_vertices)
+
+
+def read(data: bytes, source: str, prior: Prior, path: Any = None) -> ZGrid:
+    """The grid of a grid file's bytes (from ``path``, when read from one): a residual file decoded
+    with ``prior``, any other as it decodes alone (an encoder with a prior may write a plain file)."""
+    if data.startswith(RESIDUAL_MAGIC):
+        return decode(data, source, prior)
+    from mzc.formats import GRIDS
+    from mzc.formats import read as read_grid
+
+    return read_grid(data, source, GRIDS, path)
 
 
 class PriorFiles:

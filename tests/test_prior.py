@@ -227,7 +227,7 @@ def test_the_commands_train_slice_encode_decode_and_info(tmp_path):
     assert "mzc-residual 1.0" in info and digest in info
     assert digest in run_mzc("info", prior, check=True).stdout.decode()
     run_mzc("slice", "--d1", "0.5", target, "-o", tmp_path / "own.zg", check=True)   # not the prior's lattice
-    refusals = {("slice", "--prior", prior, "--d1", "0.5", target): "d1: the prior's lattice",
+    refusals = {("slice", "--prior", prior, "--d1", "0.5", target): "--d1: the prior's lattice",
                 ("encode", "--prior", prior, tmp_path / "own.zg"): "differs from the prior's"}
     for refused, message in refusals.items():
         result = run_mzc(*refused)
@@ -247,5 +247,33 @@ def test_a_face_coded_against_the_others_prior_is_smaller_at_a_coarse_target():
     assert len(data) < 0.9 * len(mzc.encode(mzc.slice(held), rmse=0.2))
     decoded = mzc.decode(data, prior=prior)
     np.testing.assert_array_equal(decoded.valid, grid.valid)
+    assert decoded.projection == grid.projection == "spherical" and decoded.source_vertices == grid.source_vertices
+    inner = mzc.decode(data[len(RESIDUAL_MAGIC) + 32:])   # the residual alone: planar, the lattice is the prior's
+    assert inner.projection == "planar" and inner.shape == grid.shape
     bounded = mzc.decode(mzc.encode(grid, prior=prior, max_error=0.05), prior=prior)
     assert np.abs(bounded.z - grid.z)[grid.valid].max() <= 0.05
+
+
+# --- mzc batch --prior ---------------------------------------------------------------------
+
+
+def test_a_batch_item_is_cut_and_coded_against_the_prior_and_decoded_with_it(tmp_path, trained):
+    from mzc.batch import Job, items, work
+
+    path, mesh = tmp_path / "p.mzp", tmp_path / "t.ply"
+    path.write_bytes(trained.data)
+    mzc.write(mesh, bump(8.2, 0.09))
+    named = {"path": str(path), "sha256": trained.name}
+    encoding = {"codec": "dwt2d", "codec_options": {"rmse": 0.02}, "slice_options": {}, "prior": named}
+    row = work.run_item(Job("encode", str(tmp_path / "out"), encoding), items.Item(str(mesh), "t.mzw2"))
+    data = (tmp_path / "out" / "t.mzw2").read_bytes()
+    assert row["status"] == "ok" and data.startswith(RESIDUAL_MAGIC)
+    assert data == mzc.encode(mzc.slice(mesh, prior=trained), prior=trained, rmse=0.02)   # as slice | encode
+    decoding = {"densify": 0, "method": "biharmonic", "format": "ply", "jump_angle": None}
+    coded = items.Item(str(tmp_path / "out" / "t.mzw2"), "t.ply")
+    row = work.run_item(Job("decode", str(tmp_path / "meshes"), {**decoding, "prior": named}), coded)
+    assert row["status"] == "ok" and row["valid_nodes"] == mzc.decode(data, prior=trained).valid.sum()
+    row = work.run_item(Job("decode", str(tmp_path / "alone"), decoding), coded)
+    assert row["status"] == "failed" and trained.name in row["error"] and "\n" not in row["error"]
+    with pytest.raises(MzcError, match="codes with dwt2d"):
+        mzc.batch_encode(str(mesh), tmp_path / "dct", "dct", prior=path, quality=20)

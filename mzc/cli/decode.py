@@ -72,15 +72,12 @@ def command(input, output, legacy, window, levels, prior, file_format, plain, fl
 def read_with_prior(path, prior):
     """The grid of the file at ``path`` (or stdin), a residual file decoded with the prior at ``prior``
     (mzc.prior.decode); any other file as it decodes alone."""
-    from mzc.formats import GRIDS, read
-    from mzc.prior import RESIDUAL_MAGIC, as_prior, decode
+    from mzc.prior import as_prior, read
     from mzc.streams import display_name, read_input
 
     data, source = read_input(path), display_name(path)
     with about(source, "decoding it"):
-        if data.startswith(RESIDUAL_MAGIC):
-            return decode(data, source, as_prior(prior))
-        return read(data, source, GRIDS, path)
+        return read(data, source, as_prior(prior), path)
 
 
 def read_levels(path, levels):

@@ -8,7 +8,7 @@ prior_option = click.option("--prior", metavar="FILE",
 
 @click.command(help="""Learn a shared prior from a collection of like surfaces (faces, say).
 
-Cuts every mesh or point cloud on one lattice (the first one's default grid, --d1 and --d2
+Cuts every mesh or point cloud on one lattice (their union's default grid, --d1 and --d2
 when given, grown to cover them all), and writes their mean, a value at every node, as a
 prior file (mzc-prior 1.0, spec/prior.md), named by the SHA-256 of its bytes. Then
 
@@ -21,9 +21,9 @@ file, which needs no prior).""")
 @click.argument("files", nargs=-1, required=True, metavar="FILES...")
 @click.option("-o", "--output", required=True, metavar="FILE", help="Write the prior here (atomically).")
 @click.option("--d1", type=click.FloatRange(0, min_open=True), metavar="F",
-              help="Row spacing of the lattice [default: the first surface's own].")
+              help="Row spacing of the lattice [default: the surfaces' own].")
 @click.option("--d2", type=click.FloatRange(0, min_open=True), metavar="F",
-              help="Column spacing of the lattice [default: the first surface's own, else d1].")
+              help="Column spacing of the lattice [default: the surfaces' own, else d1].")
 def command(files, output, d1, d2):
     from mzc.api import train
     from mzc.progress import step

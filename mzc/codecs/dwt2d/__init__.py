@@ -426,9 +426,12 @@ class Prepared:
         if self.vertical:
             heights = self.grid.z[self.valid]
             return heights, np.ones(heights.size), float(heights.size)
-        filled = self.filled if self.surface is self.grid else \
-            w2.laplace_fill(self.surface.z, self.valid, self.geometry.periodic)
-        lean, metric = w2.node_areas(filled, self.geometry, jump_edges(self.surface))
+        surface, geometry, filled = self.surface, self.geometry, self.filled
+        if surface is not self.grid:
+            geometry = w2.Geometry.of(surface.d1, surface.d2, surface.origin, surface.shape, surface.projection,
+                                      surface.radius)
+            filled = w2.laplace_fill(surface.z, self.valid, geometry.periodic)
+        lean, metric = w2.node_areas(filled, geometry, jump_edges(surface))
         lean, metric = lean[self.valid], metric[self.valid]
         return self.grid.z[self.valid], metric / lean, float(np.sum(metric * lean))
 
@@ -672,7 +675,8 @@ def encode_whole(grid, max_error=None, rmse=None, size=None, wavelet=DEFAULT_WAV
     a tile of a 5.0 file has (written_version). A 7.0 file of a grid with colours carries them in its
     colour section, coded at ``colour_psnr`` dB or within ``colour_max_error`` levels (``colour_section``).
     ``surface``: the grid of the surface whose RMS error ``rmse`` aims at, when ``grid`` is a residual
-    of it (mzc.prior: the mean added back at decode); its node lines and mask are ``grid``'s.
+    of it (mzc.prior: the mean added back at decode), its mask and shape ``grid``'s, its node lines
+    (projection, frame, spacings) its own.
 
     ``slope_limit`` defaults to SLOPE_LIMIT for ``rmse`` and ``size``, whose errors are
     surface distances, and to 1 (equal steps) for ``max_error``, a bound on heights, where
