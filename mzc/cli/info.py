@@ -107,8 +107,9 @@ def mzc_header(row, data, source, decode):
 
 def prior_header(row, data, source, decode):
     """``mzc_header``'s five of a prior file (its mean z-grid's header, the surfaces it was trained on
-    and its SHA-256) or of a residual file (its inner dwt2d stream's header and the prior it names);
-    a residual file decodes with its prior alone, so --decode describes its residual."""
+    and its SHA-256) or of a residual file (its inner dwt2d stream's header, a planar grid of the
+    residual, and the prior it names, which holds the lattice: info reads the file alone, so
+    --decode describes the residual)."""
     import hashlib
 
     from mzc.formats import named
@@ -123,7 +124,8 @@ def prior_header(row, data, source, decode):
     digest = residual_digest(data, source)
     inner = data[len(RESIDUAL_MAGIC) + DIGEST_BYTES:]
     grid, line, header, count, lines = mzc_header(named("dwt2d"), inner, source, decode)
-    about = [f"prior     sha256 {digest.hex()} (decode --prior FILE: the residual plus its mean)"]
+    about = [f"prior     sha256 {digest.hex()}: the grid above is the residual from its mean, planar, and the "
+             "surface lies on the prior's lattice (decode --prior FILE)"]
     return grid, f"mzc-residual 1.0 ({line} inside)", header, count, about + lines
 
 
