@@ -277,3 +277,33 @@ def test_a_batch_item_is_cut_and_coded_against_the_prior_and_decoded_with_it(tmp
     assert row["status"] == "failed" and trained.name in row["error"] and "\n" not in row["error"]
     with pytest.raises(MzcError, match="codes with dwt2d"):
         mzc.batch_encode(str(mesh), tmp_path / "dct", "dct", prior=path, quality=20)
+
+
+# --- hostile bytes ---------------------------------------------------------------------------
+
+FIXTURE_PRIOR = (PRIOR_FIXTURES / "prior-1.0.mzp").read_bytes()
+FIXTURE_RESIDUAL = (PRIOR_FIXTURES / "residual-1.0.mzw2").read_bytes()
+
+
+@settings(max_examples=80, deadline=None)
+@given(st.binary(max_size=400), st.sampled_from(["prior", "prior with its count", "residual"]))
+def test_garbage_after_a_magic_line_is_refused_in_one_mzc_error(tail, kind):
+    prior = read_prior(FIXTURE_PRIOR)
+    head = {"prior": PRIOR_MAGIC, "prior with its count": PRIOR_MAGIC + b"surfaces 3\n",
+            "residual": RESIDUAL_MAGIC + prior.digest}[kind]
+    with pytest.raises(MzcError) as error:
+        read_prior(head + tail) if kind.startswith("prior") else mzc.decode(head + tail, prior=prior)
+    assert "\n" not in str(error.value)
+
+
+@settings(max_examples=80, deadline=None)
+@given(st.integers(0, len(FIXTURE_RESIDUAL) - 1), st.integers(1, 255))
+def test_a_damaged_residual_file_is_refused_or_decodes_on_the_lattice(position, flip):
+    prior = read_prior(FIXTURE_PRIOR)
+    damaged = bytearray(FIXTURE_RESIDUAL)
+    damaged[position] ^= flip
+    try:
+        grid = mzc.decode(bytes(damaged), prior=prior)
+    except MzcError:
+        return
+    assert grid.shape == prior.mean.shape and grid.projection == prior.mean.projection
