@@ -47,6 +47,7 @@ def face_points(face, faces, grid, files, times):
     """Every point of one held-out ``face``: mzc alone (its ``files`` by target), with zstd's
     dictionary, and with the prior trained on the others; the prior's times added to ``times``."""
     import mzc
+    from mzc.prior import RESIDUAL_MAGIC
 
     source = Surface.of(mzc.read(str(face)))
     started = time.perf_counter()
@@ -67,7 +68,7 @@ def face_points(face, faces, grid, files, times):
         decoded = mzc.decode(coded, prior=prior)
         times["decode"].append(time.perf_counter() - started)
         points.append({"method": PRIOR, "setting": target, "bytes": len(coded), "rms": rebuilt_error(
-            on_lattice, decoded.z, source), "residual": coded.startswith(b"mzc-residual")})
+            on_lattice, decoded.z, source), "residual": coded.startswith(RESIDUAL_MAGIC)})
     return points
 
 

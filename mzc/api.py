@@ -310,11 +310,12 @@ def decode(data: bytes, legacy: str | None = None, *, window: Any = None, levels
     except TypeError:
         raise MzcError(f"must be the bytes of an mzc file, not a {type(data).__name__}", field="data") from None
     window = window_argument(window)
-    if prior is not None and contents.startswith(b"mzc-residual"):   # any other file decodes alone
-        from mzc.prior import as_prior
+    if prior is not None:
+        from mzc.prior import RESIDUAL_MAGIC, as_prior
         from mzc.prior import decode as decode_residual
 
-        return windowed(decode_residual(contents, BYTES_SOURCE, as_prior(prior)), window)
+        if contents.startswith(RESIDUAL_MAGIC):   # any other file decodes alone
+            return windowed(decode_residual(contents, BYTES_SOURCE, as_prior(prior)), window)
     if levels is not None:
         if legacy is not None:
             raise MzcError("decodes a progressive mzc-dwt2d 9.0 file, not a legacy one", field="levels")
