@@ -2,7 +2,7 @@
 
 The method follows a PhD thesis on cutting planes, per-row transforms and a PDE step (see
 README.md and spec/). ``import mzc`` gives the Python API (``mzc.api``): slice, encode,
-decode, densify, triangulate, compare, read and write, batch_encode and batch_decode (on
+decode, densify, triangulate, compare, read and write, train (a shared prior), batch_encode and batch_decode (on
 Dask), the ZGrid and Mesh types, the codec registry and the error types. The names are
 imported on first use, so that ``import mzc`` (and the command line's start-up) stays free
 of numpy and scipy until they are needed.
@@ -17,7 +17,7 @@ __version__ = "0.1.0"
 
 HOMES = {
     **dict.fromkeys(("slice", "encode", "decode", "densify", "triangulate", "compare", "read", "write",
-                      "sample", "batch_encode", "batch_decode"), "mzc.api"),
+                      "sample", "batch_encode", "batch_decode", "train"), "mzc.api"),
     "ZGrid": "mzc.grid",
     "Mesh": "mzc.meshes",
     "Codec": "mzc.codecs.base",
@@ -27,8 +27,8 @@ HOMES = {
 }
 __all__ = [  # the names of HOMES, spelled out so that linters and type checkers see them
     "__version__", "slice", "encode", "decode", "densify", "triangulate", "compare", "read", "write", "sample",
-    "batch_encode", "batch_decode", "ZGrid", "Mesh", "Codec", "Option", "register_codec", "get_codec", "codec_names",
-    "MzcError", "MzcWarning",
+    "batch_encode", "batch_decode", "train", "ZGrid", "Mesh", "Codec", "Option", "register_codec", "get_codec",
+    "codec_names", "MzcError", "MzcWarning",
 ]
 
 if TYPE_CHECKING:
@@ -42,6 +42,7 @@ if TYPE_CHECKING:
         read,
         sample,
         slice,
+        train,
         triangulate,
         write,
     )

@@ -191,7 +191,8 @@ def slice(surface: Any, d1: float | None = None, d2: float | None = None, *, row
           cols: int | None = None, align: str = "none", projection: str = "auto", view: str = "auto",
           center: tuple[float, float, float] | None = None, axis: tuple[float, float, float] | None = None,
           units: str | None = None, thesis_grid: bool = False, classes: Sequence[int] | None = None,
-          cloud: str = "auto", charts: str | int = "auto", tap: bool = False, colour_scale: int = 1) -> ZGrid:
+          cloud: str = "auto", charts: str | int = "auto", tap: bool = False, colour_scale: int = 1,
+          prior: Any = None) -> ZGrid:
     """Cut a surface into a z-grid (``mzc slice``): spacings d1 (rows) and d2 (columns) default to
     the data's own, the cutting surfaces (``projection``) to the ones that see it best; ``classes``
     keeps those ASPRS classes of a LAS/LAZ cloud (2: ground), ``cloud`` (auto, bin, delaunay)
@@ -204,19 +205,51 @@ def slice(surface: Any, d1: float | None = None, d2: float | None = None, *, row
     A grid (a ZGrid, or a path of a z-grid, a compressed file or a raster: a GeoTIFF or ESRI ASCII
     grid) already is one: it is returned as it is, node for node (with ``units`` when given), and
     an option that would cut it otherwise is refused (resample a raster first; triangulate a
-    z-grid and slice its mesh)."""
+    z-grid and slice its mesh).
+
+    ``prior`` (a prior file's path or bytes, or a ``mzc.prior.Prior``) cuts the surface (a grid's
+    mesh) on the prior's lattice, for ``encode`` with it; the options that shape a grid are refused
+    beside it."""
     from mzc.formats import read_file
     from mzc.meshes import warn_dropped
     from mzc.ops.slicing import slice_surface
 
     numbers = slicing_numbers({"d1": d1, "d2": d2, "rows": rows, "cols": cols, "center": center, "axis": axis,
                                "classes": classes, "tap": tap, "colour_scale": colour_scale})
+    if prior is not None:
+        shaping = {"d1": d1, "d2": d2, "rows": rows, "cols": cols, "center": center, "axis": axis,
+                   "align": align != "none" or None, "projection": projection != "auto" or None,
+                   "view": view != "auto" or None, "thesis_grid": thesis_grid or None,
+                   "charts": charts not in ("auto", 1) or None, "tap": tap or None,
+                   "colour_scale": colour_scale != 1 or None}
+        refused = next((name for name, value in shaping.items() if value is not None), None)
+        if refused:
+            raise MzcError("the prior's lattice shapes the grid, so this option does not apply beside it",
+                           field=refused, options=(refused,))
+        from mzc.prior import as_prior, slice_on
+
+        mesh = as_mesh(surface)
+        mesh = mesh if numbers.get("classes") is None else mesh.with_classes(numbers["classes"])
+        grid = slice_on(mesh, as_prior(prior).mean)
+        return grid if units is None else grid.with_z(grid.z, units=units)
     surface = given(surface)
     read = read_file(surface) if isinstance(surface, str) else surface
     grid = slice_surface(read, align=align, units=units, projection=projection, view=view, thesis_grid=thesis_grid,
                          cloud=cloud, charts=charts, colour_scale=numbers.pop("colour_scale", 1), **numbers)
     warn_dropped(read)   # once the grid is made: a refused slice is one line, its error alone
     return grid
+
+
+def train(surfaces: Sequence[Any], d1: float | None = None, d2: float | None = None) -> Any:
+    """The prior of a collection of like surfaces (``mzc train``): their mean on one lattice, that of
+    their union's default slice (spacings ``d1``, ``d2`` when given) grown to cover them all, as a
+    ``mzc.prior.Prior`` (its file's bytes ``data``, for :func:`write`; ``mean``, the mean grid)."""
+    from mzc.prior import train as train_prior
+
+    if isinstance(surfaces, (str, os.PathLike, bytes)) or not hasattr(surfaces, "__iter__"):
+        raise MzcError("must be a list of surfaces (paths or meshes)", field="surfaces")
+    d1, d2 = (number(value, name, float, 0, low_open=True) for value, name in ((d1, "d1"), (d2, "d2")))
+    return train_prior([as_mesh(surface) for surface in surfaces], d1, d2)
 
 
 def slicing_numbers(options: dict[str, Any]) -> dict[str, Any]:
@@ -242,28 +275,47 @@ def slicing_numbers(options: dict[str, Any]) -> dict[str, Any]:
     return checked
 
 
-def encode(grid: ZGrid | np.ndarray, codec: str = DEFAULT_CODEC, **options: Unpack[EncodeOptions]) -> bytes:
+def encode(grid: ZGrid | np.ndarray, codec: str = DEFAULT_CODEC, *, prior: Any = None,
+           **options: Unpack[EncodeOptions]) -> bytes:
     """Compress a z-grid (or a 2D array) with a registered codec (``mzc encode``); ``options`` are
-    the codec's, e.g. ``max_error=0.01`` for dwt2d, ``quality=20`` for dct."""
+    the codec's, e.g. ``max_error=0.01`` for dwt2d, ``quality=20`` for dct. With ``prior`` (a prior
+    file's path or bytes, or a ``mzc.prior.Prior``: :func:`train`) a grid cut on the prior's lattice
+    is coded by dwt2d alone and as its residual from the prior's mean, the smaller written
+    (``mzc.prior.encode``)."""
     from mzc.codecs import get_codec
     from mzc.colours import warn_uncoded
 
     chosen, grid = get_codec(codec), as_grid(grid)
+    if prior is not None:
+        if chosen.name != "dwt2d":
+            raise MzcError(f"a prior codes with dwt2d, not {chosen.name}", field="prior")
+        from mzc.prior import as_prior
+        from mzc.prior import encode as encode_with_prior
+
+        return encode_with_prior(grid, as_prior(prior), **options)
     data = chosen.encode(grid, **options)
     warn_uncoded(grid, chosen, options)
     return data
 
 
-def decode(data: bytes, legacy: str | None = None, *, window: Any = None, levels: int | None = None) -> ZGrid:
+def decode(data: bytes, legacy: str | None = None, *, window: Any = None, levels: int | None = None,
+           prior: Any = None) -> ZGrid:
     """The z-grid of any mzc file's bytes, or of a raster's (``mzc decode``); ``legacy`` names the
     kind of a thesis file (poly, dft, dct, dwt), which has no magic line; ``window`` (row, col,
     rows, cols) decodes only those rows and columns (of a tiled file, only the tiles they touch);
-    ``levels`` K decodes a progressive file (mzc-dwt2d 9.0) to band 0 and its K coarsest detail levels."""
+    ``levels`` K decodes a progressive file (mzc-dwt2d 9.0) to band 0 and its K coarsest detail levels;
+    ``prior`` (a path, bytes or ``mzc.prior.Prior``) the prior a residual file was coded against."""
     try:
         contents = bytes(memoryview(data).cast("B"))
     except TypeError:
         raise MzcError(f"must be the bytes of an mzc file, not a {type(data).__name__}", field="data") from None
     window = window_argument(window)
+    if prior is not None:
+        from mzc.prior import RESIDUAL_MAGIC, as_prior
+        from mzc.prior import decode as decode_residual
+
+        if contents.startswith(RESIDUAL_MAGIC):   # any other file decodes alone
+            return windowed(decode_residual(contents, BYTES_SOURCE, as_prior(prior)), window)
     if levels is not None:
         if legacy is not None:
             raise MzcError("decodes a progressive mzc-dwt2d 9.0 file, not a legacy one", field="levels")
@@ -425,14 +477,15 @@ def write(path: PathLike, item: ZGrid | Mesh | bytes, file_format: str | None = 
 def batch_encode(sources: Any, dest: PathLike, codec: str = DEFAULT_CODEC, *,
                  slice_options: dict[str, Any] | None = None, verify: bool = False, scheduler: Any = None,
                  workers: int | None = None, chunk_size: int | None = None, listener: Any = None,
-                 **codec_options: Unpack[EncodeOptions]) -> Any:
+                 prior: PathLike | None = None, **codec_options: Unpack[EncodeOptions]) -> Any:
     """Slice and encode every mesh, cloud and raster of ``sources`` (paths, folders, globs, ``@list``
     files) into the folder ``dest`` on Dask (``mzc batch encode``): ``slice_options`` are :func:`slice`'s,
     ``codec_options`` :func:`encode`'s. It runs on ``scheduler`` (a scheduler's address or a
     ``distributed.Client``, which is left open), else on the current client when there is one and
     no ``workers`` are asked for, else on a local cluster of ``workers`` processes. Returns the
     ``mzc.batch.Summary`` (its ``rows`` are the manifest's, ``dest``/manifest.csv); a bad file is
-    a failed row, never an exception."""
+    a failed row, never an exception. ``prior`` (a prior file's path, which the workers read) cuts
+    every surface on its lattice and codes it against it, as ``slice --prior | encode --prior``."""
     import inspect
 
     from mzc.codecs import get_codec
@@ -448,8 +501,21 @@ def batch_encode(sources: Any, dest: PathLike, codec: str = DEFAULT_CODEC, *,
     given = slicing_numbers(slice_options or {})
     slicing = {k: v for k, v in given.items() if v not in (None, ()) and v != defaults[k]}
     settings = {"codec": chosen.name, "codec_options": chosen.checked(codec_options), "slice_options": slicing}
+    if prior is not None:
+        if chosen.name != "dwt2d":
+            raise MzcError(f"a prior codes with dwt2d, not {chosen.name}", field="prior")
+        settings["prior"] = batch_prior(prior)
     return run_batch_job("encode", sources, dest, settings, sliceable_extensions(), chosen.extension, verify=verify,
                          scheduler=scheduler, workers=workers, chunk_size=chunk_size, listener=listener)
+
+
+def batch_prior(prior: PathLike) -> dict[str, str]:
+    """{path, sha256} of a batch's ``prior`` file, read and checked now: the workers read it from
+    that path (and refuse it if it changed), and the manifest's settings name it by its hash."""
+    from mzc.prior import as_prior
+
+    path = os.path.abspath(path_of(prior, "prior"))
+    return {"path": path, "sha256": as_prior(path).name}
 
 
 def sliceable_extensions() -> list[str]:
@@ -463,14 +529,14 @@ def sliceable_extensions() -> list[str]:
 def batch_decode(sources: Any, dest: PathLike, *, densify: int = 0, method: str = "biharmonic",
                  file_format: str = "ply", jump_angle: float | None = None, creation_options: Any = None,
                  cog: bool = False, scheduler: Any = None, workers: int | None = None,
-                 chunk_size: int | None = None, listener: Any = None) -> Any:
+                 chunk_size: int | None = None, listener: Any = None, prior: PathLike | None = None) -> Any:
     """Decode every mzc file of ``sources`` into a mesh in the folder ``dest`` on Dask (``mzc batch
     decode``): decoded, densified with ``densify`` rows between planes, triangulated into
     ``file_format``, or written as a raster when it is tif or asc (a GeoTIFF with GDAL's
     ``creation_options`` and Cloud Optimized with ``cog``, as ``write``); on Dask as
     :func:`batch_encode` runs (``scheduler``: an address, a ``distributed.Client``, or the current
-    client). Returns the
-    ``mzc.batch.Summary``."""
+    client); ``prior`` (a prior file's path, which the workers read) decodes the residual files
+    coded against it. Returns the ``mzc.batch.Summary``."""
     from mzc.codecs import codec_names, get_codec
     from mzc.formats import SURFACES, extensions, writable
     from mzc.limits import MAX_INSERTED
@@ -481,6 +547,8 @@ def batch_decode(sources: Any, dest: PathLike, *, densify: int = 0, method: str 
     densify = number(densify, "densify", int, 0, MAX_INSERTED)
     settings = {"densify": densify, "method": method, "format": file_format, "jump_angle": jump_angle,
                 **geotiff_settings(creation_options, cog, file_format)}
+    if prior is not None:
+        settings["prior"] = batch_prior(prior)
     decoded = [*extensions(("grid",)), *(get_codec(name).extension for name in codec_names())]
     return run_batch_job("decode", sources, dest, settings, decoded, "." + file_format, scheduler=scheduler,
                          workers=workers, chunk_size=chunk_size, listener=listener)

@@ -13,6 +13,7 @@ never read whole, the tiles as Dask tasks of the cluster the item runs on.
 
 from __future__ import annotations
 
+import functools
 import hashlib
 import json
 import os
@@ -258,11 +259,20 @@ def encode_item(job, item, data, row, timings):
     settings, source = job.settings, item.source
     with timings.stage("read"):
         surface = read(data, source, path=source)
+    prior = job_prior(settings)
     with timings.stage("slice"), about(source, "slicing it"):
-        grid = slice_surface(surface, **settings["slice_options"])
+        grid = slice_surface(surface, **settings["slice_options"]) if prior is None else \
+            sliced_on_prior(surface, prior, settings["slice_options"])
     codec = get_codec(settings["codec"])
     with timings.stage("encode"), about(source, f"encoding it with {codec.name}"):
-        output, decoded = codec.encode_with_decoded(grid, **settings["codec_options"])
+        if prior is None:
+            output, decoded = codec.encode_with_decoded(grid, **settings["codec_options"])
+        else:
+            from mzc.prior import encode
+            from mzc.prior import read as read_coded
+
+            output = encode(grid, prior, **settings["codec_options"])
+            decoded = read_coded(output, source, prior).z
     warn_uncoded(grid, codec, settings["codec_options"])
     valid = grid.valid
     errors = np.abs(decoded[valid] - grid.z[valid])
@@ -273,6 +283,32 @@ def encode_item(job, item, data, row, timings):
         with timings.stage("verify"), about(source, "measuring the decoded surface"):
             row.update(surface_distances(surface, grid, decoded))
     return [(item.output, output)]
+
+
+def job_prior(settings):
+    """The Prior a batch's ``settings`` name ({path, sha256}), read once in each process; None
+    without one. A prior file that changed since the batch started is refused (each item's row)."""
+    named = settings.get("prior")
+    return None if named is None else loaded_prior(named["path"], named["sha256"])
+
+
+@functools.lru_cache(maxsize=4)
+def loaded_prior(path, digest):
+    """The prior at ``path``, whose SHA-256 must be ``digest``."""
+    from mzc.prior import as_prior
+
+    prior = as_prior(path)
+    if prior.name != digest:
+        raise MzcError(f"the prior changed since the batch started (its SHA-256 was {digest})", source=path)
+    return prior
+
+
+def sliced_on_prior(surface, prior, options):
+    """``surface`` (a mesh or cloud, or a raster's grid) cut on ``prior``'s lattice with the slicing
+    ``options`` that do not shape a grid (``mzc.api.slice`` refuses the others)."""
+    from mzc.api import slice as slice_surface
+
+    return slice_surface(surface, prior=prior, **options)
 
 
 def surface_distances(surface, grid, decoded):
@@ -296,8 +332,14 @@ def decode_item(job, item, data, row, timings):
     from mzc.formats import GRIDS, named, read
 
     settings, source = job.settings, item.source
+    prior = job_prior(settings)
     with timings.stage("decode"), about(source, "decoding it"):
-        grid = read(data, source, GRIDS, path=source)
+        if prior is None:
+            grid = read(data, source, GRIDS, path=source)
+        else:
+            from mzc.prior import read as read_coded
+
+            grid = read_coded(data, source, prior, source)
     row.update(rows=grid.shape[0], cols=grid.shape[1], valid_nodes=int(grid.valid.sum()))
     if settings["densify"]:
         from mzc.ops.densify import densify_grid

@@ -25,6 +25,7 @@ COMMANDS = {
     "diff": "Compare two surfaces (meshes or z-grids).",
     "info": "Describe any mzc file.",
     "sample": "Write a built-in sample surface.",
+    "train": "Learn a shared prior from a collection of like surfaces.",
     "batch": "Slice and encode (or decode) whole archives, on Dask.",
 }
 

@@ -55,7 +55,7 @@ def build_encode():
 
     codecs = [get_codec(name) for name in codec_names()]
 
-    def run(sources, dest, scheduler, workers, chunk_size, verify, **values):
+    def run(sources, dest, scheduler, workers, chunk_size, verify, prior, **values):
         from mzc.api import batch_encode
 
         slicing = {name: values.pop(name) for name in SLICE_NAMES}
@@ -64,12 +64,15 @@ def build_encode():
         options = codec_options(codec, values)
         report(batch_encode(sources, dest, codec.name, verify=verify, scheduler=scheduler, workers=workers,
                             chunk_size=chunk_size, listener=terminal_progress(), slice_options=slicing,
-                            **options))
+                            prior=prior, **options))
 
     params = [*[codec_flag(c) for c in codecs], *tuning_options(codecs)]
     command = click.Command("encode", callback=run, params=params, help=ENCODE_HELP)
     verify = click.option("--verify", is_flag=True, help="Measure each decoded surface against its input's.")
-    return with_options([*batch_options, *SLICE_OPTIONS, verify], command)
+    prior = click.option("--prior", metavar="FILE",
+                         help="Cut every surface on this prior's lattice and code it against it (mzc train; "
+                              "--dwt2d), as 'mzc slice --prior | mzc encode --prior'; the workers read it here.")
+    return with_options([*batch_options, *SLICE_OPTIONS, verify, prior], command)
 
 
 ENCODE_HELP = f"""Slice and encode every mesh, point cloud and raster of SOURCES into DEST.
@@ -105,15 +108,17 @@ decode --format' writes the grids of rasters.
 @click.option("--format", "file_format", type=click.Choice([*FORMATS, *RASTER_FORMATS]), default="ply",
               show_default=True, help="Mesh format of the outputs, or tif or asc: rasters.")
 @jump_angle_option
+@click.option("--prior", metavar="FILE", help="The prior (mzc train) residual files were coded against; the "
+                                              "workers read it here.")
 @co_option
 @cog_option
-def decode(densify, method, file_format, jump_angle, sources, dest, scheduler, workers, chunk_size):
+def decode(densify, method, file_format, jump_angle, prior, sources, dest, scheduler, workers, chunk_size):
     from mzc.api import batch_decode
 
     co, cog = given_geotiff_options()
     report(batch_decode(sources, dest, densify=densify, method=method, file_format=file_format,
                         jump_angle=jump_angle, creation_options=co, cog=cog, scheduler=scheduler, workers=workers,
-                        chunk_size=chunk_size, listener=terminal_progress()))
+                        chunk_size=chunk_size, listener=terminal_progress(), prior=prior))
 
 
 decode = with_options(batch_options, decode)

@@ -36,19 +36,25 @@ which --precision rounds.
 @click.option("--levels", type=click.IntRange(0), metavar="K",
               help="Of a progressive file (mzc-dwt2d 9.0, encode --progressive): decode band 0 and the K coarsest "
                    "detail levels alone, a coarser surface (K from the file's level count on: all of it).")
+@click.option("--prior", metavar="FILE",
+              help="The prior (mzc train) a residual file (mzc-residual, encode --prior) was coded against.")
 @grid_output_options
-def command(input, output, legacy, window, levels, file_format, plain, float32, precision):
+def command(input, output, legacy, window, levels, prior, file_format, plain, float32, precision):
     from mzc.streams import check_not_input, display_name, read_input
 
     write = grid_writer(output, file_format, plain, float32, precision)
     check_not_input(output, input)
     if legacy and levels is not None:
         raise click.UsageError("--levels decodes a progressive mzc-dwt2d 9.0 file, not a --legacy one")
+    if prior is not None and (legacy or levels is not None):
+        raise click.UsageError("--prior decodes a residual file (mzc-residual), not a --legacy or --levels one")
     if not legacy and levels is None and decoded_by_tiles(input, output, window or None, file_format, write,
                                                           float32):
         return
     if levels is not None:
         grid = read_levels(input, levels)
+    elif prior is not None:
+        grid = read_with_prior(input, prior)
     elif legacy:
         from mzc.codecs.rows.legacy import read_legacy
 
@@ -61,6 +67,17 @@ def command(input, output, legacy, window, levels, file_format, plain, float32, 
         with about(display_name(input), "cutting its window"):
             grid = window_of(grid, window)
     write(grid)
+
+
+def read_with_prior(path, prior):
+    """The grid of the file at ``path`` (or stdin), a residual file decoded with the prior at ``prior``
+    (mzc.prior.decode); any other file as it decodes alone."""
+    from mzc.prior import as_prior, read
+    from mzc.streams import display_name, read_input
+
+    data, source = read_input(path), display_name(path)
+    with about(source, "decoding it"):
+        return read(data, source, as_prior(prior), path)
 
 
 def read_levels(path, levels):

@@ -26,7 +26,8 @@ file) from INPUT or stdin; writes the compressed file to -o or stdout.
   mzc encode --rmse 0.05 face.zg -o face.mzw2
   mzc encode --dwt2d --max-error 0.05 < face.zg > face.mzw2
   mzc encode --dct -q 20 face.zg -o face.mzd
-  mzc encode --poly 30 face.zg -o face.mzp"""
+  mzc encode --poly 30 face.zg -o face.mzp
+  mzc encode --prior faces.mzp --rmse 0.1 face.zg -o face.mzw2"""
 SHORT_NAMES = {"quality": "-q"}
 
 
@@ -147,13 +148,23 @@ def written_by_windows(codec, path, output, options, scheduler=None):
         source.close()
 
 
+def encoded_with_prior(grid, codec, path, options):
+    """The bytes of ``grid`` coded against the prior at ``path`` (mzc.prior.encode): dwt2d alone."""
+    from mzc.errors import MzcError
+    from mzc.prior import as_prior, encode
+
+    if codec.name != "dwt2d":
+        raise MzcError(f"--prior codes with --dwt2d, not {flag(codec.name)}", field="prior")
+    return encode(grid, as_prior(path), **options)
+
+
 def build_command():
     """The ``mzc encode`` command over the codecs registered now."""
     from mzc.codecs import codec_names, get_codec
 
     codecs = [get_codec(name) for name in codec_names()]
 
-    def run(input, output, scheduler, **values):
+    def run(input, output, scheduler, prior, **values):
         from mzc.colours import warn_uncoded
         from mzc.errors import MzcError, about
         from mzc.streams import STDOUT_NAME, check_not_input, display_name, is_terminal, write_output
@@ -164,22 +175,25 @@ def build_command():
             raise MzcError("compressed data is not written to a terminal: redirect it or give -o FILE",
                            source=STDOUT_NAME)
         check_not_input(output, input)
-        if written_by_windows(codec, input, output, options, scheduler):
+        if prior is None and written_by_windows(codec, input, output, options, scheduler):
             return
         if scheduler is not None:
             raise click.UsageError("--scheduler codes the tiles of a GeoTIFF file coded in tiles (--dwt2d on a "
                                    "raster of more than one tile, or with --tile N), not this input")
         grid = read_grid(input)
         with about(display_name(input), f"encoding it with {codec.name}"):
-            data = codec.encode(grid, **options)
+            data = codec.encode(grid, **options) if prior is None else encoded_with_prior(grid, codec, prior, options)
         warn_uncoded(grid, codec, options)
         write_output(output, data)
 
     scheduler = click.Option(["--scheduler"], metavar="ADDRESS",
                              help="Code a tiled GeoTIFF's tiles as tasks of this Dask scheduler (tcp://HOST:8786), "
                                   "whose workers read the file themselves: they must see the same path.")
+    prior = click.Option(["--prior"], metavar="FILE",
+                         help="Code against this prior (mzc train): a grid sliced with --prior FILE is coded alone and "
+                              "as its residual from the prior's mean, the smaller written (--dwt2d).")
     command = click.Command("encode", callback=run, help=HELP,
-                            params=[*[codec_flag(c) for c in codecs], *tuning_options(codecs), scheduler])
+                            params=[*[codec_flag(c) for c in codecs], *tuning_options(codecs), scheduler, prior])
     for decorate in (output_option, input_argument):
         command = decorate(command)
     return command

@@ -25,6 +25,8 @@ def command(input, decode):
     if row.kind == "raster":
         grid = read_as(row, data, source, input)
         format_line, header, chart_count = f"{row.name} (a raster, read as its grid)", grid_header_lines(grid), None
+    elif row.name in ("prior", "residual"):
+        grid, format_line, header, chart_count, tiles = prior_header(row, data, source, decode)
     elif row.name == "dwt2d" and data.startswith(b"mzc-dwt2d 5."):
         grid, format_line, header, tiles = tiled_header(data, source, decode)
         chart_count = None
@@ -101,6 +103,30 @@ def mzc_header(row, data, source, decode):
     lines_of_colour = (scale_lines(header.integer("colour_scale"), rows, cols, "colour    rgb8 samples, ") if scaled
                        else colour_lines(header, colour, rows, cols))
     return grid, f"mzc-{kind} {major}.{minor}", lines, chart_count, levels + lines_of_colour
+
+
+def prior_header(row, data, source, decode):
+    """``mzc_header``'s five of a prior file (its mean z-grid's header, the surfaces it was trained on
+    and its SHA-256) or of a residual file (its inner dwt2d stream's header, a planar grid of the
+    residual, and the prior it names, which holds the lattice: info reads the file alone, so
+    --decode describes the residual)."""
+    import hashlib
+
+    from mzc.formats import named
+    from mzc.prior import DIGEST_BYTES, PRIOR_MAGIC, RESIDUAL_MAGIC, read_prior, residual_digest
+
+    if row.name == "prior":
+        prior = read_prior(data, source)
+        inner = data[len(PRIOR_MAGIC) + len(data[len(PRIOR_MAGIC):].split(b"\n", 1)[0]) + 1:]
+        grid, _line, header, count, lines = mzc_header(named("zgrid"), inner, source, decode)
+        about = [f"prior     the mean of {prior.surfaces} surfaces, sha256 {hashlib.sha256(data).hexdigest()}"]
+        return grid, "mzc-prior 1.0 (a z-grid inside)", header, count, about + lines
+    digest = residual_digest(data, source)
+    inner = data[len(RESIDUAL_MAGIC) + DIGEST_BYTES:]
+    grid, line, header, count, lines = mzc_header(named("dwt2d"), inner, source, decode)
+    about = [f"prior     sha256 {digest.hex()}: the grid above is the residual from its mean, planar, and the "
+             "surface lies on the prior's lattice (decode --prior FILE)"]
+    return grid, f"mzc-residual 1.0 ({line} inside)", header, count, about + lines
 
 
 def level_lines(sections, shape):

@@ -119,9 +119,12 @@ that would cut it otherwise are refused.
 @input_argument
 @output_option
 @slice_options
+@click.option("--prior", metavar="FILE",
+              help="Cut on the lattice of this prior (mzc train), for encode --prior; the options that shape the "
+                   "grid are refused beside it.")
 @grid_output_options
 def command(input, output, d1, d2, rows, cols, thesis_grid, align, projection, view, center, axis, units,
-            classes, charts, tap, cloud, colour_scale, file_format, plain, float32, precision):
+            classes, charts, tap, cloud, colour_scale, prior, file_format, plain, float32, precision):
     from mzc.api import slice as slice_surface
     from mzc.errors import about
     from mzc.streams import check_not_input, display_name
@@ -133,5 +136,5 @@ def command(input, output, d1, d2, rows, cols, thesis_grid, align, projection, v
         grid = slice_surface(input, d1=d1, d2=d2, rows=rows, cols=cols, align=align, units=units,
                              projection=projection, center=center, axis=axis, view=view,
                              thesis_grid=thesis_grid, classes=classes, charts=charts, cloud=cloud, tap=tap,
-                             colour_scale=colour_scale)
+                             colour_scale=colour_scale, prior=prior)
     write(grid)

@@ -61,6 +61,8 @@ class Format:
 
 FORMATS = (   # in rank order; the codecs' compressed formats follow the z-grid's
     Format("zgrid", "grid", "mzc.formats.zgrid", (b"mzc-zgrid",)),
+    Format("prior", "grid", "mzc.prior:PriorFiles", (b"mzc-prior",)),   # read as its mean grid
+    Format("residual", "compressed", "mzc.prior:ResidualFiles", (b"mzc-residual",)),   # decoded with its prior
     Format("tif", "raster", "mzc.rasters.geotiff", (b"II*\0", b"MM\0*", b"II+\0", b"MM\0+")),   # and BigTIFF
     Format("asc", "raster", "mzc.rasters.asc", sidecar=".prj"),
     Format("ply", "mesh", "mzc.meshes.ply", (b"ply",)),

@@ -393,7 +393,8 @@ class Prepared:
     the magnitude is 0 where the coefficient is not relevant, so it quantises to the 0 that
     is never coded)."""
 
-    def __init__(self, grid, wavelet, levels, slope_limit, compact=True, colour=None):
+    def __init__(self, grid, wavelet, levels, slope_limit, compact=True, colour=None, surface=None):
+        self.surface = grid if surface is None else surface   # whose surface the rmse target measures (surface_terms)
         self.compact = compact   # 8.0 (or the container version given: 7.0 or 9.0), else the text header of 3.x,
                                  # 4.0, 6.0 (a tile of a 5.0 file)
         self.colour = colour     # (target line, colour section bytes) of a 7.0 file of a grid with colours
@@ -417,13 +418,20 @@ class Prepared:
         """(the valid heights, the weight a*cos(t) of each one's squared error, the area sum of
         a/cos(t)) of surface_rms, from the lean t of the surface from each node's line and its
         metric area a: only the rmse target needs them. On a geographic grid, weights of 1 over
-        the node count: its RMS error is the vertical one, as a DEM's accuracy is stated."""
+        the node count: its RMS error is the vertical one, as a DEM's accuracy is stated. The lean and
+        area are ``surface``'s: the grid's own, or the rebuilt surface of a residual (mzc.prior), whose
+        values are not the surface's heights."""
         from mzc.ops.triangulation import jump_edges
 
         if self.vertical:
             heights = self.grid.z[self.valid]
             return heights, np.ones(heights.size), float(heights.size)
-        lean, metric = w2.node_areas(self.filled, self.geometry, jump_edges(self.grid))
+        surface, geometry, filled = self.surface, self.geometry, self.filled
+        if surface is not self.grid:
+            geometry = w2.Geometry.of(surface.d1, surface.d2, surface.origin, surface.shape, surface.projection,
+                                      surface.radius)
+            filled = w2.laplace_fill(surface.z, self.valid, geometry.periodic)
+        lean, metric = w2.node_areas(filled, geometry, jump_edges(surface))
         lean, metric = lean[self.valid], metric[self.valid]
         return self.grid.z[self.valid], metric / lean, float(np.sum(metric * lean))
 
@@ -657,7 +665,7 @@ def check_whole(progressive, side):
 
 
 def encode_whole(grid, max_error=None, rmse=None, size=None, wavelet=DEFAULT_WAVELET, level=None, slope_limit=None,
-                 unit_checked=False, compact=True, colour_psnr=None, colour_max_error=None):
+                 unit_checked=False, compact=True, colour_psnr=None, colour_max_error=None, surface=None):
     """(bytes, the heights a decoder gets from them) of a ZGrid coded whole; at most one of
     ``max_error`` (bound at every valid node, grid units), ``rmse`` (target RMS surface error; on a
     geographic grid the vertical one, in the height unit) or ``size`` (target file bytes, not
@@ -666,6 +674,9 @@ def encode_whole(grid, max_error=None, rmse=None, size=None, wavelet=DEFAULT_WAV
     grid's CRS); without ``compact`` the file has a 3.x, 4.0 or 6.0 text header, as
     a tile of a 5.0 file has (written_version). A 7.0 file of a grid with colours carries them in its
     colour section, coded at ``colour_psnr`` dB or within ``colour_max_error`` levels (``colour_section``).
+    ``surface``: the grid of the surface whose RMS error ``rmse`` aims at, when ``grid`` is a residual
+    of it (mzc.prior: the mean added back at decode), its mask and shape ``grid``'s, its node lines
+    (projection, frame, spacings) its own.
 
     ``slope_limit`` defaults to SLOPE_LIMIT for ``rmse`` and ``size``, whose errors are
     surface distances, and to 1 (equal steps) for ``max_error``, a bound on heights, where
@@ -681,7 +692,7 @@ def encode_whole(grid, max_error=None, rmse=None, size=None, wavelet=DEFAULT_WAV
         slope_limit = 1.0 if max_error is not None or is_geographic(grid) else SLOPE_LIMIT
     check_slope_limit(grid, slope_limit)
     colour = colour_section(grid, colour_psnr, colour_max_error) if compact else None
-    prepared = Prepared(grid, wavelet, level, slope_limit, compact, colour)
+    prepared = Prepared(grid, wavelet, level, slope_limit, compact, colour, surface)
     if max_error is not None:
         bound, rounded = rounding_bounds(grid, max_error) or (max_error, None)
         # the smallest file, except that a finer step (lower RMS error) wins within ALPHA_SLACK of it
