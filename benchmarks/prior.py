@@ -34,8 +34,9 @@ import startup  # noqa: F401  first: one thread per process, set before numpy lo
 # isort: split
 import numpy as np
 import prior_study
+from corpora import FACES, mesh_files
 from objects import QUICK_SAMPLES, Surface
-from prior_study import FACES, LADDER, TARGETS, ratios, rebuilt_error, zstd_dictionary
+from prior_study import LADDER, TARGETS, ratios, rebuilt_error, zstd_dictionary
 from report import benchmark_parser, bytes_at, fmt, pareto, stamped, write_report
 
 PACKAGES = ("numpy", "scipy", "constriction", "zstandard")
@@ -125,7 +126,7 @@ def markdown(document):
 
 def main():
     args = benchmark_parser(__doc__, "four faces, fewer samples").parse_args()
-    faces = sorted([*FACES.glob("*.ply"), *FACES.glob("*.obj")])
+    faces = mesh_files(FACES)
     if args.quick:
         faces, prior_study.SAMPLES = faces[:4], QUICK_SAMPLES
     if len(faces) < 3:
