@@ -16,7 +16,7 @@ import pytest
 from mzc.codecs import BUILT_IN, dwt2d, get_codec
 from mzc.codecs.dwt2d import compact
 from mzc.codecs.rows import dct, dft, dwt, poly
-from mzc.errors import MzcError
+from mzc.errors import MzcError, MzcWarning
 from mzc.formats import module_for, read_any, zgrid
 from mzc.formats.header import split_magic
 from mzc.grid import IDENTITY_TRANSFORM, ZGrid
@@ -43,7 +43,13 @@ NAME = FIXTURE_NAME
 
 @pytest.mark.parametrize("name", fixture_names())
 def test_fixture_decodes_to_its_expected_grid(name):
-    assert_same_grid(read_any(fixture_bytes(name), name), expected_grid(name))
+    """Each fixture decodes to its expected grid; a cut progressive file says so in its one warning."""
+    if name.endswith("-cut.mzw2"):
+        with pytest.warns(MzcWarning, match="cut short"):
+            decoded = read_any(fixture_bytes(name), name)
+    else:
+        decoded = read_any(fixture_bytes(name), name)
+    assert_same_grid(decoded, expected_grid(name))
 
 
 @pytest.mark.parametrize("name", fixture_names())
