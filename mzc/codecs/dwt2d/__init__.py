@@ -1,4 +1,5 @@
-"""The wavelet z-grid codec (``mzc-dwt2d 8.0``, 7.0 with the mask as predicted flips; 7.0: the fields of
+"""The wavelet z-grid codec (``mzc-dwt2d 10.0``, 8.0 in a tighter container with short table records; 8.0, 7.0
+with the mask as predicted flips; 7.0: the fields of
 3.1, 3.2 with a raster's crs and raster lines, 4.0 with charts and 6.0 for a raster of integers that decodes
 to integers in a binary container; those are read, and written as the tiles of 5.0; 3.0 and 2.0 are read;
 extension ``.mzw2``): see spec/dwt2d.md.
