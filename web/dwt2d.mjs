@@ -398,7 +398,7 @@ export class Payload {
 }
 
 /** A table's frequencies (summing to 16384) from its integer weights (BigInts: a parametric
- * table's reach 2^40, their products 2^54), with the lookup of a 14-bit slot to its class and
+ * table's sum to 2^48, their products 2^62), with the lookup of a 14-bit slot to its class and
  * the cumulative frequencies. */
 export function frequencyTable(weights) {
   const s = weights.length;

@@ -365,10 +365,9 @@ def choose_short_records(counts, sizes):
         lead = b"" if size == current else bytes([RESIZED]) + varint(size)
         freq, logs = short_tables(size)
         best = int(np.argmin(-(logs * model_counts).sum(axis=1)))
-        codes = table_codes(model_counts)
+        codes, fitted = table_codes(model_counts), fit_parametric(model_counts)
         options = [(freq[best], lead + bytes([1 + best])),
-                   (parametric_table(size, *fit_parametric(model_counts)),
-                    lead + bytes([PARAMETRIC, *fit_parametric(model_counts)])),
+                   (parametric_table(size, *fitted), lead + bytes([PARAMETRIC, *fitted])),
                    (frequencies(codes), lead + bytes([CODED]) + encode_table(codes)[1:])]
         if tables and len(tables[-1]) == size:
             options.append((tables[-1], bytes([REPEAT])))
