@@ -25,14 +25,15 @@ export function decodeDwt2d(bytes, lines, body, magic) {
 /** Decodes a 7.0 file (bytes; the end of its magic line; its magic): its sections, the header's
  * fields read as the lines they stand for, the payload with 7.0's table records; section 3, a
  * grid's colours (Colours of 7.0), comes back undecoded as `colourSection` (colour.mjs's
- * `withColours` decodes it over the grid's valid nodes). */
+ * `withColours` decodes it over the grid's valid nodes). A 10.0 file's CRC-32 is checked before
+ * its minor version, as mzc does. */
 export function decodeCompact(bytes, magicEnd, magic) {
+  const parts = magic.major >= 10 ? tightParts(bytes, magicEnd) : null;
   if (magic.minor) fail(null, `mzc-dwt2d version ${magic.major}.${magic.minor} is newer than this decoder reads (${magic.major}.0); upgrade`);
   if (magic.major === 9) return decodeProgressive(bytes, magicEnd, magic);
-  if (magic.major >= 10) {
-    const { fields, payload, colour } = tightParts(bytes, magicEnd);
-    const grid = decodeWhole(fields, [payload], magic);
-    return colour ? { ...grid, colourSection: colour } : grid;
+  if (parts) {
+    const grid = decodeWhole(parts.fields, [parts.payload], magic);
+    return parts.colour ? { ...grid, colourSection: parts.colour } : grid;
   }
   const bodies = sections(bytes, magicEnd, [HEADER, PAYLOAD], COLOUR);
   const grid = decodeWhole(headerLines(bodies[HEADER], magic.major), [bodies[PAYLOAD]], magic);
