@@ -120,9 +120,12 @@ def test_a_coloured_grid_round_trips_through_the_7_0_file_within_its_bounds(grid
 
 
 def coloured_file():
-    """A 7.0 file of a small coloured grid, and where its colour section (tag, length, body, CRC) starts."""
+    """An 8.0 file of a small coloured grid (7.0's colour section; 10.0's is checked in test_dwt2d_tight), and
+    where its colour section (tag, length, body, CRC) starts."""
+    from mzc.codecs import dwt2d
+
     grid = sliced()
-    data = mzc.encode(grid, "dwt2d", max_error=0.05, colour_psnr=30)
+    data = dwt2d.encode_whole(grid, max_error=0.05, colour_psnr=30, compact=dwt2d.FLIPS_VERSION)[0]
     colour = compact.read(data, "t")[2]
     start = len(data) - 4 - len(colour) - len(compact.varint(len(colour))) - 1
     assert data[start] == compact.COLOUR

@@ -46,10 +46,13 @@ def text_face_file():
 
 
 def header_bytes(data):
-    """The bytes of a file's header: through its ``data`` line, or a dwt2d 7.0 or 8.0 file's magic line and
-    header section."""
+    """The bytes of a file's header: through its ``data`` line, a dwt2d 7.0 or 8.0 file's magic line and
+    header section, or a 10.0 file's magic line and header fields."""
     from mzc.codecs.dwt2d import compact
 
+    if compact.major(data) == compact.TIGHT_MAJOR:
+        reader = compact.Reader(data, "t")
+        return reader.varint() + reader.position
     if compact.is_compact(data):
         reader = compact.Reader(data, "t")
         reader.header()
@@ -97,7 +100,7 @@ def test_a_thousand_single_bit_flips_of_a_face_file_are_all_refused(face_file):
 def test_every_bit_of_every_codec_file_is_guarded(name, data):
     """Bits of every codec's file (planar and central grids; every bit of the header and up to
     3,000 in all): flipped, each is refused."""
-    assert CHECKSUM_LINE.search(data) or data.startswith(b"mzc-dwt2d 8.0\n"), f"{name} carries no crc32 line"
+    assert CHECKSUM_LINE.search(data) or data.startswith(b"mzc-dwt2d 10.0\n"), f"{name} carries no crc32 line"
     header_bits = 8 * header_bytes(data)
     rng = np.random.default_rng(len(data))
     body_bits = rng.choice(np.arange(header_bits, len(data) * 8), size=min(3000, len(data) * 8 - header_bits),
@@ -149,10 +152,13 @@ def test_a_malformed_checksum_is_refused(text_face_file, value):
 def test_the_checksum_covers_the_version_so_an_older_version_number_does_not_hide_a_flip(text_face_file,
                                                                                           face_file):
     """3.1 -> 3.0 on the magic line (3.0 needs no checksum): the crc32 line is still checked; 8.0 -> 7.0
-    (whose mask reads otherwise): the header section's CRC-32 covers the magic line."""
+    (whose mask reads otherwise): the header section's CRC-32 covers the magic line; 10.0 -> 10.1: the
+    file's one CRC-32 covers it, and is checked before the version is judged."""
     assert "checksum mismatch" in refused(text_face_file.replace(b"mzc-dwt2d 3.1\n", b"mzc-dwt2d 3.0\n", 1)).message
-    assert face_file.startswith(b"mzc-dwt2d 8.0\n")
-    assert "checksum mismatch" in refused(face_file.replace(b"mzc-dwt2d 8.0\n", b"mzc-dwt2d 7.0\n", 1)).message
+    eight = fixture_bytes("dwt2d-8.0.mzw2")
+    assert "checksum mismatch" in refused(eight.replace(b"mzc-dwt2d 8.0\n", b"mzc-dwt2d 7.0\n", 1)).message
+    assert face_file.startswith(b"mzc-dwt2d 10.0\n")
+    assert "checksum mismatch" in refused(face_file.replace(b"mzc-dwt2d 10.0\n", b"mzc-dwt2d 10.1\n", 1)).message
 
 
 @pytest.mark.parametrize("name", ["dwt2d-3.0.mzw2", "dwt2d-2.0.mzw2"])

@@ -85,9 +85,9 @@ def test_grids_up_to_one_tile_keep_their_bytes_and_larger_ones_are_tiled(monkeyp
     monkeypatch.setattr(tiles, "DEFAULT_TILE", 8)
     small, large = grid_of(terrain(8, 8)), grid_of(terrain(9, 8))
     assert mzc.encode(small, "dwt2d", max_error=0.05) == mzc.encode(small, "dwt2d", max_error=0.05, tile=0)
-    assert mzc.encode(small, "dwt2d", max_error=0.05).startswith(b"mzc-dwt2d 8.0\n")   # coded whole: 8.0
+    assert mzc.encode(small, "dwt2d", max_error=0.05).startswith(b"mzc-dwt2d 10.0\n")   # coded whole: 10.0
     assert mzc.encode(large, "dwt2d", max_error=0.05) == mzc.encode(large, "dwt2d", max_error=0.05, tile=8)
-    assert mzc.encode(large, "dwt2d", max_error=0.05, tile=0).startswith(b"mzc-dwt2d 8.0\n")
+    assert mzc.encode(large, "dwt2d", max_error=0.05, tile=0).startswith(b"mzc-dwt2d 10.0\n")
 
 
 def test_the_worked_example_decodes_as_the_spec_says():
@@ -235,7 +235,7 @@ def test_a_multi_chart_grid_is_coded_whole_unless_told_to_tile(monkeypatch):
     z[:, 4] = np.nan
     charted = ZGrid(z=z, d1=1.0, d2=1.0, charts=(Chart("+z", 0, 0, 6, 4, 0, 0), Chart("-x", 0, 5, 6, 4, 0, 0)))
     data = mzc.encode(charted, "dwt2d", max_error=0.05)
-    assert data.startswith(b"mzc-dwt2d 8.0\n") and mzc.decode(data).charts == charted.charts
+    assert data.startswith(b"mzc-dwt2d 10.0\n") and mzc.decode(data).charts == charted.charts
     with pytest.raises(MzcError, match="multi-chart grid is coded whole"):
         mzc.encode(charted, "dwt2d", max_error=0.05, tile=4)
 

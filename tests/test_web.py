@@ -210,8 +210,11 @@ def mutations(data, count, seed):
 
 def compact_sections(data):
     """The (start, end) of each section of a 7.0 or 8.0 file before its CRC-32 (the first from its tag);
-    of a 9.0 file, of its header, base and whole level sections and its colour section, if whole."""
+    of a 9.0 file, of its header, base and whole level sections and its colour section, if whole; of a
+    10.0 file, its one body (after the magic line) before its CRC-32."""
     reader = compact.Reader(data, "t")
+    if compact.major(data) == compact.TIGHT_MAJOR:
+        return [(reader.position, len(data) - compact.CRC.size)]
     if compact.major(data) == compact.PROGRESSIVE_MAJOR:
         start = reader.position
         reader.header()

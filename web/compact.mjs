@@ -2,7 +2,8 @@
 // sections each under its own CRC-32, the header's fields in binary turned back into the header
 // lines they stand for, so that dwt2d.mjs reads them as it reads a 3.x file's lines. 9.0 (Version 9.0)
 // has a base section and one section per detail level, each CRC-32 chained to the section before, and
-// a prefix of whole sections decodes (`progressiveSections`).
+// a prefix of whole sections decodes (`progressiveSections`). 10.0 (Version 10.0) has one body under one
+// CRC-32, its fields as presence bits without implied counts (`tightParts`).
 
 import { fail, crc32, formatNumber, words } from "./header.mjs";
 
@@ -64,6 +65,44 @@ function readSection(bytes, cursor, tag, before) {
   const body = bytes.subarray(cursor.at, end);
   cursor.at = end + 4;
   return body;
+}
+
+/** 10.0's field ids in the order of its presence bits, and the fields of one count (Version 10.0). */
+const TIGHT_ORDER = [1, 2, 3, 4, 5, 6, 7, 8, 16, 23, 9, 10, 11, 12, 13, 14, 15, 17, 18, 19, 20, 21, 22];
+const FIXED_COUNTS = { rows: 1, cols: 1, d1: 1, d2: 1, origin: 2, radius: 1, chart_count: 1, levels: 1, slope_limit: 1,
+  correction: 1, max_error: 1, colour_psnr: 1, colour_max_error: 1, source_vertices: 1 };
+
+/** The parts of a 10.0 file (`magicEnd`: the end of its magic line): {fields (keyword -> words, d2 and a
+ * translation-only transform filled in), payload, colour (null without)}, its CRC-32 checked first. */
+export function tightParts(bytes, magicEnd) {
+  checkBinary(bytes, magicEnd);
+  const last = bytes.length - 4;
+  if (last < magicEnd || crc32(bytes.subarray(0, last)) !== new DataView(bytes.buffer, bytes.byteOffset + last, 4).getUint32(0, true)) {
+    fail("crc32", "checksum mismatch: the file is corrupt (damaged, cut short or added to)");
+  }
+  const outer = new Cursor(bytes, magicEnd, last);
+  const length = Number(outer.varint());
+  const end = outer.at + length;
+  if (end > last) fail("data", "the header fields run past the end of the file");
+  const cursor = new Cursor(bytes, outer.at, end);
+  const present = cursor.varint();
+  if (present >> BigInt(TIGHT_ORDER.length)) fail("data", `unknown header field (bits 0x${present.toString(16)})`);
+  const fields = new Map();
+  TIGHT_ORDER.forEach((id, place) => {
+    if (!((present >> BigInt(place)) & 1n)) return;
+    const [keyword, type] = FIELDS[id];
+    fields.set(keyword, values(cursor, type, FIXED_COUNTS[keyword]));
+  });
+  if (cursor.at !== end) fail("data", "the header fields end before their length says");
+  if (fields.has("d1") && !fields.has("d2")) fields.set("d2", fields.get("d1"));
+  const transform = fields.get("transform");
+  if (transform?.length === 3) fields.set("transform", ["1", "0", "0", transform[0], "0", "1", "0", transform[1], "0", "0", "1", transform[2]]);
+  if (!fields.has("colour_psnr") && !fields.has("colour_max_error")) return { fields, payload: bytes.subarray(end, last), colour: null };
+  const rest = new Cursor(bytes, end, last);
+  const payloadLength = Number(rest.varint());
+  const split = rest.at + payloadLength;
+  if (split > last) fail("data", "the payload runs past the end of the file");
+  return { fields, payload: bytes.subarray(rest.at, split), colour: bytes.subarray(split, last) };
 }
 
 /** Refuses a file whose magic line ends in CRLF (copied as text). */
@@ -153,14 +192,15 @@ export function headerLines(body, major) {
   return fields;
 }
 
-/** The value words of one field of `type`. */
-function values(cursor, type) {
+/** The value words of one field of `type`: `fixed` of them when given (10.0's fields of one count), else
+ * as many as the count before them says. */
+function values(cursor, type, fixed) {
   if (type === "e") {
     const index = cursor.varint();
     if (index >= BigInt(WORDS.length)) fail("data", `word number ${index} of a header field is not 0..${WORDS.length - 1}`);
     return [WORDS[Number(index)]];
   }
-  const count = cursor.varint();
+  const count = fixed === undefined ? cursor.varint() : BigInt(fixed);
   if (count > BigInt(cursor.end - cursor.at)) fail("data", "a header field runs past its section");
   const n = Number(count);
   if (type === "t") {

@@ -1,12 +1,13 @@
 // The 2D wavelet codec `mzc-dwt2d` 2.0, 3.0, 3.1, 3.2, 4.0, 5.0 (tiles), 5.1 (rounded tiles), 6.0 (rounding)
 // and 7.0 (binary header and parametric tables, in the sections of compact.mjs), 8.0 (7.0, its mask in mask.mjs),
-// 9.0 (8.0 in sections of levels, coarsest first: a prefix of whole sections decodes to a coarser surface)
+// 9.0 (8.0 in sections of levels, coarsest first: a prefix of whole sections decodes to a coarser surface),
+// 10.0 (8.0 in one body under one CRC-32, its header fields tighter, its table records short)
 // (spec/dwt2d.md): header, payload (tables, rANS, raw bits), mask, relevance, bands, slope
 // factors, inverse transform, correction layer, chart records, rounding and tiles.
 
 import { fail, headerFields, fieldReader, gridFields, checkChecksum, checkCharts, VIEWS, crc32, splitHeader, parseMagic } from "./header.mjs";
 import { cos } from "./elementary.mjs";
-import { sections, progressiveSections, headerLines, HEADER, PAYLOAD, COLOUR } from "./compact.mjs";
+import { sections, progressiveSections, tightParts, headerLines, HEADER, PAYLOAD, COLOUR } from "./compact.mjs";
 import { inversePeriodized2d, relevantPeriodized2d } from "./pywt.mjs";
 import { decodeFlips } from "./mask.mjs";
 
@@ -24,10 +25,16 @@ export function decodeDwt2d(bytes, lines, body, magic) {
 /** Decodes a 7.0 file (bytes; the end of its magic line; its magic): its sections, the header's
  * fields read as the lines they stand for, the payload with 7.0's table records; section 3, a
  * grid's colours (Colours of 7.0), comes back undecoded as `colourSection` (colour.mjs's
- * `withColours` decodes it over the grid's valid nodes). */
+ * `withColours` decodes it over the grid's valid nodes). A 10.0 file's CRC-32 is checked before
+ * its minor version, as mzc does. */
 export function decodeCompact(bytes, magicEnd, magic) {
+  const parts = magic.major >= 10 ? tightParts(bytes, magicEnd) : null;
   if (magic.minor) fail(null, `mzc-dwt2d version ${magic.major}.${magic.minor} is newer than this decoder reads (${magic.major}.0); upgrade`);
-  if (magic.major >= 9) return decodeProgressive(bytes, magicEnd, magic);
+  if (magic.major === 9) return decodeProgressive(bytes, magicEnd, magic);
+  if (parts) {
+    const grid = decodeWhole(parts.fields, [parts.payload], magic);
+    return parts.colour ? { ...grid, colourSection: parts.colour } : grid;
+  }
   const bodies = sections(bytes, magicEnd, [HEADER, PAYLOAD], COLOUR);
   const grid = decodeWhole(headerLines(bodies[HEADER], magic.major), [bodies[PAYLOAD]], magic);
   return bodies[COLOUR] ? { ...grid, colourSection: bodies[COLOUR] } : grid;
@@ -60,12 +67,12 @@ function decodeWhole(fields, bodies, magic) {
   const p = codecFields(h, magic, grid);
   if (bodies.length > 1 + p.levels) fail("data", `${bodies.length - 1} level sections for ${p.levels} wavelet levels`);
   const payloads = [];
-  for (const body of bodies) payloads.push(new Payload(body, magic.major >= 7, magic.major >= 9 && payloads.length ? payloads[0].tables : null));
+  for (const body of bodies) payloads.push(new Payload(body, magic.major >= 7, magic.major === 9 && payloads.length ? payloads[0].tables : null, magic.major >= 10));
   const z = decodeGrid(payloads, grid, p);
   const charts = p.chartCount ? chartRecords(payloads[0], p.chartCount, grid, z) : undefined;
   for (const payload of payloads) payload.finish();
   if (p.rounding) roundToSamples(z, grid);
-  return magic.major >= 9 ? { ...grid, z, charts, levels: p.levels } : { ...grid, z, charts };
+  return magic.major === 9 ? { ...grid, z, charts, levels: p.levels } : { ...grid, z, charts };
 }
 
 const SAMPLE_RANGES = { uint8: [0, 255], int8: [-128, 127], uint16: [0, 65535], int16: [-32768, 32767],
@@ -187,14 +194,27 @@ const TOTAL = 16384;
 const range = (from, to) => Array.from({ length: to - from + 1 }, (_, i) => from + i);
 const SAME_SIZE = [range(4, 14), range(15, 22), range(23, 26)];   // detail, sign and correction tables
 
+/** 10.0's one-byte tables: P(0) in 65536ths and ratio codes (Tables of 10.0). */
+const SHORT_ZEROS = [1179, 2903, 6881, 15004, 28118, 42952, 54263, 60565, 63477, 64707, 65206, 65405, 65484, 65516, 65528];
+const SHORT_RATIOS = [0, 4, 8, 12, 16, 20, 24, 30, 36, 44, 52, 62, 74, 88, 104, 124];
+
+/** `tables`, refused when the tables of one group (mixed in one row) have different class counts. */
+function sameSizes(tables) {
+  for (const group of SAME_SIZE) {
+    const sizes = new Set(group.filter((m) => m < tables.length).map((m) => tables[m].freq.length));
+    if (sizes.size > 1) fail("tables", "tables mixed in one row have different class counts");
+  }
+  return tables;
+}
+
 /** A reader of the payload: its tables, its rANS state and its raw-bit cursor. */
 export class Payload {
   /** `parametric`: 7.0's table records (Tables of 7.0), else 3.x's; `prior`: a 9.0 level section's, the
-   * base section's tables (Tables of 9.0). */
-  constructor(bytes, parametric, prior = null) {
+   * base section's tables (Tables of 9.0); `short`: 10.0's records (Tables of 10.0). */
+  constructor(bytes, parametric, prior = null, short = false) {
     this.bytes = bytes;
     this.at = 0;
-    this.tables = this.readTables(parametric, prior);
+    this.tables = short ? this.readShortTables() : this.readTables(parametric, prior);
     this.startRans();
     this.bitAt = this.at * 8;
   }
@@ -236,11 +256,45 @@ export class Payload {
       if (s < 2 || s > 48) fail("tables", `a table of ${s} classes (2..48)`);
       tables.push(frequencyTable(kind ? this.parametricRecord(s) : this.codeWeights(s)));
     }
-    for (const group of SAME_SIZE) {
-      const sizes = new Set(group.filter((m) => m < tables.length).map((m) => tables[m].freq.length));
-      if (sizes.size > 1) fail("tables", "tables mixed in one row have different class counts");
+    return sameSizes(tables);
+  }
+
+  /** 10.0's M model tables: one record a model, of the class count S (2 at first) of the table before,
+   * unless RESIZED (243) gives it (Tables of 10.0). */
+  readShortTables() {
+    const m = this.varint("tables");
+    if (m > 4096) fail("tables", `${m} tables (at most 4096)`);
+    const tables = [];
+    let s = 2;
+    for (let t = 0; t < m; t++) {
+      let r = this.byte();
+      if (r === 243) {
+        s = this.varint("tables");
+        if (s < 2 || s > 48) fail("tables", `a table of ${s} classes (2..48)`);
+        r = this.byte();
+        if (r === 0 || r === 243) fail("tables", "a resized model table record must give its table");
+      }
+      if (r === 0) {
+        if (!t) fail("tables", "the first table repeats none");
+        tables.push(tables[t - 1]);
+      } else if (r <= 240) {
+        tables.push(frequencyTable(parametricWeights(s, SHORT_ZEROS[(r - 1) >> 4], SHORT_RATIOS[(r - 1) % 16], 65536)));
+      } else if (r === 241) {
+        tables.push(frequencyTable(this.parametricRecord(s)));
+      } else if (r === 242) {
+        tables.push(frequencyTable(this.codeWeights(s)));
+      } else {
+        fail("tables", `model table record ${r} is not 0..243`);
+      }
+      s = tables[t].freq.length;
     }
-    return tables;
+    return sameSizes(tables);
+  }
+
+  /** The byte at the cursor (of a table record). */
+  byte() {
+    if (this.at >= this.bytes.length) fail("tables", "the payload is cut short");
+    return this.bytes[this.at++];
   }
 
   /** The weights of S 6-bit weight codes, most significant bit first (Tables). */
@@ -345,7 +399,7 @@ export class Payload {
 }
 
 /** A table's frequencies (summing to 16384) from its integer weights (BigInts: a parametric
- * table's reach 2^40, their products 2^54), with the lookup of a 14-bit slot to its class and
+ * table's sum to 2^48, their products 2^62), with the lookup of a 14-bit slot to its class and
  * the cumulative frequencies. */
 export function frequencyTable(weights) {
   const s = weights.length;
@@ -372,14 +426,14 @@ const ROOTS = [4294967296n, 4112874773n, 3938502375n, 3771522796n, 3611622602n, 
   3171459999n, 3037000499n, 2908241642n, 2784941737n, 2666869344n, 2553802833n, 2445529971n, 2341847523n, 2242560871n];
 
 /** The BigInt weights of a parametric table of S classes with bytes z and t (Tables of 7.0):
- * class 0 z/256 of the mass, class k >= 1 the |v| in 2^(k-1) .. 2^k - 1 of a |v| - 1 geometric of
- * ratio theta / 2^32, the last class the whole tail. */
-export function parametricWeights(s, z, t) {
+ * class 0 z/`zeros` of the mass (256ths; 10.0's one-byte tables 65536ths), class k >= 1 the |v| in
+ * 2^(k-1) .. 2^k - 1 of a |v| - 1 geometric of ratio theta / 2^32, the last class the whole tail. */
+export function parametricWeights(s, z, t, zeros = 256) {
   const theta = ONE - (ROOTS[t % 16] >> BigInt(t >> 4));
   const tails = [];
   for (let k = 1; k < s; k++) tails.push(power(theta, 2 ** (k - 1) - 1));
   tails.push(0n);
-  return [BigInt(z) << 32n, ...tails.slice(0, -1).map((tail, k) => BigInt(256 - z) * (tail - tails[k + 1]))];
+  return [BigInt(z) << 32n, ...tails.slice(0, -1).map((tail, k) => BigInt(zeros - z) * (tail - tails[k + 1]))];
 }
 
 /** theta^n in 32-bit fixed point by squaring, every product floored (exact integers). */

@@ -153,12 +153,14 @@ def colour_lines(header, colour, rows, cols):
     colours finer than the ``rows`` x ``cols`` nodes (a version 2 section's header)."""
     if colour is None:
         return []
+    from mzc.codecs.dwt2d import compact
     from mzc.codecs.dwt2d.colour import read_header
 
     targets = [f"{keyword} {' '.join(header.tokens(keyword))}" for keyword in ("colour_psnr", "colour_max_error")
                if header.has(keyword)]
     fields = read_header(colour, header.source)
-    return [f"colour    {len(colour)} bytes (section 3), {', '.join(targets) or 'no target given'}",
+    where = "after the payload" if header.major >= compact.TIGHT_MAJOR else "section 3"
+    return [f"colour    {len(colour)} bytes ({where}), {', '.join(targets) or 'no target given'}",
             *scale_lines(fields[-1], rows, cols)]
 
 

@@ -1,4 +1,5 @@
-"""The wavelet z-grid codec (``mzc-dwt2d 8.0``, 7.0 with the mask as predicted flips; 7.0: the fields of
+"""The wavelet z-grid codec (``mzc-dwt2d 10.0``, 8.0 in a tighter container with short table records; 8.0, 7.0
+with the mask as predicted flips; 7.0: the fields of
 3.1, 3.2 with a raster's crs and raster lines, 4.0 with charts and 6.0 for a raster of integers that decodes
 to integers in a binary container; those are read, and written as the tiles of 5.0; 3.0 and 2.0 are read;
 extension ``.mzw2``): see spec/dwt2d.md.
@@ -53,8 +54,11 @@ FLIPS_VERSION = (8, 0)       # every grid coded whole: 7.0 with the source_verti
                              # flips (mzc.codecs.dwt2d.flips)
 PROGRESSIVE_VERSION = (9, 0)   # opt-in (``progressive``): 8.0 in sections, the mask and band 0, then one detail level
                                # each, coarsest first, so that a prefix of whole sections decodes (coarser)
+TIGHT_VERSION = (10, 0)      # every grid coded whole by default: 8.0 in one section with one CRC-32, its header fields
+                             # without counts where implied, its tables in short records (compact.tight_bytes,
+                             # entropy.choose_short_records)
 GEOREF_SINCE = dict([GEOREFERENCED_VERSION, TILED_VERSION, ROUNDED_VERSION, COMPACT_VERSION,
-                     FLIPS_VERSION, PROGRESSIVE_VERSION])   # major -> first minor
+                     FLIPS_VERSION, PROGRESSIVE_VERSION, TIGHT_VERSION])   # major -> first minor
                                                                                          # with crs, raster
 ROUNDING = "integer"         # the one value of the rounding line
 ROUNDING_ULPS = 16           # the coded bound stays this many units in the last place of the largest value below
@@ -479,7 +483,7 @@ class Prepared:
         lines = self.header_lines(version, step, correction, max_error, rounded is not None)
         if version[0] >= COMPACT_VERSION[0]:
             colour = self.colour and self.colour[1]
-            payload = section_payloads(encoders) if version >= PROGRESSIVE_VERSION else encoder.finish()
+            payload = section_payloads(encoders) if version == PROGRESSIVE_VERSION else encoder.finish()
             return compact.file_bytes(lines[1:-1], payload, colour, version[0]), decoded
         return file_bytes(lines, encoder.finish()), decoded
 
@@ -488,8 +492,9 @@ class Prepared:
         tables and rANS words; before, one encoder for them all (the same object 1 + levels times)."""
         from mzc.codecs.dwt2d.entropy import Encoder
 
-        count = 1 + self.levels if version >= PROGRESSIVE_VERSION else 1
-        encoders = [Encoder(same_size=SAME_SIZE, parametric=self.compact) for _ in range(count)]
+        count = 1 + self.levels if version == PROGRESSIVE_VERSION else 1
+        encoders = [Encoder(same_size=SAME_SIZE, parametric=self.compact, short=version >= TIGHT_VERSION)
+                    for _ in range(count)]
         return encoders * (1 + self.levels) if count == 1 else encoders
 
     def header_lines(self, version, step, correction, max_error, rounded=False):
@@ -559,12 +564,12 @@ def section_payloads(encoders):
 
 
 def written_version(grid, rounded, compact=True):
-    """The version the reference encoder writes a grid coded whole in: 8.0 (``compact`` True), or the
-    container version ``compact`` names (9.0 for ``progressive``, 7.0 for 7.0's tests), or without
+    """The version the reference encoder writes a grid coded whole in: 10.0 (``compact`` True), or the
+    container version ``compact`` names (9.0 for ``progressive``, 7.0 and 8.0 for their tests), or without
     ``compact`` (a tile of a 5.0 file) the 3.x, 4.0 or 6.0 (``rounded``: decoded values rounded to
     integers) it was before."""
     if compact:
-        return FLIPS_VERSION if compact is True else tuple(compact)
+        return TIGHT_VERSION if compact is True else tuple(compact)
     if rounded:
         return ROUNDED_VERSION
     return file_version(grid, VERSION, PROJECTED_VERSION, GEOREFERENCED_VERSION, CHARTED_VERSION)
@@ -880,7 +885,8 @@ def read(data, source="<bytes>", wanted=None):
     rounding = read_rounding(header, fields, ROUNDED_VERSION)
     geometry = w2.Geometry.of(fields["d1"], fields["d2"], fields["origin"], (rows, cols),
                               fields.get("projection", "planar"), fields.get("radius"))
-    decoders = section_decoders(bodies, levels, wanted, source, parametric, progressive)
+    decoders = section_decoders(bodies, levels, wanted, source, parametric, progressive,
+                                short=header.major >= TIGHT_VERSION[0])
     valid = (flips.decode if header.major >= FLIPS_VERSION[0] else decode_mask)(decoders[0], rows, cols)
     relevant = w2.flatten(transform.relevance(valid, wavelet, levels, geometry.periodic))
     qflat = decode_bands(decoders, relevant, steps)
@@ -912,15 +918,15 @@ def read(data, source="<bytes>", wanted=None):
     return grid
 
 
-def section_decoders(bodies, levels, wanted, source, parametric, progressive):
-    """The entropy decoder of each level of bands (band_level) that is decoded: before 9.0, the one
-    payload's (``bodies``' one; ``parametric``: 7.0's table records) for every level; in 9.0
+def section_decoders(bodies, levels, wanted, source, parametric, progressive, short=False):
+    """The entropy decoder of each level of bands (band_level) that is decoded: outside 9.0, the one
+    payload's (``bodies``' one; ``parametric``: 7.0's table records, ``short``: 10.0's) for every level; in 9.0
     (``progressive``), the base section's and each level section's that the file holds, up to
     ``wanted`` (None: all of them)."""
     from mzc.codecs.dwt2d.entropy import Decoder
 
     if not progressive:
-        return [Decoder(bodies[0], source, SAME_SIZE, parametric)] * (1 + levels)
+        return [Decoder(bodies[0], source, SAME_SIZE, parametric, short=short)] * (1 + levels)
     if len(bodies) > 1 + levels:
         raise MzcError(f"{len(bodies) - 1} level sections for {levels} wavelet levels", source=source, field="data")
     base = Decoder(bodies[0], source, SAME_SIZE, True)
@@ -944,7 +950,7 @@ def warn_cut(source, complete, levels, coloured):
 
 
 CODEC = Codec(
-    "dwt2d", encode_grid, read, writer_with_decoded=encode_grid_with_decoded, version=PROGRESSIVE_VERSION,
+    "dwt2d", encode_grid, read, writer_with_decoded=encode_grid_with_decoded, version=TIGHT_VERSION,
     oldest_major=OLDEST_MAJOR, extension=".mzw2", spec="spec/dwt2d.md", window_writer=window_writer,
     summary="2D wavelet of the whole grid, entropy coded, error-bounded", check_options=check_options,
     example={"max_error": 0.05}, keeps_colour=keeps_colour, options=(
@@ -968,8 +974,8 @@ CODEC = Codec(
                help="Code the grid's colours within this many 8-bit levels at every valid node (0: lossless)."),
         Option("progressive", bool, None,
                help="Write mzc-dwt2d 9.0: the levels in sections, coarsest first, each with its own checksum, "
-                    "so that a cut file (or decode --levels K) decodes to a coarser surface; about 60 bytes "
-                    "more on a face. Grids coded whole only."),
+                    "so that a cut file (or decode --levels K) decodes to a coarser surface; about 120 bytes "
+                    "more than the default (10.0) on a face. Grids coded whole only."),
         Option("tile", int, None, 0, metavar="N",
                help="Code the grid in independent N x N tiles (4..4096), each decoded on its own; 0 = whole "
                     "[default: tiles of 1024 above 1024 x 1024 nodes]."),

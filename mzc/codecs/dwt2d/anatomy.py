@@ -27,7 +27,8 @@ def parts(data):
         body = compact.read(data, "<bytes>")[1]
     else:
         body = read_header(data, "<bytes>", "dwt2d", 99, binary=True)[1]
-    decoder = en.Decoder(body, "<bytes>", parametric=compact.is_compact(data))
+    decoder = en.Decoder(body, "<bytes>", parametric=compact.is_compact(data),
+                         short=compact.major(data) == compact.TIGHT_MAJOR)
     tables = decoder.position - len(en.varint(len(decoder.tables)))
     if (compact.major(data) or 0) >= 8:   # the predicted flips: no tables, every bit in the rANS words
         mask = flips.ideal_bits(grid.valid) / 8

@@ -1,9 +1,11 @@
-"""The container of ``mzc-dwt2d 7.0``, ``8.0`` and ``9.0`` (spec/dwt2d.md, Version 7.0): the magic line,
+"""The container of ``mzc-dwt2d 7.0``, ``8.0``, ``9.0`` and ``10.0`` (spec/dwt2d.md, Version 7.0): the magic line,
 then tagged sections, each with its own CRC-32, the first of them the header's fields in binary. 8.0 has one
 more field, the source's vertex count (``source_vertices``), and codes its mask otherwise (Version 8.0).
 9.0 (progressive, Version 9.0) splits 8.0's payload into a base section and one section per detail
 level, coarsest first, each CRC-32 chained to the section before, so that a prefix of whole sections
-decodes (``read_progressive``).
+decodes (``read_progressive``). 10.0 (Version 10.0) has no sections: its header fields (present ones
+as bits, no count a field's keyword implies), its payload (short table records) and colour section in
+one body under one CRC-32 (``tight_bytes``, ``read_tight``).
 
 A 3.x header of a face file took about 215 bytes of text; the same fields take about 60 here. The
 fields are the 3.x header lines (keyword and values), so one reader checks them all
@@ -22,9 +24,10 @@ from mzc.errors import MzcError
 from mzc.formats.header import CHECKSUM, Header, format_number, split_magic
 
 MAGIC = b"mzc-dwt2d 7.0\n"
-MAJORS = (7, 8, 9)              # the majors in this container: 8.0 is 7.0 with source_vertices and the mask as flips,
-                                # 9.0 is 8.0 in sections of levels
+MAJORS = (7, 8, 9, 10)          # the majors in this container: 8.0 is 7.0 with source_vertices and the mask as flips,
+                                # 9.0 is 8.0 in sections of levels, 10.0 is 8.0 in one body (``tight_bytes``)
 PROGRESSIVE_MAJOR = 9
+TIGHT_MAJOR = 10
 HEADER, PAYLOAD, COLOUR = 1, 2, 3   # section tags, in the order they come (COLOUR only in a file with colours)
 BASE, LEVEL = 4, 5              # 9.0: HEADER, BASE, one LEVEL a detail level (coarsest first), then COLOUR
 CRC = struct.Struct("<I")
@@ -42,6 +45,16 @@ FIELDS = {
 COUNTED_MAJOR = 8               # the major whose header has source_vertices (field 23)
 SINCE = {23: COUNTED_MAJOR}     # field id -> the major that added it (the others are 7.0's)
 IDS = {keyword: (number, kind) for number, (keyword, kind) in FIELDS.items()}
+# 10.0: the fields present as one bit each, in this order (the usual ones first, so the bits take 2 bytes), and
+# no value count where a field has one count (d2 left out when it equals d1, a transform whose rotation is
+# the identity given as its translation alone: TRANSLATION values)
+TIGHT_ORDER = (1, 2, 3, 4, 5, 6, 7, 8, 16, 23, 9, 10, 11, 12, 13, 14, 15, 17, 18, 19, 20, 21, 22)
+FIXED_COUNTS = {"rows": 1, "cols": 1, "d1": 1, "d2": 1, "origin": 2, "radius": 1, "chart_count": 1, "levels": 1,
+                "slope_limit": 1, "correction": 1, "max_error": 1, "colour_psnr": 1, "colour_max_error": 1,
+                "source_vertices": 1}
+ROTATION = (0, 1, 2, 4, 5, 6, 8, 9, 10)   # the rotation's places among a transform's 12 values (row by row)
+TRANSLATION = 3
+COLOURED = ("colour_psnr", "colour_max_error")   # a 10.0 header with one of these has a colour section
 SMALL_EXPONENTS, EXPONENT_BIAS = (-8, 6), 8   # a decimal exponent in this range shares the mantissa's varint
 WORDS = ("planar", "cylindrical", "spherical", "bior4.4", "bior2.2", "integer")   # the words of ``e`` fields
 
@@ -79,6 +92,35 @@ def field_bytes(line):
     return varint(number) + varint(len(values)) + b"".join(values)
 
 
+def tight_fields(lines):
+    """10.0's header fields of the header ``lines``: a varint of one bit per field present (TIGHT_ORDER),
+    then each field's values as 7.0 codes them, without the value count of a field in FIXED_COUNTS."""
+    words = {line.split()[0]: line.split()[1:] for line in lines}
+    if words.get("d2") == words["d1"]:
+        words.pop("d2")
+    rotation = [words["transform"][i] for i in ROTATION] if "transform" in words else None
+    if rotation == "1 0 0 0 1 0 0 0 1".split():
+        words["transform"] = words["transform"][TRANSLATION::4]
+    present = [number for number in TIGHT_ORDER if FIELDS[number][0] in words]
+    out = varint(sum(1 << TIGHT_ORDER.index(number) for number in present))
+    for number in present:
+        keyword = FIELDS[number][0]
+        field = field_bytes(" ".join([keyword, *words[keyword]]))[len(varint(number)):]   # without the field id
+        out += field[len(varint(len(words[keyword]))):] if keyword in FIXED_COUNTS else field
+    return out
+
+
+def tight_bytes(lines, payload, colour=None):
+    """The 10.0 file of the header ``lines`` and payload (and colour section, for a grid with colours):
+    the magic line, the varint length of the header fields (``tight_fields``), the fields, the varint
+    length of the payload when a colour section follows it, the payload, the colour section, then one
+    CRC-32 (little-endian) of every byte before it."""
+    fields = tight_fields(lines)
+    head = magic_line((TIGHT_MAJOR, 0)) + varint(len(fields)) + fields
+    body = payload if colour is None else varint(len(payload)) + payload + colour
+    return head + body + CRC.pack(zlib.crc32(head + body))
+
+
 def section(tag, body, before=b""):
     """A section: its tag, the varint length of ``body``, ``body``, then the CRC-32 (little-endian) of
     ``before`` (the magic line, for the header section) and the section's bytes so far."""
@@ -94,11 +136,13 @@ def magic_line(version):
 def file_bytes(lines, payload, colour=None, major=7):
     """The file of ``major`` (7, 8 or 9) of the header ``lines`` (3.x's, without the magic and ``data``
     lines; fields of that major's), the payload (9.0: the list of its base and level sections' bodies)
-    and, for a grid with colours, its colour section (mzc.codecs.dwt2d.colour's bytes)."""
+    and, for a grid with colours, its colour section (mzc.codecs.dwt2d.colour's bytes); 10.0's is ``tight_bytes``."""
+    if major == TIGHT_MAJOR:
+        return tight_bytes(lines, payload, colour)
     fields = b"".join(field_bytes(line) for line in sorted(lines, key=field_number))   # in the table's order
     magic = magic_line((major, 0))
     head = magic + section(HEADER, fields, magic)
-    if major >= PROGRESSIVE_MAJOR:
+    if major == PROGRESSIVE_MAJOR:
         tagged = [(BASE, payload[0]), *((LEVEL, body) for body in payload[1:])]
         return head + chained(tagged + ([] if colour is None else [(COLOUR, colour)]), head[-CRC.size:])
     coloured = b"" if colour is None else section(COLOUR, colour)
@@ -133,7 +177,7 @@ class Reader:
 
     def __init__(self, data, source):
         self.data, self.source = memoryview(data), source
-        self.position = bytes(self.data[:len(MAGIC) + 1]).find(b"\n") + 1   # after the magic line
+        self.position = bytes(self.data[:len(magic_line((MAJORS[-1], 0))) + 1]).find(b"\n") + 1   # after the magic line
         if self.data[self.position - 2:self.position] == b"\r\n":
             raise self.error("the magic line ends in CRLF: the file was copied as text, which changes its binary "
                              "bytes; copy mzc files as binary", CHECKSUM)
@@ -219,14 +263,15 @@ class Reader:
             header.add(keyword, fields.words(kind, end), None)
         return header
 
-    def words(self, kind, end):
-        """The value words of one field of ``kind`` (FIELDS) ending before ``end``."""
+    def words(self, kind, end, count=None):
+        """The value words of one field of ``kind`` (FIELDS) ending before ``end``; ``count`` values
+        when given (10.0's FIXED_COUNTS), else as many as the varint before them says."""
         if kind == "e":
             index = self.varint(end)
             if index >= len(WORDS):
                 raise self.error(f"word number {index} of a header field is not 0..{len(WORDS) - 1}")
             return [WORDS[index]]
-        count = self.varint(end)
+        count = self.varint(end) if count is None else count
         if kind == "t":
             if self.position + count > end:
                 raise self.error("a header field runs past its section")
@@ -257,8 +302,7 @@ def unsigned(value):
 
 def major(data):
     """The major version of a file of this container (its magic line's), else None."""
-    head = bytes(data[:len(MAGIC) - 2])
-    return next((m for m in MAJORS if head == magic_line((m, 0))[:-2]), None)
+    return next((m for m in MAJORS if bytes(data[:len(magic_line((m, 0))) - 2]) == magic_line((m, 0))[:-2]), None)
 
 
 def is_compact(data):
@@ -271,6 +315,8 @@ def read(data, source):
     is the list of its base and level sections' bodies (``read_progressive``)."""
     if major(data) == PROGRESSIVE_MAJOR:
         return read_progressive(data, source)[:3]
+    if major(data) == TIGHT_MAJOR:
+        return read_tight(data, source)
     reader = Reader(data, source)
     header = reader.header()
     payload = reader.section(PAYLOAD)
@@ -278,6 +324,54 @@ def read(data, source):
         else None
     reader.check_end()
     return header, payload, colour
+
+
+def read_tight(data, source):
+    """(Header, payload bytes, colour section bytes or None) of a 10.0 file (``tight_bytes``), its CRC-32 checked
+    first; the header's lines are the ones its fields stand for (d2 and a transform's rotation filled in)."""
+    reader = Reader(data, source)
+    last = len(reader.data) - CRC.size
+    if last < reader.position or zlib.crc32(reader.data[:last]) != CRC.unpack_from(reader.data, last)[0]:
+        raise reader.error("checksum mismatch: the file is corrupt (damaged, cut short or added to)", CHECKSUM)
+    _kind, file_major, minor = split_magic(bytes(reader.data[:reader.position]), source)
+    if minor:
+        raise MzcError(f"mzc-dwt2d version {file_major}.{minor} is newer than this mzc reads ({file_major}.0); "
+                       "upgrade mzc", source=source, line=1)
+    end = reader.varint(last)
+    end += reader.position
+    if end > last:
+        raise reader.error("the header fields run past the end of the file")
+    header = Header(source, file_major, projected=True, georeferenced=True, charted=True, counted=True)
+    present = reader.varint(end)
+    if present >> len(TIGHT_ORDER):
+        raise reader.error(f"unknown header field (bits {present:#x})")
+    for place, number in enumerate(TIGHT_ORDER):
+        if present >> place & 1:
+            keyword, kind = FIELDS[number]
+            header.add(keyword, reader.words(kind, end, FIXED_COUNTS.get(keyword)), None)
+    if reader.position != end:
+        raise reader.error("the header fields end before their length says")
+    filled(header)
+    if not any(header.has(keyword) for keyword in COLOURED):
+        return header, bytes(reader.data[reader.position:last]), None
+    length = reader.varint(last)
+    if reader.position + length > last:
+        raise reader.error("the payload runs past the end of the file")
+    split = reader.position + length
+    return header, bytes(reader.data[reader.position:split]), bytes(reader.data[split:last])
+
+
+def filled(header):
+    """Give a 10.0 Header the fields its writer left out (``tight_fields``), d2 as d1 and a transform of
+    TRANSLATION values with the identity rotation, and put its fields in the table's order (``mzc info``'s)."""
+    if header.has("d1") and not header.has("d2"):
+        header.add("d2", header.fields["d1"][0], None)
+    if header.has("transform") and len(header.fields["transform"][0]) == TRANSLATION:
+        values = ["1", "0", "0", "0", "1", "0", "0", "0", "1"]
+        for place, value in zip(range(TRANSLATION, 12, 4), header.fields["transform"][0]):
+            values.insert(place, value)
+        header.fields["transform"] = (values, None)
+    header.fields = dict(sorted(header.fields.items(), key=lambda item: IDS[item[0]][0]))
 
 
 class Sections(NamedTuple):

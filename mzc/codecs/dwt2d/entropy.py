@@ -73,7 +73,7 @@ def normalised(weights):
     the flooring leaves goes to the first class of largest weight. Integer arithmetic only,
     so every decoder builds the same table.
     """
-    weights = np.asarray(weights, dtype=np.int64)   # at most 2**40 (parametric), so w * 2**14 fits
+    weights = np.asarray(weights, dtype=np.int64)   # summing to at most 2**48 (parametric), so w * 2**14 fits
     total = 1 << TABLE_BITS
     spare = total - len(weights)
     freq = 1 + (weights * spare) // max(int(weights.sum()), 1)
@@ -102,13 +102,14 @@ def power(theta, n):
     return result
 
 
-def parametric_weights(size, zero, ratio):
-    """Integer weights of ``size`` classes: class 0 ``zero``/256 of the mass; class k >= 1 holds |v| in
+def parametric_weights(size, zero, ratio, zeros=ZERO_CODES):
+    """Integer weights of ``size`` classes: class 0 ``zero``/``zeros`` of the mass (``zeros``: 256 in 7.0's
+    records, SHORT_ZERO_CODES in 10.0's one-byte records); class k >= 1 holds |v| in
     2**(k-1) .. 2**k - 1, whose share of the rest is theta**(2**(k-1) - 1) - theta**(2**k - 1), the last
     class taking the whole tail theta**(2**(size-2) - 1)."""
     theta = (1 << PARAMETRIC_BITS) - (ROOTS[ratio % 16] >> (ratio // 16))
     tails = [power(theta, (1 << (k - 1)) - 1) for k in range(1, size)] + [0]
-    return [zero << PARAMETRIC_BITS] + [(ZERO_CODES - zero) * (tails[k] - tails[k + 1]) for k in range(size - 1)]
+    return [zero << PARAMETRIC_BITS] + [(zeros - zero) * (tails[k] - tails[k + 1]) for k in range(size - 1)]
 
 
 def parametric_table(size, zero, ratio):
@@ -125,6 +126,34 @@ def fit_parametric(counts):
     shares = ratio_shares(len(counts))
     cost = -(np.log2(np.maximum(shares, 1e-300)) * counts[1:]).sum(axis=1)
     return zero, int(np.argmin(cost))
+
+
+# 10.0's short table records (spec/dwt2d.md, Version 10.0): one byte per model in the common case. A
+# record byte is REPEAT (the previous model's table), 1 + c for the parametric table of P(0) =
+# SHORT_ZEROS[c // 16] / 65536 and ratio code SHORT_RATIOS[c % 16] (7.0's t), PARAMETRIC (7.0's z and t
+# bytes follow), CODED (weight codes follow) or RESIZED (a varint class count S follows, then the model's
+# record of S classes); a record has the previous table's class count (2 for the first) unless RESIZED.
+# Measured on the 13 faces at 3 RMS targets: 28 B a file fewer than 7.0's records (tables and symbols)
+SHORT_ZERO_CODES = 1 << 16
+SHORT_ZEROS = (1179, 2903, 6881, 15004, 28118, 42952, 54263, 60565, 63477, 64707, 65206, 65405, 65484, 65516,
+               65528)   # 65536 / (1 + e**-x), x = -4 + 13 i / 14 (rounded), P(0) of 0.018 to 0.99988
+SHORT_RATIOS = (0, 4, 8, 12, 16, 20, 24, 30, 36, 44, 52, 62, 74, 88, 104, 124)
+REPEAT, PARAMETRIC, CODED, RESIZED = 0, 241, 242, 243
+SHORT_CODES = len(SHORT_ZEROS) * len(SHORT_RATIOS)   # 240: record bytes 1..240
+
+
+def short_table(size, code):
+    """The frequencies of the one-byte table ``code`` (0..SHORT_CODES-1) of ``size`` classes."""
+    return normalised(parametric_weights(size, SHORT_ZEROS[code // len(SHORT_RATIOS)],
+                                         SHORT_RATIOS[code % len(SHORT_RATIOS)], SHORT_ZERO_CODES))
+
+
+@functools.cache
+def short_tables(size):
+    """(frequencies, log2 probabilities) of the SHORT_CODES one-byte tables of ``size`` classes, a row each
+    (the encoder's: it tries them all)."""
+    freq = np.array([short_table(size, code) for code in range(SHORT_CODES)], dtype=np.int64)
+    return freq, elementary.log2(freq / (1 << TABLE_BITS))
 
 
 def table_codes(counts):
@@ -220,10 +249,11 @@ class Encoder:
     decoder can mix them symbol by symbol (Decoder.read_rows).
     """
 
-    def __init__(self, same_size=(), parametric=False):
+    def __init__(self, same_size=(), parametric=False, short=False):
         self.models, self.values, self.signed = [], [], []
         self.same_size = [list(group) for group in same_size]
         self.parametric = parametric   # 7.0's table records (parametric or weight codes), else 3.x's
+        self.short = short             # 10.0's short table records (choose_short_records)
         self.leading = None            # 8.0: pushes the mask's binary decisions onto the coder, to decode first
         self.prior = None              # 9.0's level sections: the base section's tables, which ``01`` keeps
         self.tables = None             # the tables written, once finished
@@ -256,7 +286,9 @@ class Encoder:
         counts = model_class_counts(models, cls, 0 if shared is None else len(shared))
         chosen = counts if shared is None else shared
         sizes = self.table_sizes(chosen)
-        if self.parametric:
+        if self.short:
+            tables, table_bytes = choose_short_records(chosen, sizes)
+        elif self.parametric:
             tables, table_bytes = choose_records(chosen, sizes, self.prior)
         else:
             codes = choose_tables(chosen, sizes)
@@ -322,6 +354,30 @@ def choose_records(counts, sizes, prior=None):
     return tables, b"".join(out)
 
 
+def choose_short_records(counts, sizes):
+    """(frequencies, bytes) of 10.0's short table records, one per model: each the cheapest, by the ideal
+    bits of its symbols plus the record's own, of REPEAT (the previous table, of as many classes), the
+    best one-byte parametric table, 7.0's parametric table and a table of weight codes, each but REPEAT
+    led by RESIZED and its class count where that is not the previous table's."""
+    tables, out, current = [], [], 2
+    for model_counts, size in zip(counts, sizes):
+        model_counts = model_counts[:size]
+        lead = b"" if size == current else bytes([RESIZED]) + varint(size)
+        freq, logs = short_tables(size)
+        best = int(np.argmin(-(logs * model_counts).sum(axis=1)))
+        codes, fitted = table_codes(model_counts), fit_parametric(model_counts)
+        options = [(freq[best], lead + bytes([1 + best])),
+                   (parametric_table(size, *fitted), lead + bytes([PARAMETRIC, *fitted])),
+                   (frequencies(codes), lead + bytes([CODED]) + encode_table(codes)[1:])]
+        if tables and len(tables[-1]) == size:
+            options.append((tables[-1], bytes([REPEAT])))
+        table, record = min(options, key=lambda option: ideal_bits(option[0], model_counts) + 8 * len(option[1]))
+        tables.append(table)
+        out.append(record)
+        current = size
+    return tables, b"".join(out)
+
+
 def keeps_all(prior, counts, own, own_bytes):
     """True when a 9.0 level section had better keep every table of the base section (``prior``; its
     table count 0) than write its ``own`` (``own_bytes`` of count and records): ``prior`` has a table
@@ -379,11 +435,11 @@ class Decoder:
     (``state``, uint64) and the ``cursor`` (words left, next raw bit, an error detail) in place.
     """
 
-    def __init__(self, payload, source, same_size=(), parametric=False, prior=None):
+    def __init__(self, payload, source, same_size=(), parametric=False, prior=None, short=False):
         self.source = source
         self.data = memoryview(payload)
         self.position = 0
-        self.tables = self.read_tables(parametric, prior)
+        self.tables = self.read_short_tables() if short else self.read_tables(parametric, prior)
         word_count = self.read_varint()
         end = self.position + 4 * word_count
         if end > len(self.data):
@@ -476,15 +532,55 @@ class Decoder:
                     continue
             if not 2 <= size <= MAX_CLASSES:
                 raise self.error(f"model table with {size} classes (allowed 2..{MAX_CLASSES})")
-            end = self.position + (size * CODE_BITS + 7) // 8
-            if end > len(self.data):
-                raise self.error("payload ends inside a model table")
-            bits = np.unpackbits(np.frombuffer(self.data[self.position:end], dtype=np.uint8))
-            self.position = end
-            place_values = 1 << np.arange(CODE_BITS - 1, -1, -1)
-            codes = bits[: size * CODE_BITS].reshape(size, CODE_BITS).astype(np.int64) @ place_values
-            tables.append(frequencies(codes))
+            tables.append(self.coded_table(size))
         return tables
+
+    def coded_table(self, size):
+        """The table of ``size`` weight codes (CODE_BITS each, MSB first, zero-padded) at the position."""
+        end = self.position + (size * CODE_BITS + 7) // 8
+        if end > len(self.data):
+            raise self.error("payload ends inside a model table")
+        bits = np.unpackbits(np.frombuffer(self.data[self.position:end], dtype=np.uint8))
+        self.position = end
+        place_values = 1 << np.arange(CODE_BITS - 1, -1, -1)
+        return frequencies(bits[: size * CODE_BITS].reshape(size, CODE_BITS).astype(np.int64) @ place_values)
+
+    def read_short_tables(self):
+        """10.0's model tables: a varint count, then one short record per model (choose_short_records)."""
+        count = self.read_varint()
+        if count > 4096:
+            raise self.error(f"{count} model tables is more than 4096")
+        tables, size = [], 2
+        for _ in range(count):
+            record = self.byte()
+            if record == RESIZED:
+                size = self.read_varint()
+                if not 2 <= size <= MAX_CLASSES:
+                    raise self.error(f"model table with {size} classes (allowed 2..{MAX_CLASSES})")
+                record = self.byte()
+                if record in (REPEAT, RESIZED):
+                    raise self.error("a resized model table record must give its table")
+            if record == REPEAT:
+                if not tables:
+                    raise self.error("the first model table cannot repeat a previous one")
+                tables.append(tables[-1])
+            elif record <= SHORT_CODES:
+                tables.append(short_table(size, record - 1))
+            elif record == PARAMETRIC:
+                tables.append(parametric_table(size, self.byte(), self.byte()))
+            elif record == CODED:
+                tables.append(self.coded_table(size))
+            else:
+                raise self.error(f"model table record {record} is not 0..{RESIZED}")
+            size = len(tables[-1])
+        return tables
+
+    def byte(self):
+        """The byte at the position."""
+        if self.position >= len(self.data):
+            raise self.error("payload ends inside a model table")
+        self.position += 1
+        return self.data[self.position - 1]
 
     def read(self, model, count):
         """``count`` (signed) values coded with context ``model``."""

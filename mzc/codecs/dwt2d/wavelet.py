@@ -291,8 +291,9 @@ TRANSFORMS = {
                  lambda bands, shape, wavelet, levels, periodic: lifting.inverse(bands, wavelet, periodic),
                  lifting.relevance, 8),   # 5 levels on a face at 0.5 mm: 4-5% smaller than 4
 }
-# 4.0 adds charts side by side, 6.0 rounding, 7.0 a binary container, 8.0 another mask coding: the same transform
-TRANSFORMS[4] = TRANSFORMS[6] = TRANSFORMS[7] = TRANSFORMS[8] = TRANSFORMS[9] = TRANSFORMS[3]
+# 4.0 adds charts side by side, 6.0 rounding, 7.0 a binary container, 8.0 another mask coding, 9.0 sections of
+# levels, 10.0 a tighter container and table records: the same transform
+TRANSFORMS[4] = TRANSFORMS[6] = TRANSFORMS[7] = TRANSFORMS[8] = TRANSFORMS[9] = TRANSFORMS[10] = TRANSFORMS[3]
 
 
 # --------------------------------------------------------------------------- slope-scaled steps
