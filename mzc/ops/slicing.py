@@ -381,15 +381,15 @@ def charted(mesh, align, d1, d2, units, count=None):
     unwelded: a vertex per corner). At 1/200 the cycloidal (long stitches across the gaps between its
     many small charts) and the dragon (its fins) miss floors that they meet at 1/300, while fran and
     the fuze meet them at 1/200 with 2.2x fewer nodes than at 1/300 (issues 28 and 32). The check
-    costs one rebuild of the coarser grid and a distance search (fran 0.3 s, the cycloidal 6 s);
+    costs one rebuild of the coarser grid and a distance search (fran 0.3 s CPU, the cycloidal 7.7 s);
     a mesh that is not low-poly (the ogre, the hand) is charted once, as before."""
     from mzc.ops.charts import chart_surface
 
     frame = frame_for(mesh, align)
     grid = chart_surface(mesh, *frame, chart_spacing(d1, d2, mesh), units, count)
     points = np.asarray(mesh.points, dtype=float)
-    if d1 is not None or d2 is not None or not len(mesh.triangles) or not low_poly(points, mesh.triangles) \
-            or meets_floors(points, mesh.triangles, grid):
+    low_poly_default = d1 is None and d2 is None and len(mesh.triangles) and low_poly(points, mesh.triangles)
+    if not low_poly_default or meets_floors(points, mesh.triangles, grid):
         return grid
     return chart_surface(mesh, *frame, shortened(longest_side(points) / CHART_CAP_NODES_ACROSS), units, count)
 
