@@ -385,13 +385,14 @@ def charted(mesh, align, d1, d2, units, count=None):
     a mesh that is not low-poly (the ogre, the hand) is charted once, as before."""
     from mzc.ops.charts import chart_surface
 
-    frame = frame_for(mesh, align)
-    grid = chart_surface(mesh, *frame, chart_spacing(d1, d2, mesh), units, count)
-    points = np.asarray(mesh.points, dtype=float)
-    low_poly_default = d1 is None and d2 is None and len(mesh.triangles) and low_poly(points, mesh.triangles)
+    frame, spacing, points = frame_for(mesh, align), chart_spacing(d1, d2, mesh), np.asarray(mesh.points, dtype=float)
+    grid = chart_surface(mesh, *frame, spacing, units, count)
+    longest = longest_side(points)   # low_poly last: a mesh whose spacing is not 1/200 skips its median edge again
+    low_poly_default = d1 is None and d2 is None and len(mesh.triangles) \
+        and spacing == shortened(longest / MIN_NODES_ACROSS) and low_poly(points, mesh.triangles)
     if not low_poly_default or meets_floors(points, mesh.triangles, grid):
         return grid
-    return chart_surface(mesh, *frame, shortened(longest_side(points) / CHART_CAP_NODES_ACROSS), units, count)
+    return chart_surface(mesh, *frame, shortened(longest / CHART_CAP_NODES_ACROSS), units, count)
 
 
 def meets_floors(points, triangles, grid):
