@@ -82,7 +82,7 @@ def cpu_times(mesh, d1, diagonal):
 def run_object(job):
     """Every spacing of one object: {"item", "diagonal", "vertices", "s0", "rows": {k: run_grid}}."""
     import mzc
-    from mzc.ops.slicing import chart_spacing, source_spacing
+    from mzc.ops.slicing import source_spacing
 
     path, factors, samples = job
     started = time.perf_counter()
@@ -90,10 +90,10 @@ def run_object(job):
         warnings.simplefilter("ignore")
         mesh = mzc.read(path)
         original = Surface.of(mesh)
-        s0, default = source_spacing(mesh), chart_spacing(None, None, mesh)
-        rows = {str(k): run_grid(mesh, original, k * s0, samples) for k in factors}
-        same = [k for k in factors if k * s0 == default]   # the default's grid is measured already
-        rows[DEFAULT] = dict(rows[str(same[0])]) if same else run_grid(mesh, original, None, samples)
+        s0, default = source_spacing(mesh), run_grid(mesh, original, None, samples)
+        rows = {str(k): dict(default) if k * s0 == default["d1"] else run_grid(mesh, original, k * s0, samples)
+                for k in factors}   # a factor at the default's spacing is its grid, measured already
+        rows[DEFAULT] = default
         if Path(path).stem == TIMED_OBJECT:
             for k, row in rows.items():
                 row["times"] = cpu_times(mesh, None if k == DEFAULT else float(k) * s0, original.diagonal)

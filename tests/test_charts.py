@@ -306,17 +306,52 @@ def test_a_multi_chart_grids_default_spacing_is_coarser_than_its_sources_and_one
     np.testing.assert_array_equal(again.z, one.z)
 
 
-def test_a_mesh_of_few_large_triangles_takes_a_finer_cap_for_its_charts():
-    """Where half the median edge is above 1/200 of the longest side (a CAD part's few large
-    triangles; the coarse torus) the charts take 1/300 of it: the objects measured lose a floor
-    target of issue 28 at any coarser spacing (benchmarks/chart-spacing-results.md), the cycloidal
-    and the dragon at 1/200 (mesh_chart_spacing)."""
-    from mzc.ops.slicing import CHART_CAP_NODES_ACROSS, DATA_SPACING_FRACTION, MIN_NODES_ACROSS, median_edge, shortened
+def test_a_low_poly_mesh_whose_rebuild_meets_the_floors_keeps_its_charts_at_1_200_of_its_longest_side():
+    """The coarse torus (half its median edge above 1/200 of its longest side: ``low_poly``) is
+    smooth between its few large triangles: its charts at 1/200 of the longest side rebuild within
+    issue 28's floors (``meets_floors``), so they stay there, as fran's and the fuze's do."""
+    from mzc.ops.slicing import MIN_NODES_ACROSS, longest_side, low_poly, meets_floors, shortened
 
     mesh = torus()
-    longest = float(np.ptp(mesh.points, axis=0).max())
+    grid = slice_surface(mesh)
+    assert low_poly(mesh.points, mesh.triangles)
+    assert grid.d1 == shortened(longest_side(mesh.points) / MIN_NODES_ACROSS)
+    assert meets_floors(mesh.points, mesh.triangles, grid)
+
+
+def test_a_low_poly_mesh_whose_rebuild_misses_a_floor_takes_charts_at_1_300_of_its_longest_side():
+    """The rough torus's small facets turned every way miss the floors at 1/200 of its longest side
+    (as the cycloidal's stitches and the dragon's fins do), so its default charts take 1/300 of it;
+    a spacing given (--d1) is kept, whatever its rebuild measures."""
+    from mzc.ops.slicing import (
+        CHART_CAP_NODES_ACROSS,
+        MIN_NODES_ACROSS,
+        longest_side,
+        low_poly,
+        meets_floors,
+        shortened,
+    )
+
+    mesh = rough_torus()
+    longest = longest_side(mesh.points)
+    given = slice_surface(mesh, d1=shortened(longest / MIN_NODES_ACROSS))
+    assert low_poly(mesh.points, mesh.triangles) and given.d1 == shortened(longest / MIN_NODES_ACROSS)
+    assert not meets_floors(mesh.points, mesh.triangles, given)
     assert slice_surface(mesh).d1 == shortened(longest / CHART_CAP_NODES_ACROSS)
-    assert DATA_SPACING_FRACTION * median_edge(mesh.points, mesh.triangles) >= longest / MIN_NODES_ACROSS
+
+
+@pytest.mark.parametrize("floor, value", [("FLOOR_RMS", 0.004), ("FLOOR_HAUSDORFF", 0.03), ("FLOOR_NEAR", 0.001)])
+def test_a_rebuild_misses_the_floors_when_any_one_of_them_is_beyond_it(monkeypatch, floor, value):
+    """The coarse torus's charts at 1/200 rebuild within 0.0057% D RMS, 0.045% D Hausdorff and all
+    its area within 0.1% D (50,000 samples each way): each floor set tighter than its figure fails
+    the check on its own."""
+    from mzc.ops import slicing
+
+    mesh = torus()
+    grid = slice_surface(mesh)
+    assert slicing.meets_floors(mesh.points, mesh.triangles, grid)
+    monkeypatch.setattr(slicing, floor, value)
+    assert not slicing.meets_floors(mesh.points, mesh.triangles, grid)
 
 
 def test_a_mesh_dense_in_a_few_places_takes_its_spacing_from_its_area_per_vertex():
@@ -452,15 +487,33 @@ def test_a_piece_wide_enough_keeps_only_the_nodes_its_lines_meet():
     assert (j0 + rows).min() == 1 and (j0 + rows).max() == 3 and (i0 + cols).min() == 1 and (i0 + cols).max() == 10
 
 
-@pytest.mark.parametrize("name", ["dragon.ply", "cycloidal.ply"])
+@pytest.mark.parametrize("name", ["dragon.ply", "cycloidal.ply", "featuretype.ply"])
 def test_the_low_poly_objects_meet_issue_28s_floor(name):
-    """The objects of few large triangles, charted at 1/300 of their longest side (the cycloidal's
-    long stitches, the dragon's coarse bends missed the floor at 1/200) with their thin fins kept:
-    whole-surface RMS within 0.02% of D, 99.5% of the area within 0.1% D, and nothing of the
-    original (the dragon's fins were 1.35% D from its rebuild) beyond 0.75% D."""
+    """The objects of few large triangles, charted at 1/300 of their longest side where 1/200 misses
+    a floor (the cycloidal's long stitches, the dragon's coarse bends), featuretype at 1/200, with
+    their thin fins kept: whole-surface RMS within 0.02% of D, 99.5% of the area within 0.1% D, and
+    nothing of the original (the dragon's fins were 1.35% D from its rebuild) beyond 0.75% D."""
+    mesh, rebuilt, diagonal = sliced_shared_object(name)
+    assert_within_the_floor(mesh, rebuilt, diagonal)
+
+
+@pytest.mark.parametrize("name", ["fran/fran.obj", "fuze/fuze.obj"])
+def test_the_smooth_low_poly_scans_keep_their_charts_at_1_200_and_meet_the_floor(name):
+    """fran's and the fuze's few large triangles lie on a smooth surface: their charts at 1/200 of the
+    longest side rebuild within the floor (issue 32: 2.2x fewer nodes than at 1/300)."""
+    from mzc.ops.slicing import MIN_NODES_ACROSS, longest_side, shortened
+
+    mesh = read_mesh(REPO / "tests" / "data" / "public" / name)
+    grid = slice_surface(mesh)
+    assert grid.d1 == shortened(longest_side(mesh.points) / MIN_NODES_ACROSS)
+    assert_within_the_floor(mesh, grid_to_mesh(grid), float(np.linalg.norm(np.ptp(mesh.points, axis=0))))
+
+
+def assert_within_the_floor(mesh, rebuilt, diagonal):
+    """Issue 28's floor, on 20,000 samples each way: ``rebuilt`` within 0.02% of ``diagonal`` RMS of
+    ``mesh``, 99.5% of the mesh's area within 0.1%, none of it beyond 0.75%."""
     from mzc.measure.metrics import distance_to_mesh, sample_surface, surface_distance
 
-    mesh, rebuilt, diagonal = sliced_shared_object(name)
     assert surface_distance((mesh.points, mesh.triangles), (rebuilt.points, rebuilt.triangles),
                             samples=20_000)["rms"] <= 0.0002 * diagonal
     samples = sample_surface(mesh.points, mesh.triangles, 20_000, np.random.default_rng(0))[0]
