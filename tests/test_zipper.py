@@ -246,6 +246,36 @@ def test_equally_far_neighbours_are_taken_by_number(seed):
     assert np.array_equal(near.distance[inner], np.tile([0.0, 1, 1, 1, 1] + [np.sqrt(2.0)] * 3, (len(inner), 1)))
 
 
+@given(st.integers(1, 30), st.integers(1, 10), st.lists(st.tuples(st.integers(0, 29), st.integers(0, 29),
+                                                                     st.integers(0, 5)), max_size=200))
+def test_the_nearest_kernel_keeps_what_sorting_all_pairs_keeps(rows, columns, pairs):
+    """``_zipper.nearest`` (each pair put into its row's sorted list) keeps in each row the pairs
+    that a lexsort of them all by row, squared distance and number puts first, ties (squared
+    distances of a few values) by number, whatever the order of the pairs."""
+    from mzc.ops import _zipper
+
+    pairs = np.array([(h % rows, t, d) for h, t, d in pairs], dtype=np.int64).reshape(-1, 3)
+    here, there, squared = pairs.T.copy()
+    squared = squared.astype(float)
+    candidate, distance = np.full((rows, columns), 30), np.full((rows, columns), np.inf)
+    _zipper.nearest(here, there, squared, columns, candidate, distance)
+    expected, far = np.full((rows, columns), 30), np.full((rows, columns), np.inf)
+    order = np.lexsort((there, squared, here))
+    column = np.arange(len(order)) - np.searchsorted(here[order], here[order])
+    kept, slot = order[column < columns], column[column < columns]
+    expected[here[kept], slot], far[here[kept], slot] = there[kept], squared[kept]
+    assert np.array_equal(candidate, expected) and np.array_equal(distance, far)
+
+
+def test_the_nearest_kernel_refuses_a_row_out_of_range():
+    from mzc.ops import _zipper
+
+    with pytest.raises(IndexError):
+        _zipper.nearest(np.array([2]), np.array([0]), np.array([1.0]), 1, np.zeros((2, 1), int), np.zeros((2, 1)))
+    with pytest.raises(ValueError):
+        _zipper.nearest(np.array([0]), np.array([0]), np.array([1.0]), 3, np.zeros((2, 1), int), np.zeros((2, 1)))
+
+
 def test_charts_that_coincide_on_a_lattice_edge_are_welded():
     points, triangles = cube()   # its edges on the lattice of spacing 0.1: the charts share their rims
     chart_points, chart_triangles, chart = chart_meshes(points, triangles, 0.1)

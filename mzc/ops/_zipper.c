@@ -1,5 +1,5 @@
-/* The loops of the zipper (mzc/ops/zipper.py): a mesh's boundary edges, the faces of the gap
- * between charts, and the triangles that fill them.
+/* The loops of the zipper (mzc/ops/zipper.py): a mesh's boundary edges, each boundary vertex's
+ * nearest, the faces of the gap between charts, and the triangles that fill them.
  *
  * boundary(triangles, vertex_count, edges) -> count
  *   triangles  int64 (m, 3), corner indices checked to be in 0..vertex_count-1
@@ -9,6 +9,16 @@
  *   Each vertex's outgoing edges are listed (a counting sort by tail), and each edge a -> b
  *   looks for b -> a among b's and for another a -> b among a's: O(m) for meshes of bounded
  *   valence.
+ * nearest(here, there, squared, columns, candidate, distance) -> None
+ *   here, there  int64 (k): pairs of vertices, here in 0..rows-1, there below the value
+ *              ``candidate`` is filled with beforehand
+ *   squared    float64 (k): each pair's squared distance, finite
+ *   candidate  int64 (rows, columns), filled beforehand with a number above every there:
+ *              written, in each row, with the theres of its pairs least by (squared, there),
+ *              in that order
+ *   distance   float64 (rows, columns), filled beforehand with inf: their squared distances
+ *   Each pair is put into its row's sorted list and the last falls off: O(k columns) in any
+ *   order of the pairs (sorting them all by row, distance and number costs several times more).
  * fill(points, source, target, next, rungs, reference, edges, longest, triangles, added) -> (triangles, points)
  *   points     float64 (n, 3): the vertices the faces run through
  *   source, target  int64 (k): each half-edge's first and last vertex, in 0..n-1
@@ -172,6 +182,54 @@ static PyObject *boundary(PyObject *self, PyObject *args) {
     if (count == -2) return PyErr_Format(PyExc_ValueError, "boundary: buffers whose sizes do not fit");
     if (count == -3) return PyErr_Format(PyExc_IndexError, "boundary: a corner index out of range");
     return PyLong_FromSsize_t(count);
+}
+
+/* ---- each boundary vertex's nearest ---- */
+
+/* Puts each pair (here, there, squared) of k into here's row of c, kept least by (squared, there) first. */
+static void nearest_rows(const int64_t *here, const int64_t *there, const double *squared, Py_ssize_t k,
+                         Py_ssize_t c, int64_t *candidate, double *distance) {
+    for (Py_ssize_t i = 0; i < k; i++) {
+        int64_t *row = candidate + here[i] * c;
+        double *far = distance + here[i] * c, d = squared[i];
+        int64_t t = there[i];
+        Py_ssize_t j = c;
+        while (j > 0 && (far[j - 1] > d || (far[j - 1] == d && row[j - 1] > t))) j--;
+        if (j == c) continue;
+        memmove(row + j + 1, row + j, (size_t)(c - j - 1) * sizeof(int64_t));
+        memmove(far + j + 1, far + j, (size_t)(c - j - 1) * sizeof(double));
+        row[j] = t;
+        far[j] = d;
+    }
+}
+
+static PyObject *nearest(PyObject *self, PyObject *args) {
+    (void)self;
+    Py_buffer heres, theres, squareds, candidates, distances;
+    Py_ssize_t c;
+    if (!PyArg_ParseTuple(args, "y*y*y*nw*w*", &heres, &theres, &squareds, &c, &candidates, &distances)) return NULL;
+    const Py_ssize_t word = (Py_ssize_t)sizeof(int64_t);   /* and of a double */
+    Py_ssize_t k = heres.len / word, rows = c > 0 ? candidates.len / (c * word) : 0;
+    const int64_t *here = heres.buf;
+    int status = 1;   /* 1: sizes, 2: an index */
+    if (c > 0 && heres.len == k * word && theres.len == k * word && squareds.len == k * word &&
+        candidates.len == rows * c * word && distances.len == rows * c * word) {
+        status = 0;
+        for (Py_ssize_t i = 0; i < k; i++) status |= (here[i] < 0 || here[i] >= rows) << 1;
+    }
+    if (!status) {
+        Py_BEGIN_ALLOW_THREADS
+        nearest_rows(here, theres.buf, squareds.buf, k, c, candidates.buf, distances.buf);
+        Py_END_ALLOW_THREADS
+    }
+    PyBuffer_Release(&heres);
+    PyBuffer_Release(&theres);
+    PyBuffer_Release(&squareds);
+    PyBuffer_Release(&candidates);
+    PyBuffer_Release(&distances);
+    if (status == 1) return PyErr_Format(PyExc_ValueError, "nearest: buffers whose sizes do not fit");
+    if (status) return PyErr_Format(PyExc_IndexError, "nearest: a row index out of range");
+    Py_RETURN_NONE;
 }
 
 /* ---- filling the faces ---- */
@@ -593,6 +651,8 @@ static PyObject *fill(PyObject *self, PyObject *args) {
 static PyMethodDef methods[] = {
     {"boundary", boundary, METH_VARARGS,
      "boundary(triangles, vertex_count, edges) -> count: write the edges no triangle runs the other way."},
+    {"nearest", nearest, METH_VARARGS,
+     "nearest(here, there, squared, columns, candidate, distance): each row's nearest pairs, nearest first."},
     {"fill", fill, METH_VARARGS,
      "fill(points, source, target, next, rungs, reference, edges, longest, triangles, added) -> "
      "(triangles, points): triangulate "
@@ -601,7 +661,7 @@ static PyMethodDef methods[] = {
 };
 
 static struct PyModuleDef module = {PyModuleDef_HEAD_INIT, "_zipper",
-                                    "The zipper's loops: boundary edges, and the faces of the gap filled.",
+                                    "The zipper's loops: boundary edges, nearest boundary vertices, the gap's faces filled.",
                                     -1, methods, NULL, NULL, NULL, NULL};
 
 PyMODINIT_FUNC PyInit__zipper(void) { return PyModule_Create(&module); }
