@@ -50,9 +50,6 @@ order: the same triangles on every machine (spec/arithmetic.md).
 """
 
 import numpy as np
-from scipy.sparse import csr_matrix
-from scipy.sparse.csgraph import connected_components
-from scipy.spatial import cKDTree
 
 from mzc.vectors import dotted, lengths
 
@@ -195,25 +192,18 @@ class Neighbours:
     Nearest by squared distance (dx dx + dy dy + dz dz < (REACH spacing)^2), a tie by the lower
     number (spec/zgrid.md, Zipping the charts): a KD-tree's k nearest would keep whichever of
     equally far vertices its tree visits first (lattice points on a flat face are equally far),
-    so the tree only finds the pairs within reach and the order is made here (``_zipper.nearest``:
-    each pair put into its vertex's short sorted list, where a lexsort of all the pairs took
-    half the zipper's time)."""
+    so ``_zipper.nearest`` finds them in cells of the space and keeps each vertex's in order
+    (a KD-tree's pairs within reach sorted all at once took half the zipper's time)."""
 
     def __init__(self, points, boundary, spacing):
         from mzc.ops import _zipper
 
         self.vertex = np.unique(boundary[:, :2])
-        size, p, reach = len(self.vertex), points[self.vertex], REACH * spacing
-        pairs = cKDTree(p).query_pairs(reach * (1 + 1e-6), output_type="ndarray")   # a margin: the test below decides
-        here = np.concatenate([np.arange(size), pairs[:, 0], pairs[:, 1]])
-        there = np.concatenate([np.arange(size), pairs[:, 1], pairs[:, 0]])
-        offset = p[there] - p[here]
-        squared = dotted(offset, offset)
-        within = squared < reach * reach
+        size = len(self.vertex)
         count = min(CANDIDATES, size)
         self.candidate, squares = np.full((size, count), size), np.full((size, count), np.inf)
         if count:
-            _zipper.nearest(here[within], there[within], squared[within], count, self.candidate, squares)
+            _zipper.nearest(points[self.vertex], REACH * spacing, self.candidate, squares)
         self.distance = np.sqrt(squares)
 
 
@@ -471,10 +461,13 @@ def wedge_table(arriving, size):
 
 
 def walks(next_):
-    """The walk of each half-edge along ``next_`` (-1: none), numbered from 0."""
-    follows = np.flatnonzero(next_ >= 0)
-    graph = csr_matrix((np.ones(len(follows)), (follows, next_[follows])), shape=(len(next_),) * 2)
-    return connected_components(graph, connection="weak")[1]
+    """The walk of each half-edge along ``next_`` (-1: none), numbered from 0 in the order of
+    their first half-edges: the weakly connected components of the graph of the nexts."""
+    from mzc.ops import _zipper
+
+    walk = np.empty(len(next_), dtype=np.int64)
+    _zipper.walks(np.ascontiguousarray(next_, dtype=np.int64), walk)
+    return walk
 
 
 def triangle_normals(points, triangles):
