@@ -16,10 +16,10 @@
  *   candidate  int64 (n, c), filled with n beforehand: written, in each row v, with the
  *              points w near v (v itself among them), least by (d . d, w) first
  *   distance   float64 (n, c), filled with inf beforehand: their d . d
- *   The points are put into cubic cells at least reach wide (a hash of their cells sorted),
- *   so that each point's near ones lie in its cell's 27, each put into its row's sorted list
- *   and the last falling off: O(n c) for a boundary of bounded density, the same rows in any
- *   order of the work.
+ *   The points are put into cubic cells at least reach wide, sorted by their cells' numbers,
+ *   so that each point's near ones lie in its cell's 27 (9 runs of 3 in that order), each
+ *   put into its row's sorted list and the last falling off: O(n c) for a boundary of
+ *   bounded density, the same rows in any order of the work.
  * walks(next, walk) -> count
  *   next       int64 (k): the half-edge after each (-1 for none, else in 0..k-1)
  *   walk       int64 (k): written with the walk of each, the weakly connected components of
@@ -254,11 +254,11 @@ static int nearest_points(const double *p, Py_ssize_t n, double reach, Py_ssize_
         uint64_t key = cells[start].key;
         for (end = start; end < n && cells[end].key == key; end++) {}
         int64_t at[3] = {(int64_t)(key >> 42), (int64_t)(key >> 21 & 0x1FFFFF), (int64_t)(key & 0x1FFFFF)};
-        for (int around = 0; around < 27; around++) {
-            int64_t x = at[0] + around / 9 - 1, y = at[1] + around / 3 % 3 - 1, z = at[2] + around % 3 - 1;
-            if (x < 0 || y < 0 || z < 0) continue;
-            uint64_t other = (uint64_t)x << 42 | (uint64_t)y << 21 | (uint64_t)z;
-            for (Py_ssize_t j = first_at(cells, n, other); j < n && cells[j].key == other; j++)
+        for (int around = 0; around < 9; around++) {   /* the cells z - 1 .. z + 1 of a column are neighbours in order */
+            int64_t x = at[0] + around / 3 - 1, y = at[1] + around % 3 - 1, z = at[2] > 0 ? at[2] - 1 : 0;
+            if (x < 0 || y < 0) continue;
+            uint64_t column = (uint64_t)x << 42 | (uint64_t)y << 21, last = column | (uint64_t)(at[2] + 1);
+            for (Py_ssize_t j = first_at(cells, n, column | (uint64_t)z); j < n && cells[j].key <= last; j++)
                 for (Py_ssize_t i = start; i < end; i++) {
                     int64_t v = cells[i].point, w = cells[j].point;
                     double dx = p[3 * w] - p[3 * v], dy = p[3 * w + 1] - p[3 * v + 1], dz = p[3 * w + 2] - p[3 * v + 2];

@@ -45,7 +45,7 @@ surface) leaves it open.
    (SHARP) is split at the point of the planes' crease nearest its middle (within
    CREASE_REACH of its length and a spacing), and its triangles with it.
 
-Everything is elementwise numpy, a KD-tree and the C kernel, with IEEE operations in a fixed
+Everything is elementwise numpy and the C kernels (``_zipper.c``), with IEEE operations in a fixed
 order: the same triangles on every machine (spec/arithmetic.md).
 """
 
@@ -260,10 +260,11 @@ class Gap:
         self.p, self.point_count, self.spacing = points[self.vertex], len(points), spacing
         rank = np.full(len(points), -1, dtype=np.int64)
         rank[self.vertex] = np.arange(len(self.vertex))
-        at = (rank[triangles] >= 0).any(axis=1)   # the triangles with a boundary vertex
-        self.normal = vertex_normals(triangle_normals(points, triangles[at]), rank[triangles[at]], len(self.vertex))
+        ranked = rank[triangles]
+        at = (ranked[:, 0] >= 0) | (ranked[:, 1] >= 0) | (ranked[:, 2] >= 0)   # the triangles with a boundary vertex
+        self.normal = vertex_normals(triangle_normals(points, triangles[at]), ranked[at], len(self.vertex))
         self.frame = tangent_frames(self.normal)
-        self.edges = existing_edges(rank[triangles[at]])
+        self.edges = existing_edges(ranked[at])
         self.chart = chart[self.vertex]
         self.source, self.target = rank[boundary[:, 1]], rank[boundary[:, 0]]
         self.beside = triangle_normals(points, triangles[boundary[:, 2]])   # the chart's, across each
@@ -355,7 +356,9 @@ class Gap:
         for column in range(candidate.shape[1]):
             here = np.flatnonzero((candidate[:, column] < size) & loose)
             other = candidate[here, column]
-            keep = (self.chart[other] != self.chart[here]) & ~self.across_air(here, other)
+            apart = self.chart[other] != self.chart[here]   # first: across_air only for the pairs it may drop
+            here, other = here[apart], other[apart]
+            keep = ~self.across_air(here, other)
             here, other = here[keep], other[keep]
             nearest, self.seam[here] = here[~self.seam[here]], True
             partner[nearest], gap[nearest] = candidate[nearest, column], distance[nearest, column]
