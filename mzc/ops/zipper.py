@@ -122,7 +122,7 @@ def creased(points, charted, stitches, boundary, normals, spacing):
     alpha, beta = (along_a - cosine * along_b) / divisor, (along_b - cosine * along_a) / divisor
     crease = middle + alpha[:, None] * na + beta[:, None] * nb
     bent &= (lengths(crease - middle) <= np.minimum(CREASE_REACH * lengths(points[b] - points[a]), spacing)) & \
-        ~np.isin(edges, edge_keys(boundary[:, 0], boundary[:, 1], size))
+        ~among(edges, np.sort(edge_keys(boundary[:, 0], boundary[:, 1], size)))
     new = np.full(len(edges), -1, dtype=np.int64)
     new[bent] = size + np.arange(np.count_nonzero(bent))
     middles = new[which]
@@ -338,7 +338,7 @@ class Gap:
         key = edge_keys(rungs[:, 0], rungs[:, 1], len(self.p))
         _unique, once = np.unique(key, return_index=True)
         once = np.sort(once)
-        return rungs[once][~np.isin(key[once], edge_keys(self.edges[:, 0], self.edges[:, 1], len(self.p)))]
+        return rungs[once][~among(key[once], edge_keys(self.edges[:, 0], self.edges[:, 1], len(self.p)))]
 
     def partners(self, wedge_next):
         """(partner, distance, wedge, far wedge, loose): per boundary vertex, its partner (-1 for
@@ -384,15 +384,16 @@ class Gap:
         to the floor it stands on lies in the wall's wedge only seen between the two); -1 for
         none. A wedge turns clockwise from the reverse of the gap's half-edge that arrives at
         the vertex to the one that leaves it next."""
-        found = np.full(len(at), -1)
-        for column in range(wedges.shape[1]):
-            arrive = wedges[at, column]
-            leave = wedge_next[np.maximum(arrive, 0)]
-            start = self.angles(at, self.source[arrive], frame)
-            span = np.mod(start - self.angles(at, self.target[np.maximum(leave, 0)], frame), 4.0)
-            turn = np.mod(start - self.angles(at, towards, frame), 4.0)
-            inside = (arrive >= 0) & (leave >= 0) & (turn > 0) & ((turn < span) | (span == 0))
-            found = np.where((found < 0) & inside, arrive, found)
+        found, heading = np.full(len(at), -1), self.angles(at, towards, frame)
+        for column in range(wedges.shape[1]):   # each vertex's wedges until one holds the direction
+            open_ = np.flatnonzero((wedges[at, column] >= 0) & (found < 0))
+            arrive, part = wedges[at[open_], column], (frame[0][open_], frame[1][open_])
+            leave = wedge_next[arrive]
+            start = self.angles(at[open_], self.source[arrive], part)
+            span = np.mod(start - self.angles(at[open_], self.target[np.maximum(leave, 0)], part), 4.0)
+            turn = np.mod(start - heading[open_], 4.0)
+            inside = (leave >= 0) & (turn > 0) & ((turn < span) | (span == 0))
+            found[open_[inside]] = arrive[inside]
         return found
 
     def threaded(self, wedge_next, rungs):
@@ -443,6 +444,13 @@ class Gap:
 def edge_keys(a, b, size):
     """One number for each undirected edge a-b between ``size`` vertices."""
     return np.minimum(a, b) * size + np.maximum(a, b)
+
+
+def among(values, keys):
+    """Whether each of ``values`` is one of the ascending ``keys``: np.isin's answer by binary
+    search, without its sort of both (the edges' keys come sorted, from np.unique)."""
+    at = np.minimum(np.searchsorted(keys, values), max(len(keys) - 1, 0))
+    return keys[at] == values if len(keys) else np.zeros(len(values), dtype=bool)
 
 
 def starts(values):
@@ -508,8 +516,8 @@ def pseudo_angle(x, y):
 
 
 def existing_edges(corners):
-    """(k, 2), each row low, high: the edges between the vertices that are not -1 of triangles
-    whose ``corners`` (m, 3) they are."""
+    """(k, 2), each row low, high, the rows ascending: the edges between the vertices that are
+    not -1 of triangles whose ``corners`` (m, 3) they are."""
     a, b = corners, corners[:, [1, 2, 0]]
     both = (a >= 0) & (b >= 0)
     size = corners.max(initial=0) + 1
