@@ -132,8 +132,10 @@ def creased(points, charted, stitches, boundary, normals, spacing):
     place[cut] = np.arange(len(cut))
     tested = place[parent] >= 0
     kept, owner = pieces[tested], place[parent[tested]]
-    used, local = np.unique(np.concatenate([stitches[cut], kept]), return_inverse=True)
-    local = local.ravel()
+    corners = np.concatenate([stitches[cut], kept]).ravel()
+    present = np.zeros(size + len(new), dtype=bool)   # np.unique(return_inverse=True)'s, without its sort
+    present[corners] = True
+    used, local = np.flatnonzero(present), (np.cumsum(present) - 1)[corners]
     parents, kept = local[:3 * len(cut)].reshape(-1, 3), local[3 * len(cut):].reshape(-1, 3)
     at = points[np.minimum(used, size - 1)]
     added = used >= size
