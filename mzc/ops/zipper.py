@@ -264,12 +264,13 @@ class Gap:
         rank[self.vertex] = np.arange(len(self.vertex))
         ranked = rank[triangles]
         at = (ranked[:, 0] >= 0) | (ranked[:, 1] >= 0) | (ranked[:, 2] >= 0)   # the triangles with a boundary vertex
-        self.normal = vertex_normals(triangle_normals(points, triangles[at]), ranked[at], len(self.vertex))
+        facing = triangle_normals(points, triangles[at])
+        self.normal = vertex_normals(facing, ranked[at], len(self.vertex))
         self.frame = tangent_frames(self.normal)
         self.edges = existing_edges(ranked[at])
         self.chart = chart[self.vertex]
         self.source, self.target = rank[boundary[:, 1]], rank[boundary[:, 0]]
-        self.beside = triangle_normals(points, triangles[boundary[:, 2]])   # the chart's, across each
+        self.beside = facing[(np.cumsum(at) - 1)[boundary[:, 2]]]   # the chart's across each, one of those
         self.gap_count = len(self.source)
         wedge_next = self.turns(self.source, self.target)
         rungs = self.rungs(wedge_next)
