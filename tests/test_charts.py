@@ -3,6 +3,8 @@ objects into charts by default while faces, terrain and star-shaped surfaces kee
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from mzc.codecs import dwt2d
 from mzc.codecs.rows import dct
@@ -13,7 +15,7 @@ from mzc.meshes import Mesh, read_mesh
 from mzc.ops.charts import FACING, JOINING, SINGLE_COVER, single_grid_cover
 from mzc.ops.densify import densify_grid
 from mzc.ops.slicing import slice_surface
-from mzc.ops.triangulation import CHART_JUMP_ANGLE, grid_to_mesh
+from mzc.ops.triangulation import CHART_JUMP_ANGLE, GridMesh, chart_meshes, grid_to_mesh
 from mzc.projections import PLANAR_VIEWS, view_rotation
 from mzc.samples import blob, icosphere
 
@@ -191,6 +193,37 @@ def test_a_multi_chart_mesh_is_its_charts_meshes_zipped():
     count = sum(len(part.points) for part in parts)
     np.testing.assert_array_equal(mesh.points[:count], np.concatenate([part.points for part in parts]))
     assert len(mesh.triangles) >= sum(len(part.triangles) for part in parts) and mesh.grid is grid
+
+
+@settings(max_examples=60, deadline=None)
+@given(st.data())
+def test_the_charts_meshes_made_at_once_are_each_charts_own_one_after_the_other(data):
+    """``chart_meshes`` (every chart's cells at once over the grid's values) gives each chart
+    grid's GridMesh one after the other, point for point, triangle for triangle and colour for
+    colour: charts packed side by side (no triangle across two), holes, steps steeper than the
+    jump angle, any view and place on the lattice."""
+    rows, widths = data.draw(st.integers(1, 6)), data.draw(st.lists(st.integers(1, 5), min_size=1, max_size=4))
+    z = np.full((rows, sum(widths)), np.nan)
+    charts, col0 = [], 0
+    for width in widths:
+        height = data.draw(st.integers(1, rows))
+        row0 = data.draw(st.integers(0, rows - height))
+        values = data.draw(st.lists(st.sampled_from([np.nan, 0.0, 0.5, 1.0, 3.0, 40.0, -2.5]),
+                                    min_size=height * width, max_size=height * width))
+        z[row0:row0 + height, col0:col0 + width] = np.reshape(values, (height, width))
+        charts.append(Chart(data.draw(st.sampled_from(sorted(PLANAR_VIEWS))), row0, col0, height, width,
+                            data.draw(st.integers(-5, 5)), data.draw(st.integers(-5, 5))))
+        col0 += width
+    colours = np.random.default_rng(len(charts)).integers(0, 256, (*z.shape, 3), dtype=np.uint8)
+    grid = ZGrid(z, 1.5, 0.75, transform=TRANSFORM, charts=tuple(charts), colors=colours)
+    angle = data.draw(st.sampled_from([0.0, 3.0, CHART_JUMP_ANGLE, 89.0]))
+    points, triangles, chart, node = chart_meshes(grid, angle)
+    parts = [GridMesh(part, angle).mesh() for part in grid.chart_grids()]
+    offsets = np.cumsum([0] + [len(part.points) for part in parts])
+    assert np.array_equal(points, np.concatenate([part.points for part in parts]))
+    assert np.array_equal(triangles, np.concatenate([part.triangles + at for part, at in zip(parts, offsets)]))
+    assert np.array_equal(chart, np.repeat(np.arange(len(parts)), np.diff(offsets)))
+    assert np.array_equal(grid.colors.reshape(-1, 3)[node], np.concatenate([part.colors for part in parts]))
 
 
 @pytest.mark.parametrize("mesh", [torus(), two_spheres()], ids=["torus", "two spheres"])

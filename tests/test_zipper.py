@@ -246,6 +246,58 @@ def test_equally_far_neighbours_are_taken_by_number(seed):
     assert np.array_equal(near.distance[inner], np.tile([0.0, 1, 1, 1, 1] + [np.sqrt(2.0)] * 3, (len(inner), 1)))
 
 
+@given(st.lists(st.tuples(*[st.integers(-6, 6)] * 3), min_size=1, max_size=120), st.integers(1, 10),
+       st.sampled_from([0.5, 1.0, 1.5, 2.0, 3.5]), st.sampled_from([1e-3, 1.0, 1e4]))
+def test_the_nearest_kernel_keeps_what_sorting_all_pairs_keeps(lattice, columns, reach, scale):
+    """``_zipper.nearest`` (points in cells of the space, each one's near ones kept in order) keeps
+    in each row the points that a lexsort of all the pairs by row, squared distance and number
+    puts first among those closer than ``reach``: points on a lattice, so that many are equally
+    far (ties by number), some twice (at distance 0), at scales small and large."""
+    from mzc.ops import _zipper
+
+    points = np.array(lattice, dtype=float) * scale + (1e3, -7.0, 0.25)
+    size, reach = len(points), reach * scale
+    candidate, distance = np.full((size, columns), size), np.full((size, columns), np.inf)
+    _zipper.nearest(points, reach, candidate, distance)
+    here, there = np.repeat(np.arange(size), size), np.tile(np.arange(size), size)
+    offset = points[there] - points[here]
+    squared = offset[:, 0] * offset[:, 0] + offset[:, 1] * offset[:, 1] + offset[:, 2] * offset[:, 2]
+    within = squared < reach * reach
+    here, there, squared = here[within], there[within], squared[within]
+    order = np.lexsort((there, squared, here))
+    column = np.arange(len(order)) - np.searchsorted(here[order], here[order])
+    kept, slot = order[column < columns], column[column < columns]
+    expected, far = np.full((size, columns), size), np.full((size, columns), np.inf)
+    expected[here[kept], slot], far[here[kept], slot] = there[kept], squared[kept]
+    assert np.array_equal(candidate, expected) and np.array_equal(distance, far)
+
+
+def test_the_nearest_kernel_refuses_what_it_cannot_use():
+    from mzc.ops import _zipper
+
+    with pytest.raises(ValueError):   # a table of another number of rows
+        _zipper.nearest(np.zeros((2, 3)), 1.0, np.zeros((3, 1), int), np.zeros((3, 1)))
+    with pytest.raises(ValueError):
+        _zipper.nearest(np.array([[0.0, np.nan, 0.0]]), 1.0, np.zeros((1, 1), int), np.zeros((1, 1)))
+    with pytest.raises(ValueError):
+        _zipper.nearest(np.zeros((1, 3)), 0.0, np.zeros((1, 1), int), np.zeros((1, 1)))
+
+
+@given(st.integers(1, 60).flatmap(lambda k: st.lists(st.integers(-1, k - 1), min_size=k, max_size=k)))
+def test_the_walks_are_the_weakly_connected_components_of_the_nexts(nexts):
+    """``walks`` numbers the half-edges as scipy's weakly connected components of the graph of
+    the nexts do (any nexts, not only a gap's, where no two share one)."""
+    from scipy.sparse import csr_matrix
+    from scipy.sparse.csgraph import connected_components
+
+    from mzc.ops.zipper import walks
+
+    nexts = np.array(nexts, dtype=np.int64)
+    follows = np.flatnonzero(nexts >= 0)
+    graph = csr_matrix((np.ones(len(follows)), (follows, nexts[follows])), shape=(len(nexts),) * 2)
+    assert np.array_equal(walks(nexts), connected_components(graph, connection="weak")[1])
+
+
 def test_charts_that_coincide_on_a_lattice_edge_are_welded():
     points, triangles = cube()   # its edges on the lattice of spacing 0.1: the charts share their rims
     chart_points, chart_triangles, chart = chart_meshes(points, triangles, 0.1)

@@ -1,5 +1,5 @@
-/* The loops of the zipper (mzc/ops/zipper.py): a mesh's boundary edges, the faces of the gap
- * between charts, and the triangles that fill them.
+/* The loops of the zipper (mzc/ops/zipper.py): a mesh's boundary edges, each boundary vertex's
+ * nearest, the walks of the gap's half-edges, and the triangles that fill the gap's faces.
  *
  * boundary(triangles, vertex_count, edges) -> count
  *   triangles  int64 (m, 3), corner indices checked to be in 0..vertex_count-1
@@ -9,6 +9,22 @@
  *   Each vertex's outgoing edges are listed (a counting sort by tail), and each edge a -> b
  *   looks for b -> a among b's and for another a -> b among a's: O(m) for meshes of bounded
  *   valence.
+ * nearest(points, reach, candidate, distance) -> None
+ *   points     float64 (n, 3)
+ *   reach      pairs of points with d . d < reach reach are near (d = p(w) - p(v), each
+ *              product and sum an IEEE operation in that order)
+ *   candidate  int64 (n, c), filled with n beforehand: written, in each row v, with the
+ *              points w near v (v itself among them), least by (d . d, w) first
+ *   distance   float64 (n, c), filled with inf beforehand: their d . d
+ *   The points are put into cubic cells at least reach wide, sorted by their cells' numbers,
+ *   so that each point's near ones lie in its cell's 27 (9 runs of 3 in that order), each
+ *   put into its row's sorted list and the last falling off: O(n c) for a boundary of
+ *   bounded density, the same rows in any order of the work.
+ * walks(next, walk) -> count
+ *   next       int64 (k): the half-edge after each (-1 for none, else in 0..k-1)
+ *   walk       int64 (k): written with the walk of each, the weakly connected components of
+ *              the graph of the nexts, numbered 0.. in the order of their first half-edges
+ *   Returns the number of walks (a union-find).
  * fill(points, source, target, next, rungs, reference, edges, longest, triangles, added) -> (triangles, points)
  *   points     float64 (n, 3): the vertices the faces run through
  *   source, target  int64 (k): each half-edge's first and last vertex, in 0..n-1
@@ -171,6 +187,158 @@ static PyObject *boundary(PyObject *self, PyObject *args) {
     if (count == -1) return PyErr_NoMemory();
     if (count == -2) return PyErr_Format(PyExc_ValueError, "boundary: buffers whose sizes do not fit");
     if (count == -3) return PyErr_Format(PyExc_IndexError, "boundary: a corner index out of range");
+    return PyLong_FromSsize_t(count);
+}
+
+/* ---- each boundary vertex's nearest ---- */
+
+#define CELL_BITS 20   /* cells along each axis at most 2^20: a cell's key is its three numbers, 21 bits each */
+
+typedef struct {
+    uint64_t key;
+    int64_t point;
+} Celled;
+
+static int by_key(const void *a, const void *b) {
+    uint64_t x = ((const Celled *)a)->key, y = ((const Celled *)b)->key;
+    return (x > y) - (x < y);
+}
+
+/* Puts w (d . d = squared) into v's row of c, kept least by (squared, number) first. */
+static void keep_nearest(int64_t *row, double *far, Py_ssize_t c, int64_t w, double squared) {
+    Py_ssize_t j = c;
+    while (j > 0 && (far[j - 1] > squared || (far[j - 1] == squared && row[j - 1] > w))) j--;
+    if (j == c) return;
+    memmove(row + j + 1, row + j, (size_t)(c - j - 1) * sizeof(int64_t));
+    memmove(far + j + 1, far + j, (size_t)(c - j - 1) * sizeof(double));
+    row[j] = w;
+    far[j] = squared;
+}
+
+/* The first of the n sorted cells whose key is at least key. */
+static Py_ssize_t first_at(const Celled *cells, Py_ssize_t n, uint64_t key) {
+    Py_ssize_t low = 0, high = n;
+    while (low < high) {
+        Py_ssize_t middle = low + (high - low) / 2;
+        if (cells[middle].key < key) low = middle + 1;
+        else high = middle;
+    }
+    return low;
+}
+
+/* Fills each row of the n points' candidate and distance tables (c columns); -1 without memory. */
+static int nearest_points(const double *p, Py_ssize_t n, double reach, Py_ssize_t c, int64_t *candidate,
+                          double *distance) {
+    if (!n) return 0;
+    Celled *cells = malloc((size_t)n * sizeof(Celled));
+    if (!cells) return -1;
+    double low[3], cell = reach;
+    for (int k = 0; k < 3; k++) {
+        double high = low[k] = p[k];
+        for (Py_ssize_t v = 1; v < n; v++) {
+            low[k] = fmin(low[k], p[3 * v + k]);
+            high = fmax(high, p[3 * v + k]);
+        }
+        cell = fmax(cell, (high - low[k]) / (double)(1 << CELL_BITS));
+    }
+    cell *= 1.0 + 1e-6;   /* wider than reach by more than the rounding of the cells' numbers */
+    for (Py_ssize_t v = 0; v < n; v++) {
+        uint64_t key = 0;
+        for (int k = 0; k < 3; k++) key = key << 21 | (uint64_t)((p[3 * v + k] - low[k]) / cell);
+        cells[v].key = key;
+        cells[v].point = v;
+    }
+    qsort(cells, (size_t)n, sizeof(Celled), by_key);
+    double limit = reach * reach;
+    for (Py_ssize_t start = 0, end; start < n; start = end) {
+        uint64_t key = cells[start].key;
+        for (end = start; end < n && cells[end].key == key; end++) {}
+        int64_t at[3] = {(int64_t)(key >> 42), (int64_t)(key >> 21 & 0x1FFFFF), (int64_t)(key & 0x1FFFFF)};
+        for (int around = 0; around < 9; around++) {   /* the cells z - 1 .. z + 1 of a column are neighbours in order */
+            int64_t x = at[0] + around / 3 - 1, y = at[1] + around % 3 - 1, z = at[2] > 0 ? at[2] - 1 : 0;
+            if (x < 0 || y < 0) continue;
+            uint64_t column = (uint64_t)x << 42 | (uint64_t)y << 21, last = column | (uint64_t)(at[2] + 1);
+            for (Py_ssize_t j = first_at(cells, n, column | (uint64_t)z); j < n && cells[j].key <= last; j++)
+                for (Py_ssize_t i = start; i < end; i++) {
+                    int64_t v = cells[i].point, w = cells[j].point;
+                    double dx = p[3 * w] - p[3 * v], dy = p[3 * w + 1] - p[3 * v + 1], dz = p[3 * w + 2] - p[3 * v + 2];
+                    double squared = dx * dx + dy * dy + dz * dz;
+                    if (squared < limit) keep_nearest(candidate + v * c, distance + v * c, c, w, squared);
+                }
+        }
+    }
+    free(cells);
+    return 0;
+}
+
+static PyObject *nearest(PyObject *self, PyObject *args) {
+    (void)self;
+    Py_buffer points, candidates, distances;
+    double reach;
+    if (!PyArg_ParseTuple(args, "y*dw*w*", &points, &reach, &candidates, &distances)) return NULL;
+    const Py_ssize_t word = (Py_ssize_t)sizeof(int64_t);   /* and of a double */
+    Py_ssize_t n = points.len / (3 * word), c = n ? candidates.len / (n * word) : 0;
+    int status = 1;   /* 1: sizes or values, 3: memory */
+    if (points.len == 3 * n * word && candidates.len == n * c * word && distances.len == n * c * word &&
+        reach > 0 && isfinite(reach)) {
+        const double *p = points.buf;
+        status = 0;
+        for (Py_ssize_t i = 0; i < 3 * n; i++) status |= !isfinite(p[i]);
+    }
+    if (!status) {
+        Py_BEGIN_ALLOW_THREADS
+        if (nearest_points(points.buf, n, reach, c, candidates.buf, distances.buf)) status = 3;
+        Py_END_ALLOW_THREADS
+    }
+    PyBuffer_Release(&points);
+    PyBuffer_Release(&candidates);
+    PyBuffer_Release(&distances);
+    if (status == 1)
+        return PyErr_Format(PyExc_ValueError, "nearest: buffers whose sizes do not fit, or values not finite");
+    if (status == 3) return PyErr_NoMemory();
+    Py_RETURN_NONE;
+}
+
+/* ---- the walks of the half-edges ---- */
+
+/* The root of v's set, the path to it halved on the way. */
+static int64_t root_of(int64_t *parent, int64_t v) {
+    while (parent[v] != v) v = parent[v] = parent[parent[v]];
+    return v;
+}
+
+static PyObject *walks(PyObject *self, PyObject *args) {
+    (void)self;
+    Py_buffer nexts, walked;
+    if (!PyArg_ParseTuple(args, "y*w*", &nexts, &walked)) return NULL;
+    const Py_ssize_t word = (Py_ssize_t)sizeof(int64_t);
+    Py_ssize_t k = nexts.len / word, count = 0;
+    const int64_t *next = nexts.buf;
+    int64_t *walk = walked.buf;
+    int status = nexts.len == k * word && walked.len == k * word ? 0 : 1;   /* 1: sizes, 2: an index */
+    for (Py_ssize_t h = 0; !status && h < k; h++)
+        if (next[h] < -1 || next[h] >= k) status = 2;
+    if (!status) {   /* walk serves as the parent of each in the union-find, then as its root's number */
+        int64_t *number = malloc(((size_t)k + 1) * sizeof(int64_t));
+        if (!number) status = 3;
+        for (Py_ssize_t h = 0; !status && h < k; h++) walk[h] = h;
+        for (Py_ssize_t h = 0; !status && h < k; h++) {
+            if (next[h] < 0) continue;
+            int64_t a = root_of(walk, h), b = root_of(walk, next[h]);
+            if (a != b) walk[a > b ? a : b] = a < b ? a : b;   /* the lower root: each set's is its least */
+        }
+        for (Py_ssize_t h = 0; !status && h < k; h++) {
+            int64_t root = root_of(walk, h);
+            number[h] = root == h ? count++ : number[root];   /* a root is its set's least: numbered first */
+        }
+        if (!status) memcpy(walk, number, (size_t)k * sizeof(int64_t));
+        free(number);
+    }
+    PyBuffer_Release(&nexts);
+    PyBuffer_Release(&walked);
+    if (status == 1) return PyErr_Format(PyExc_ValueError, "walks: buffers whose sizes do not fit");
+    if (status == 2) return PyErr_Format(PyExc_IndexError, "walks: a next out of range");
+    if (status == 3) return PyErr_NoMemory();
     return PyLong_FromSsize_t(count);
 }
 
@@ -593,6 +761,9 @@ static PyObject *fill(PyObject *self, PyObject *args) {
 static PyMethodDef methods[] = {
     {"boundary", boundary, METH_VARARGS,
      "boundary(triangles, vertex_count, edges) -> count: write the edges no triangle runs the other way."},
+    {"nearest", nearest, METH_VARARGS,
+     "nearest(points, reach, candidate, distance): each point's nearest within reach, nearest first."},
+    {"walks", walks, METH_VARARGS, "walks(next, walk) -> count: number the walks along next."},
     {"fill", fill, METH_VARARGS,
      "fill(points, source, target, next, rungs, reference, edges, longest, triangles, added) -> "
      "(triangles, points): triangulate "
@@ -601,7 +772,7 @@ static PyMethodDef methods[] = {
 };
 
 static struct PyModuleDef module = {PyModuleDef_HEAD_INIT, "_zipper",
-                                    "The zipper's loops: boundary edges, and the faces of the gap filled.",
+                                    "The zipper's loops: boundary edges, nearest boundary vertices, walks, the gap's faces filled.",
                                     -1, methods, NULL, NULL, NULL, NULL};
 
 PyMODINIT_FUNC PyInit__zipper(void) { return PyModule_Create(&module); }

@@ -45,14 +45,11 @@ surface) leaves it open.
    (SHARP) is split at the point of the planes' crease nearest its middle (within
    CREASE_REACH of its length and a spacing), and its triangles with it.
 
-Everything is elementwise numpy, a KD-tree and the C kernel, with IEEE operations in a fixed
+Everything is elementwise numpy and the C kernels (``_zipper.c``), with IEEE operations in a fixed
 order: the same triangles on every machine (spec/arithmetic.md).
 """
 
 import numpy as np
-from scipy.sparse import csr_matrix
-from scipy.sparse.csgraph import connected_components
-from scipy.spatial import cKDTree
 
 from mzc.vectors import dotted, lengths
 
@@ -125,7 +122,7 @@ def creased(points, charted, stitches, boundary, normals, spacing):
     alpha, beta = (along_a - cosine * along_b) / divisor, (along_b - cosine * along_a) / divisor
     crease = middle + alpha[:, None] * na + beta[:, None] * nb
     bent &= (lengths(crease - middle) <= np.minimum(CREASE_REACH * lengths(points[b] - points[a]), spacing)) & \
-        ~np.isin(edges, edge_keys(boundary[:, 0], boundary[:, 1], size))
+        ~among(edges, np.sort(edge_keys(boundary[:, 0], boundary[:, 1], size)))
     new = np.full(len(edges), -1, dtype=np.int64)
     new[bent] = size + np.arange(np.count_nonzero(bent))
     middles = new[which]
@@ -135,8 +132,10 @@ def creased(points, charted, stitches, boundary, normals, spacing):
     place[cut] = np.arange(len(cut))
     tested = place[parent] >= 0
     kept, owner = pieces[tested], place[parent[tested]]
-    used, local = np.unique(np.concatenate([stitches[cut], kept]), return_inverse=True)
-    local = local.ravel()
+    corners = np.concatenate([stitches[cut], kept]).ravel()
+    present = np.zeros(size + len(new), dtype=bool)   # np.unique(return_inverse=True)'s, without its sort
+    present[corners] = True
+    used, local = np.flatnonzero(present), (np.cumsum(present) - 1)[corners]
     parents, kept = local[:3 * len(cut)].reshape(-1, 3), local[3 * len(cut):].reshape(-1, 3)
     at = points[np.minimum(used, size - 1)]
     added = used >= size
@@ -195,25 +194,19 @@ class Neighbours:
     Nearest by squared distance (dx dx + dy dy + dz dz < (REACH spacing)^2), a tie by the lower
     number (spec/zgrid.md, Zipping the charts): a KD-tree's k nearest would keep whichever of
     equally far vertices its tree visits first (lattice points on a flat face are equally far),
-    so the tree only finds the pairs within reach and the order is made here."""
+    so ``_zipper.nearest`` finds them in cells of the space and keeps each vertex's in order
+    (a KD-tree's pairs within reach sorted all at once took half the zipper's time)."""
 
     def __init__(self, points, boundary, spacing):
+        from mzc.ops import _zipper
+
         self.vertex = np.unique(boundary[:, :2])
-        size, p, reach = len(self.vertex), points[self.vertex], REACH * spacing
-        pairs = cKDTree(p).query_pairs(reach * (1 + 1e-6), output_type="ndarray")   # a margin: the test below decides
-        here = np.concatenate([np.arange(size), pairs[:, 0], pairs[:, 1]])
-        there = np.concatenate([np.arange(size), pairs[:, 1], pairs[:, 0]])
-        offset = p[there] - p[here]
-        squared = dotted(offset, offset)
-        within = squared < reach * reach
-        here, there, squared = here[within], there[within], squared[within]
-        order = np.lexsort((there, squared, here))
-        here, there, squared = here[order], there[order], squared[order]
-        column = np.arange(len(here)) - np.searchsorted(here, here)
-        kept, count = column < CANDIDATES, min(CANDIDATES, size)
-        self.candidate, self.distance = np.full((size, count), size), np.full((size, count), np.inf)
-        self.candidate[here[kept], column[kept]] = there[kept]
-        self.distance[here[kept], column[kept]] = np.sqrt(squared[kept])
+        size = len(self.vertex)
+        count = min(CANDIDATES, size)
+        self.candidate, squares = np.full((size, count), size), np.full((size, count), np.inf)
+        if count:
+            _zipper.nearest(points[self.vertex], REACH * spacing, self.candidate, squares)
+        self.distance = np.sqrt(squares)
 
 
 def welded(points, triangles, chart, boundary, near, spacing):
@@ -269,13 +262,15 @@ class Gap:
         self.p, self.point_count, self.spacing = points[self.vertex], len(points), spacing
         rank = np.full(len(points), -1, dtype=np.int64)
         rank[self.vertex] = np.arange(len(self.vertex))
-        at = (rank[triangles] >= 0).any(axis=1)   # the triangles with a boundary vertex
-        self.normal = vertex_normals(triangle_normals(points, triangles[at]), rank[triangles[at]], len(self.vertex))
+        ranked = rank[triangles]
+        at = (ranked[:, 0] >= 0) | (ranked[:, 1] >= 0) | (ranked[:, 2] >= 0)   # the triangles with a boundary vertex
+        facing = triangle_normals(points, triangles[at])
+        self.normal = vertex_normals(facing, ranked[at], len(self.vertex))
         self.frame = tangent_frames(self.normal)
-        self.edges = existing_edges(rank[triangles[at]])
+        self.edges = existing_edges(ranked[at])
         self.chart = chart[self.vertex]
         self.source, self.target = rank[boundary[:, 1]], rank[boundary[:, 0]]
-        self.beside = triangle_normals(points, triangles[boundary[:, 2]])   # the chart's, across each
+        self.beside = facing[(np.cumsum(at) - 1)[boundary[:, 2]]]   # the chart's across each, one of those
         self.gap_count = len(self.source)
         wedge_next = self.turns(self.source, self.target)
         rungs = self.rungs(wedge_next)
@@ -346,7 +341,7 @@ class Gap:
         key = edge_keys(rungs[:, 0], rungs[:, 1], len(self.p))
         _unique, once = np.unique(key, return_index=True)
         once = np.sort(once)
-        return rungs[once][~np.isin(key[once], edge_keys(self.edges[:, 0], self.edges[:, 1], len(self.p)))]
+        return rungs[once][~among(key[once], edge_keys(self.edges[:, 0], self.edges[:, 1], len(self.p)))]
 
     def partners(self, wedge_next):
         """(partner, distance, wedge, far wedge, loose): per boundary vertex, its partner (-1 for
@@ -364,7 +359,9 @@ class Gap:
         for column in range(candidate.shape[1]):
             here = np.flatnonzero((candidate[:, column] < size) & loose)
             other = candidate[here, column]
-            keep = (self.chart[other] != self.chart[here]) & ~self.across_air(here, other)
+            apart = self.chart[other] != self.chart[here]   # first: across_air only for the pairs it may drop
+            here, other = here[apart], other[apart]
+            keep = ~self.across_air(here, other)
             here, other = here[keep], other[keep]
             nearest, self.seam[here] = here[~self.seam[here]], True
             partner[nearest], gap[nearest] = candidate[nearest, column], distance[nearest, column]
@@ -390,15 +387,16 @@ class Gap:
         to the floor it stands on lies in the wall's wedge only seen between the two); -1 for
         none. A wedge turns clockwise from the reverse of the gap's half-edge that arrives at
         the vertex to the one that leaves it next."""
-        found = np.full(len(at), -1)
-        for column in range(wedges.shape[1]):
-            arrive = wedges[at, column]
-            leave = wedge_next[np.maximum(arrive, 0)]
-            start = self.angles(at, self.source[arrive], frame)
-            span = np.mod(start - self.angles(at, self.target[np.maximum(leave, 0)], frame), 4.0)
-            turn = np.mod(start - self.angles(at, towards, frame), 4.0)
-            inside = (arrive >= 0) & (leave >= 0) & (turn > 0) & ((turn < span) | (span == 0))
-            found = np.where((found < 0) & inside, arrive, found)
+        found, heading = np.full(len(at), -1), self.angles(at, towards, frame)
+        for column in range(wedges.shape[1]):   # each vertex's wedges until one holds the direction
+            open_ = np.flatnonzero((wedges[at, column] >= 0) & (found < 0))
+            arrive, part = wedges[at[open_], column], (frame[0][open_], frame[1][open_])
+            leave = wedge_next[arrive]
+            start = self.angles(at[open_], self.source[arrive], part)
+            span = np.mod(start - self.angles(at[open_], self.target[np.maximum(leave, 0)], part), 4.0)
+            turn = np.mod(start - heading[open_], 4.0)
+            inside = (leave >= 0) & (turn > 0) & ((turn < span) | (span == 0))
+            found[open_[inside]] = arrive[inside]
         return found
 
     def threaded(self, wedge_next, rungs):
@@ -451,6 +449,13 @@ def edge_keys(a, b, size):
     return np.minimum(a, b) * size + np.maximum(a, b)
 
 
+def among(values, keys):
+    """Whether each of ``values`` is one of the ascending ``keys``: np.isin's answer by binary
+    search, without its sort of both (the edges' keys come sorted, from np.unique)."""
+    at = np.minimum(np.searchsorted(keys, values), max(len(keys) - 1, 0))
+    return keys[at] == values if len(keys) else np.zeros(len(values), dtype=bool)
+
+
 def starts(values):
     """Where each run of equal ``values`` starts (a boolean per value)."""
     new = np.ones(len(values), dtype=bool)
@@ -470,16 +475,24 @@ def wedge_table(arriving, size):
 
 
 def walks(next_):
-    """The walk of each half-edge along ``next_`` (-1: none), numbered from 0."""
-    follows = np.flatnonzero(next_ >= 0)
-    graph = csr_matrix((np.ones(len(follows)), (follows, next_[follows])), shape=(len(next_),) * 2)
-    return connected_components(graph, connection="weak")[1]
+    """The walk of each half-edge along ``next_`` (-1: none), numbered from 0 in the order of
+    their first half-edges: the weakly connected components of the graph of the nexts."""
+    from mzc.ops import _zipper
+
+    walk = np.empty(len(next_), dtype=np.int64)
+    _zipper.walks(np.ascontiguousarray(next_, dtype=np.int64), walk)
+    return walk
 
 
 def triangle_normals(points, triangles):
-    """The normal of each triangle, its length twice the area."""
-    corners = points[triangles]
-    return np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
+    """The normal of each triangle, its length twice the area: the cross product of its edges
+    from corner 0, each component as np.cross computes it (a fourth of its time, without its
+    (m, 3, 3) gather and moved axes)."""
+    x, y, z = points.T
+    a, b, c = triangles.T
+    ux, uy, uz = x[b] - x[a], y[b] - y[a], z[b] - z[a]
+    vx, vy, vz = x[c] - x[a], y[c] - y[a], z[c] - z[a]
+    return np.stack([uy * vz - uz * vy, uz * vx - ux * vz, ux * vy - uy * vx], axis=-1)
 
 
 def vertex_normals(normal, corners, size):
@@ -511,8 +524,8 @@ def pseudo_angle(x, y):
 
 
 def existing_edges(corners):
-    """(k, 2), each row low, high: the edges between the vertices that are not -1 of triangles
-    whose ``corners`` (m, 3) they are."""
+    """(k, 2), each row low, high, the rows ascending: the edges between the vertices that are
+    not -1 of triangles whose ``corners`` (m, 3) they are."""
     a, b = corners, corners[:, [1, 2, 0]]
     both = (a >= 0) & (b >= 0)
     size = corners.max(initial=0) + 1
