@@ -3,8 +3,6 @@ parametric model tables decode to exactly what 3.x decodes from the same integer
 the faces, and every damaged file is refused in one line."""
 
 import math
-import subprocess
-import sys
 from pathlib import Path
 
 import numpy as np
@@ -21,6 +19,7 @@ from mzc.formats.header import format_number
 from mzc.grid import ZGrid
 
 from codec_contract import fixture_bytes
+from conftest import run_mzc
 
 FACES = Path(__file__).resolve().parents[2] / "shared" / "data" / "faces"
 
@@ -117,9 +116,7 @@ def test_parametric_payloads_decode_exactly(runs):
 def test_the_fixture_shows_its_fields_as_text_lines_in_info(tmp_path):
     path = tmp_path / "a.mzw2"
     path.write_bytes(fixture_bytes("dwt2d-7.0.mzw2"))
-    out = subprocess.run([sys.executable, "-m", "mzc", "info", str(path)], capture_output=True, text=True)
-    assert out.returncode == 0, out.stderr
-    lines = out.stdout.splitlines()
+    lines = run_mzc("info", path, check=True).stdout.decode().splitlines()
     assert "format    mzc-dwt2d 7.0" in lines
     for line in ("  raster area down int16", "  rounding integer", "  nodata -32768", "  max_error 2",
                  "  slope_limit 1", "  levels 1"):
@@ -149,10 +146,10 @@ def test_the_command_line_refuses_a_damaged_file_in_one_line(tmp_path, cut):
     bad = tmp_path / "bad.mzw2"
     bad.write_bytes(data[:cut] if cut > 0 else data[:100] + bytes([data[100] ^ 1]) + data[101:])
     out = tmp_path / "out.zg"
-    run = subprocess.run([sys.executable, "-m", "mzc", "decode", str(bad), "-o", str(out)],
-                         capture_output=True, text=True)
+    run = run_mzc("decode", bad, "-o", out)
+    stderr = run.stderr.decode()
     assert run.returncode == 1 and not out.exists()
-    assert len(run.stderr.splitlines()) == 1 and "bad.mzw2" in run.stderr and "Traceback" not in run.stderr
+    assert len(stderr.splitlines()) == 1 and "bad.mzw2" in stderr and "Traceback" not in stderr
 
 
 @settings(max_examples=300, deadline=None, derandomize=True)

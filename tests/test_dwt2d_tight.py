@@ -19,6 +19,7 @@ from mzc.formats.header import format_number
 from mzc.grid import ZGrid
 
 from codec_contract import fixture_bytes
+from conftest import run_mzc
 
 FIXED_COST_3_1 = 593   # the median fixed cost of a face file in 3.1 (benchmarks/fixed-cost-3.1.md)
 
@@ -121,14 +122,9 @@ def test_every_kind_of_record_is_written_on_a_face():
 
 
 def test_the_fixture_shows_its_fields_and_colours_in_info(tmp_path):
-    import subprocess
-    import sys
-
     path = tmp_path / "a.mzw2"
     path.write_bytes(fixture_bytes("dwt2d-10.0.mzw2"))
-    out = subprocess.run([sys.executable, "-m", "mzc", "info", str(path)], capture_output=True, text=True)
-    assert out.returncode == 0, out.stderr
-    lines = out.stdout.splitlines()
+    lines = run_mzc("info", path, check=True).stdout.decode().splitlines()
     assert "format    mzc-dwt2d 10.0" in lines
     for line in ("  d1 0.75", "  d2 0.75", "  transform 1 0 0 1.5 0 1 0 -20.25 0 0 1 7", "  source_vertices 4096",
                  "  colour_max_error 2", "  raster area down float64", "  max_error 0.05"):
