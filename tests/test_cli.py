@@ -215,7 +215,7 @@ def test_encode_dwt2d_holds_its_max_error_through_the_cli(mzc, tmp_path):
     grid = tmp_path / "bump.zg"
     mzc("slice", mesh, "--d1", "1", "--d2", "1", "-o", grid, check=True)
     packed = mzc("encode", "--dwt2d", "--max-error", "0.02", grid, check=True).stdout
-    assert packed.startswith(b"mzc-dwt2d 10.0\n") and len(packed) < grid.stat().st_size / 10
+    assert packed.startswith(b"mzc-dwt2d 10.1\n") and len(packed) < grid.stat().st_size / 10   # band models pay here
     decoded = tmp_path / "back.zg"
     mzc("decode", "-o", decoded, input=packed, check=True)
     report = json.loads(mzc("diff", grid, decoded, "--json", check=True).stdout)

@@ -533,9 +533,9 @@ def test_the_mask_spans_of_any_flips_stay_inside_the_grid(rows, cols, data):
 
 def spec_examples():
     """(file bytes, expected values) of every worked example in spec/dwt2d.md (2.0, 3.0, 3.1, 5.0, 6.0, 5.1, 7.0,
-    7.0 with colours, 8.0, 9.0, the cut 9.0 file of its first sections and 10.0)."""
+    7.0 with colours, 8.0, 9.0, the cut 9.0 file of its first sections, 10.0 and 10.1)."""
     examples = [(data, values) for data, values, _id in contract_examples("dwt2d")]
-    assert len(examples) == 12
+    assert len(examples) == 13
     return examples
 
 
@@ -544,8 +544,9 @@ def spec_example():
     return spec_examples()[0]
 
 
-@pytest.mark.parametrize("data, expected", spec_examples(), ids=["2.0", "3.0", "3.1", "5.0", "6.0", "5.1", "7.0",
-                                                                   "7.0 colour", "8.0", "9.0", "9.0 cut", "10.0"])
+@pytest.mark.parametrize("data, expected", spec_examples(),
+                         ids=["2.0", "3.0", "3.1", "5.0", "6.0", "5.1", "7.0", "7.0 colour", "8.0", "9.0", "9.0 cut",
+                              "10.0", "10.1"])
 def test_spec_examples_decode_to_the_expected_values(data, expected):
     decoded = dwt2d.read(data, "spec")
     assert np.array_equal(np.isnan(decoded.z), np.isnan(expected))

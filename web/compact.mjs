@@ -17,10 +17,10 @@ const FIELDS = {
   7: ["radius", "d"], 8: ["transform", "d"], 9: ["units", "t"], 10: ["nodata", "t"], 11: ["crs", "t"],
   12: ["raster", "t"], 13: ["chart_count", "u"], 14: ["wavelet", "e"], 15: ["levels", "u"], 16: ["steps", "d"],
   17: ["slope_limit", "d"], 18: ["correction", "d"], 19: ["rounding", "e"], 20: ["max_error", "d"],
-  21: ["colour_psnr", "d"], 22: ["colour_max_error", "d"], 23: ["source_vertices", "u"],
+  21: ["colour_psnr", "d"], 22: ["colour_max_error", "d"], 23: ["source_vertices", "u"], 24: ["band_models", "u"],
 };
-/** Field id -> the major that added it (8.0: the source's vertex count); the others are 7.0's. */
-const SINCE = { 23: 8 };
+/** Field id -> the major that added it (8.0: the source's vertex count, 10.1: band_models); the others are 7.0's. */
+const SINCE = { 23: 8, 24: 10 };
 const WORDS = ["planar", "cylindrical", "spherical", "bior4.4", "bior2.2", "integer"];
 export const HEADER = 1;
 export const PAYLOAD = 2;
@@ -67,14 +67,17 @@ function readSection(bytes, cursor, tag, before) {
   return body;
 }
 
-/** 10.0's field ids in the order of its presence bits, and the fields of one count (Version 10.0). */
-const TIGHT_ORDER = [1, 2, 3, 4, 5, 6, 7, 8, 16, 23, 9, 10, 11, 12, 13, 14, 15, 17, 18, 19, 20, 21, 22];
+/** 10.x's field ids in the order of its presence bits, and the fields of one count (Version 10.0). */
+const TIGHT_ORDER = [1, 2, 3, 4, 5, 6, 7, 8, 16, 23, 9, 10, 11, 12, 13, 14, 15, 17, 18, 19, 20, 21, 22, 24];
+/** By minor: how many of TIGHT_ORDER's places a file may use (10.1 adds band_models). */
+export const TIGHT_PLACES = [23, 24];
 const FIXED_COUNTS = { rows: 1, cols: 1, d1: 1, d2: 1, origin: 2, radius: 1, chart_count: 1, levels: 1, slope_limit: 1,
-  correction: 1, max_error: 1, colour_psnr: 1, colour_max_error: 1, source_vertices: 1 };
+  correction: 1, max_error: 1, colour_psnr: 1, colour_max_error: 1, source_vertices: 1, band_models: 1 };
 
-/** The parts of a 10.0 file (`magicEnd`: the end of its magic line): {fields (keyword -> words, d2 and a
- * translation-only transform filled in), payload, colour (null without)}, its CRC-32 checked first. */
-export function tightParts(bytes, magicEnd) {
+/** The parts of a 10.x file (`magicEnd`: the end of its magic line; `minor`: its minor version, one this
+ * decoder reads): {fields (keyword -> words, d2 and a translation-only transform filled in), payload,
+ * colour (null without)}, its CRC-32 checked first. */
+export function tightParts(bytes, magicEnd, minor) {
   checkBinary(bytes, magicEnd);
   const last = bytes.length - 4;
   if (last < magicEnd || crc32(bytes.subarray(0, last)) !== new DataView(bytes.buffer, bytes.byteOffset + last, 4).getUint32(0, true)) {
@@ -86,7 +89,7 @@ export function tightParts(bytes, magicEnd) {
   if (end > last) fail("data", "the header fields run past the end of the file");
   const cursor = new Cursor(bytes, outer.at, end);
   const present = cursor.varint();
-  if (present >> BigInt(TIGHT_ORDER.length)) fail("data", `unknown header field (bits 0x${present.toString(16)})`);
+  if (present >> BigInt(TIGHT_PLACES[minor])) fail("data", `unknown header field (bits 0x${present.toString(16)})`);
   const fields = new Map();
   TIGHT_ORDER.forEach((id, place) => {
     if (!((present >> BigInt(place)) & 1n)) return;
@@ -183,7 +186,7 @@ export function headerLines(body, major) {
   const fields = new Map();
   while (cursor.at < body.length) {
     const id = cursor.varint();
-    const field = id <= 23n && (SINCE[Number(id)] ?? 7) <= major ? FIELDS[Number(id)] : undefined;
+    const field = id <= 24n && (SINCE[Number(id)] ?? 7) <= major ? FIELDS[Number(id)] : undefined;
     if (!field) fail("data", `unknown header field ${id}`);
     const [keyword, type] = field;
     if (fields.has(keyword)) fail("data", `header field ${keyword} given twice`);

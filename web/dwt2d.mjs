@@ -1,13 +1,14 @@
 // The 2D wavelet codec `mzc-dwt2d` 2.0, 3.0, 3.1, 3.2, 4.0, 5.0 (tiles), 5.1 (rounded tiles), 6.0 (rounding)
 // and 7.0 (binary header and parametric tables, in the sections of compact.mjs), 8.0 (7.0, its mask in mask.mjs),
 // 9.0 (8.0 in sections of levels, coarsest first: a prefix of whole sections decodes to a coarser surface),
-// 10.0 (8.0 in one body under one CRC-32, its header fields tighter, its table records short)
+// 10.0 (8.0 in one body under one CRC-32, its header fields tighter, its table records short), 10.1 (10.0 with
+// band_models: each detail band its own contexts' models)
 // (spec/dwt2d.md): header, payload (tables, rANS, raw bits), mask, relevance, bands, slope
 // factors, inverse transform, correction layer, chart records, rounding and tiles.
 
 import { fail, headerFields, fieldReader, gridFields, checkChecksum, checkCharts, VIEWS, crc32, splitHeader, parseMagic } from "./header.mjs";
 import { cos } from "./elementary.mjs";
-import { sections, progressiveSections, tightParts, headerLines, HEADER, PAYLOAD, COLOUR } from "./compact.mjs";
+import { sections, progressiveSections, tightParts, headerLines, HEADER, PAYLOAD, COLOUR, TIGHT_PLACES } from "./compact.mjs";
 import { inversePeriodized2d, relevantPeriodized2d } from "./pywt.mjs";
 import { decodeFlips } from "./mask.mjs";
 
@@ -28,8 +29,9 @@ export function decodeDwt2d(bytes, lines, body, magic) {
  * `withColours` decodes it over the grid's valid nodes). A 10.0 file's CRC-32 is checked before
  * its minor version, as mzc does. */
 export function decodeCompact(bytes, magicEnd, magic) {
-  const parts = magic.major >= 10 ? tightParts(bytes, magicEnd) : null;
-  if (magic.minor) fail(null, `mzc-dwt2d version ${magic.major}.${magic.minor} is newer than this decoder reads (${magic.major}.0); upgrade`);
+  const newest = magic.major >= 10 ? TIGHT_PLACES.length - 1 : 0;
+  const parts = magic.major >= 10 ? tightParts(bytes, magicEnd, Math.min(magic.minor, newest)) : null;
+  if (magic.minor > newest) fail(null, `mzc-dwt2d version ${magic.major}.${magic.minor} is newer than this decoder reads (${magic.major}.${newest}); upgrade`);
   if (magic.major === 9) return decodeProgressive(bytes, magicEnd, magic);
   if (parts) {
     const grid = decodeWhole(parts.fields, [parts.payload], magic);
@@ -67,7 +69,8 @@ function decodeWhole(fields, bodies, magic) {
   const p = codecFields(h, magic, grid);
   if (bodies.length > 1 + p.levels) fail("data", `${bodies.length - 1} level sections for ${p.levels} wavelet levels`);
   const payloads = [];
-  for (const body of bodies) payloads.push(new Payload(body, magic.major >= 7, magic.major === 9 && payloads.length ? payloads[0].tables : null, magic.major >= 10));
+  const groups = sameSizeGroups(3 * p.levels, p.bandModels);
+  for (const body of bodies) payloads.push(new Payload(body, magic.major >= 7, magic.major === 9 && payloads.length ? payloads[0].tables : null, magic.major >= 10, groups));
   const z = decodeGrid(payloads, grid, p);
   const charts = p.chartCount ? chartRecords(payloads[0], p.chartCount, grid, z) : undefined;
   for (const payload of payloads) payload.finish();
@@ -170,7 +173,8 @@ function codecFields(h, magic, grid) {
   const chartCount = magic.major >= 4 ? h.integer("chart_count", 1, 65536, false) : undefined;
   const rounding = magic.major >= 6 && h.word("rounding", ["integer"], false) === "integer";
   const flips = magic.major >= 8;   // 8.0's mask: predicted flips (mask.mjs)
-  return { v3, wavelet, levels, steps: bandSteps(written, levels), slopeLimit, correction, chartCount, rounding, flips };
+  const bandModels = magic.major >= 10 && h.integer("band_models", 1, 1, false) === 1;   // 10.1
+  return { v3, wavelet, levels, steps: bandSteps(written, levels), slopeLimit, correction, chartCount, rounding, flips, bandModels };
 }
 
 /** The step of each of the 1 + 3L bands from the `steps` line's 1, 2 or 1 + 3L values. */
@@ -193,14 +197,26 @@ const WEIGHT_MANTISSA = [16, 19, 23, 27];
 const TOTAL = 16384;
 const range = (from, to) => Array.from({ length: to - from + 1 }, (_, i) => from + i);
 const SAME_SIZE = [range(4, 14), range(15, 22), range(23, 26)];   // detail, sign and correction tables
+const BAND_MODELS = 34;   // 10.1's band_models: detail band b >= 2's context 0, after the chart models (27..33)
+
+/** The model of context 0 of detail band b: band 1's (4) for every band, but with `bandModels` (10.1). */
+function detailModel(b, bandModels) {
+  return bandModels && b >= 2 ? BAND_MODELS + 11 * (b - 2) : 4;
+}
+
+/** SAME_SIZE, and with `bandModels` the group of each of the `bands` detail bands' own models. */
+function sameSizeGroups(bands, bandModels) {
+  if (!bandModels) return SAME_SIZE;
+  return [...SAME_SIZE, ...range(2, bands).map((b) => range(detailModel(b, true), detailModel(b, true) + 10))];
+}
 
 /** 10.0's one-byte tables: P(0) in 65536ths and ratio codes (Tables of 10.0). */
 const SHORT_ZEROS = [1179, 2903, 6881, 15004, 28118, 42952, 54263, 60565, 63477, 64707, 65206, 65405, 65484, 65516, 65528];
 const SHORT_RATIOS = [0, 4, 8, 12, 16, 20, 24, 30, 36, 44, 52, 62, 74, 88, 104, 124];
 
-/** `tables`, refused when the tables of one group (mixed in one row) have different class counts. */
-function sameSizes(tables) {
-  for (const group of SAME_SIZE) {
+/** `tables`, refused when the tables of one of `groups` (mixed in one row) have different class counts. */
+function sameSizes(tables, groups) {
+  for (const group of groups) {
     const sizes = new Set(group.filter((m) => m < tables.length).map((m) => tables[m].freq.length));
     if (sizes.size > 1) fail("tables", "tables mixed in one row have different class counts");
   }
@@ -210,10 +226,12 @@ function sameSizes(tables) {
 /** A reader of the payload: its tables, its rANS state and its raw-bit cursor. */
 export class Payload {
   /** `parametric`: 7.0's table records (Tables of 7.0), else 3.x's; `prior`: a 9.0 level section's, the
-   * base section's tables (Tables of 9.0); `short`: 10.0's records (Tables of 10.0). */
-  constructor(bytes, parametric, prior = null, short = false) {
+   * base section's tables (Tables of 9.0); `short`: 10.0's records (Tables of 10.0); `groups`: the models
+   * whose tables must have one class count. */
+  constructor(bytes, parametric, prior = null, short = false, groups = SAME_SIZE) {
     this.bytes = bytes;
     this.at = 0;
+    this.groups = groups;
     this.tables = short ? this.readShortTables() : this.readTables(parametric, prior);
     this.startRans();
     this.bitAt = this.at * 8;
@@ -256,7 +274,7 @@ export class Payload {
       if (s < 2 || s > 48) fail("tables", `a table of ${s} classes (2..48)`);
       tables.push(frequencyTable(kind ? this.parametricRecord(s) : this.codeWeights(s)));
     }
-    return sameSizes(tables);
+    return sameSizes(tables, this.groups);
   }
 
   /** 10.0's M model tables: one record a model, of the class count S (2 at first) of the table before,
@@ -288,7 +306,7 @@ export class Payload {
       }
       s = tables[t].freq.length;
     }
-    return sameSizes(tables);
+    return sameSizes(tables, this.groups);
   }
 
   /** The byte at the cursor (of a table record). */
@@ -586,6 +604,7 @@ export function decodeDetail(payload, q, b, shapes, relevant, p) {
   const context = new Int8Array(cols);   // each column's context in the pass
   const order = new Int32Array(cols);    // the pass's coded columns by context, then column
   const starts = new Int32Array(12);
+  const first = detailModel(b, p.bandModels);
   for (let r = 0; r < rows; r++) {
     const row = r * cols;
     const parentRow = ps ? Math.min(r >> 1, ps.rows - 1) * ps.cols : 0;   // (r >> 1, c >> 1), held to the parent band
@@ -612,7 +631,7 @@ export function decodeDetail(payload, q, b, shapes, relevant, p) {
       for (let c = odd; c < cols; c += 2) if (mask[row + c]) order[starts[context[c]]++] = c;
       for (let i = 0; i < coded; i++) {
         const c = order[i];
-        out[row + c] = payload.unsigned(4 + context[c]);
+        out[row + c] = payload.unsigned(first + context[c]);
       }
       for (let c = odd; c < cols; c += 2) {
         const i = row + c;

@@ -57,6 +57,8 @@ PROGRESSIVE_VERSION = (9, 0)   # opt-in (``progressive``): 8.0 in sections, the 
 TIGHT_VERSION = (10, 0)      # every grid coded whole by default: 8.0 in one section with one CRC-32, its header fields
                              # without counts where implied, its tables in short records (compact.tight_bytes,
                              # entropy.choose_short_records)
+BAND_MODELS_VERSION = (10, 1)   # 10.0 with ``band_models 1``: each detail band its own contexts' models, written
+                                # where that makes the file smaller (a large DEM's, by 4-6%)
 GEOREF_SINCE = dict([GEOREFERENCED_VERSION, TILED_VERSION, ROUNDED_VERSION, COMPACT_VERSION,
                      FLIPS_VERSION, PROGRESSIVE_VERSION, TIGHT_VERSION])   # major -> first minor
                                                                                          # with crs, raster
@@ -105,10 +107,14 @@ MASK_COUNT, MASK_SAME, MASK_NEW, APPROXIMATION = 0, 1, 2, 3
 FIRST_DETAIL = 4
 
 
-def detail_model(context):
-    """Model id of a detail context; every detail band shares them (measured: 2.5-4% smaller
-    files than one set per band, whose tables cost more than their sharper statistics save)."""
-    return FIRST_DETAIL + context
+def detail_model(context, band=1, band_models=False):
+    """Model id of a detail context of band ``band`` (1..3L). Every detail band shares band 1's models
+    (on a face: 2.5-4% smaller files than one set per band, whose tables cost more than their sharper
+    statistics save), but in a file with ``band_models`` (10.1: a large DEM's, 4-6% smaller), where
+    band b >= 2 has its own, after the chart models."""
+    if not band_models or band == 1:
+        return FIRST_DETAIL + context
+    return chart_model(CHART_FIELDS) + CONTEXTS * (band - 2) + context
 
 
 def sign_model(context):
@@ -126,9 +132,18 @@ def chart_model(field):
     return correction_model(4) + field
 
 
+CHART_FIELDS = 7
 # the detail, sign and correction contexts are each mixed within a row: one class count each
 SAME_SIZE = (range(detail_model(0), detail_model(CONTEXTS)), range(sign_model(0), sign_model(2 * SIGN_CONTEXTS)),
              range(correction_model(0), correction_model(4)))
+
+
+def same_size(bands=0, band_models=False):
+    """SAME_SIZE, and with ``band_models`` the group of each of the ``bands`` detail bands' own models."""
+    if not band_models:
+        return SAME_SIZE
+    return SAME_SIZE + tuple(range(detail_model(0, band, True), detail_model(CONTEXTS, band, True))
+                             for band in range(2, bands + 1))
 
 
 # --------------------------------------------------------------------------- mask
@@ -288,7 +303,7 @@ def encode_charts(encoder, charts):
     records = np.array([[CHART_VIEWS.index(c.view), c.row0, c.col0, c.rows, c.cols, c.i0, c.j0] for c in charts],
                        dtype=np.int64)
     records[1:, 1:3] -= records[:-1, 1:3].copy()
-    for field in range(7):
+    for field in range(CHART_FIELDS):
         encoder.add(chart_model(field), records[:, field])
 
 
@@ -296,7 +311,7 @@ def decode_charts(decoder, count):
     """The ``count`` Charts of ``encode_charts``' records (the ZGrid checks where they lie)."""
     from mzc.grid import Chart
 
-    records = np.stack([decoder.read(chart_model(field), count) for field in range(7)], axis=1)
+    records = np.stack([decoder.read(chart_model(field), count) for field in range(CHART_FIELDS)], axis=1)
     if ((records[:, 0] < 0) | (records[:, 0] >= len(CHART_VIEWS))).any():   # a negative one indexed from the end
         raise decoder.error("a chart's view number is not 0..5")
     records[:, 1:3] = np.cumsum(records[:, 1:3], axis=0)
@@ -319,11 +334,11 @@ def band_level(index):
     return (index + 2) // 3
 
 
-def encode_bands(encoders, qflat, relevant, steps):
+def encode_bands(encoders, qflat, relevant, steps, band_models=False):
     """The approximation as planar differences, then each detail band row by row, each row in
-    two passes (even columns, odd columns): the pass's magnitudes by context, then the signs
-    of its nonzero values left to right; each band's integers to ``encoders[band_level(index)]``
-    (8.0: one encoder for all of them)."""
+    two passes (even columns, odd columns): the pass's magnitudes by context (``band_models``: the
+    band's own models, detail_model), then the signs of its nonzero values left to right; each
+    band's integers to ``encoders[band_level(index)]`` (8.0: one encoder for all of them)."""
     encoders[0].add(APPROXIMATION, np.diff(np.diff(qflat[0], axis=0, prepend=0), axis=1, prepend=0))
     for index in range(1, len(qflat)):
         band = qflat[index]
@@ -335,13 +350,14 @@ def encode_bands(encoders, qflat, relevant, steps):
         signed_rows, signed_cols = np.nonzero(band)
         # each pass's magnitudes (in row_order's order), then its signs (left to right, as np.nonzero lists them)
         order = stable_order(np.concatenate([2 * pass_index(rows, cols), 2 * pass_index(signed_rows, signed_cols) + 1]))
-        models = np.concatenate([detail_model(ks), sign_model(sign_context[signed_rows, signed_cols])])
+        models = np.concatenate([detail_model(ks, index, band_models),
+                                 sign_model(sign_context[signed_rows, signed_cols])])
         values = np.concatenate([np.abs(band[rows, cols]),
                                  sign_bits(band[signed_rows, signed_cols], predicted[signed_rows, signed_cols])])
         encoders[band_level(index)].add(models[order], values[order], signed=False)
 
 
-def decode_bands(decoders, relevant, steps):
+def decode_bands(decoders, relevant, steps, band_models=False):
     """Inverse of encode_bands: the flat list of integer bands, those of the levels ``decoders``
     does not reach zero (a prefix of a 9.0 file, or ``read``'s ``wanted``)."""
     residual = decoders[0].read(APPROXIMATION, relevant[0].size).reshape(relevant[0].shape)
@@ -352,7 +368,7 @@ def decode_bands(decoders, relevant, steps):
             continue
         parent = parent_map(qflat, index, relevant[index].shape)
         band = decoders[band_level(index)].read_rows(
-            relevant[index], activity(qflat, index, steps, parent), THRESHOLDS, detail_model(0),
+            relevant[index], activity(qflat, index, steps, parent), THRESHOLDS, detail_model(0, index, band_models),
             signs=(parent, SIGN_WEIGHTS[(index - 1) % 3], sign_model(0), SIGN_CONTEXTS))
         qflat.append(band)
     return qflat
@@ -460,44 +476,60 @@ class Prepared:
         integer samples coded at ``max_error`` (rounding_bounds), whose decoded values are rounded."""
         qflat, decoded = self.decoded(step) if decoded is None else decoded
         version = written_version(self.grid, rounded is not None, self.compact)
-        encoders = self.encoders(version)
+        correction, k = 0.0, None
+        if max_error is not None:
+            correction = w2.correction_step(max_error)
+            k = np.zeros(self.valid.shape, dtype=np.int64)
+            k[self.valid] = w2.corrections(self.grid.z, decoded, self.valid, correction)
+            decoded[self.valid] += correction * k[self.valid]   # as the decoder adds them
+        if rounded is not None:
+            decoded[self.valid] = rounded_values(decoded[self.valid], self.grid.raster.sample)   # as the decoder
+            max_error = rounded
+        decoded[~self.valid] = np.nan
+        payload, band_models = min(((self.payload(version, qflat, step, k, layout), layout)
+                                    for layout in self.layouts(version)), key=lambda option: len(option[0]))
+        lines = self.header_lines(BAND_MODELS_VERSION if band_models else version, step, correction, max_error,
+                                  rounded is not None, band_models)
+        if version[0] >= COMPACT_VERSION[0]:
+            colour = self.colour and self.colour[1]
+            return compact.file_bytes(lines[1:-1], payload, colour, version[0]), decoded
+        return file_bytes(lines, payload), decoded
+
+    def layouts(self, version):
+        """The layouts of the detail models ``encode`` tries, the first kept on a tie: shared by every
+        band (10.0), and in 10.x with wavelet levels one set per band (10.1's ``band_models``)."""
+        return (False, True) if version == TIGHT_VERSION and self.levels else (False,)
+
+    def payload(self, version, qflat, step, k=None, band_models=False):
+        """The payload of ``version`` (9.0: the list of its sections' bodies) of the integer bands ``qflat``
+        at the detail step ``step``, the corrections ``k`` (a grid, or None) and the grid's charts;
+        ``band_models``: 10.1's models of each detail band's own (``encode`` writes the smaller)."""
+        encoders = self.encoders(version, band_models)
         encoder = encoders[0]
         if version >= FLIPS_VERSION:   # the mask's bits go through the rANS coder before everything else
             encoder.leading = functools.partial(flips.encode, valid=self.valid)
         else:
             encode_mask(encoder, self.valid)
-        encode_bands(encoders, qflat, self.relevant, expand_steps(header_steps(step, self.levels), len(qflat)))
-        correction = 0.0
-        if max_error is not None:
-            correction = w2.correction_step(max_error)
-            k = np.zeros(self.valid.shape, dtype=np.int64)
-            k[self.valid] = w2.corrections(self.grid.z, decoded, self.valid, correction)
+        encode_bands(encoders, qflat, self.relevant, expand_steps(header_steps(step, self.levels), len(qflat)),
+                     band_models)
+        if k is not None:
             encode_corrections(encoders[-1], k, self.valid)   # with the finest level: 9.0's last section
-            decoded[self.valid] += correction * k[self.valid]   # as the decoder adds them
         if self.grid.charts is not None:
             encode_charts(encoder, self.grid.charts)
-        if rounded is not None:
-            decoded[self.valid] = rounded_values(decoded[self.valid], self.grid.raster.sample)   # as the decoder
-            max_error = rounded
-        decoded[~self.valid] = np.nan
-        lines = self.header_lines(version, step, correction, max_error, rounded is not None)
-        if version[0] >= COMPACT_VERSION[0]:
-            colour = self.colour and self.colour[1]
-            payload = section_payloads(encoders) if version == PROGRESSIVE_VERSION else encoder.finish()
-            return compact.file_bytes(lines[1:-1], payload, colour, version[0]), decoded
-        return file_bytes(lines, encoder.finish()), decoded
+        return section_payloads(encoders) if version == PROGRESSIVE_VERSION else encoder.finish()
 
-    def encoders(self, version):
+    def encoders(self, version, band_models=False):
         """The entropy encoder of each level of bands (band_level): 9.0's one per section, its own
         tables and rANS words; before, one encoder for them all (the same object 1 + levels times)."""
         from mzc.codecs.dwt2d.entropy import Encoder
 
         count = 1 + self.levels if version == PROGRESSIVE_VERSION else 1
-        encoders = [Encoder(same_size=SAME_SIZE, parametric=self.compact, short=version >= TIGHT_VERSION)
+        groups = same_size(3 * self.levels, band_models)
+        encoders = [Encoder(same_size=groups, parametric=self.compact, short=version >= TIGHT_VERSION)
                     for _ in range(count)]
         return encoders * (1 + self.levels) if count == 1 else encoders
 
-    def header_lines(self, version, step, correction, max_error, rounded=False):
+    def header_lines(self, version, step, correction, max_error, rounded=False, band_models=False):
         """The lines of the text header of ``version``, the magic line to the ``data`` line (7.0 codes
         the lines between them as binary fields)."""
         # lines at their defaults are left out: a face's file can be 1.5 KB, and they were 50 B of it
@@ -518,6 +550,8 @@ class Prepared:
             lines.append(f"rounding {ROUNDING}")
         if max_error is not None:
             lines.append(f"max_error {format_number(max_error)}")
+        if band_models:
+            lines.append("band_models 1")
         if self.colour is not None:
             lines.append(self.colour[0])
         return [*lines, "data"]
@@ -885,11 +919,12 @@ def read(data, source="<bytes>", wanted=None):
     rounding = read_rounding(header, fields, ROUNDED_VERSION)
     geometry = w2.Geometry.of(fields["d1"], fields["d2"], fields["origin"], (rows, cols),
                               fields.get("projection", "planar"), fields.get("radius"))
+    band_models = header.integer("band_models", 1, 1, required=False, default=0) == 1
     decoders = section_decoders(bodies, levels, wanted, source, parametric, progressive,
-                                short=header.major >= TIGHT_VERSION[0])
+                                short=header.major >= TIGHT_VERSION[0], groups=same_size(3 * levels, band_models))
     valid = (flips.decode if header.major >= FLIPS_VERSION[0] else decode_mask)(decoders[0], rows, cols)
     relevant = w2.flatten(transform.relevance(valid, wavelet, levels, geometry.periodic))
-    qflat = decode_bands(decoders, relevant, steps)
+    qflat = decode_bands(decoders, relevant, steps, band_models)
     whole = len(decoders) == 1 + levels   # every level decoded: the corrections are the last section's
     with np.errstate(over="ignore", invalid="ignore"):
         bands = w2.dequantise(qflat, band_steps(geometry, steps, [q.shape for q in qflat], qflat[0], slope_limit))
@@ -918,15 +953,15 @@ def read(data, source="<bytes>", wanted=None):
     return grid
 
 
-def section_decoders(bodies, levels, wanted, source, parametric, progressive, short=False):
+def section_decoders(bodies, levels, wanted, source, parametric, progressive, short=False, groups=SAME_SIZE):
     """The entropy decoder of each level of bands (band_level) that is decoded: outside 9.0, the one
-    payload's (``bodies``' one; ``parametric``: 7.0's table records, ``short``: 10.0's) for every level; in 9.0
-    (``progressive``), the base section's and each level section's that the file holds, up to
-    ``wanted`` (None: all of them)."""
+    payload's (``bodies``' one; ``parametric``: 7.0's table records, ``short``: 10.0's, ``groups``: its
+    models of one class count each, same_size) for every level; in 9.0 (``progressive``), the base
+    section's and each level section's that the file holds, up to ``wanted`` (None: all of them)."""
     from mzc.codecs.dwt2d.entropy import Decoder
 
     if not progressive:
-        return [Decoder(bodies[0], source, SAME_SIZE, parametric, short=short)] * (1 + levels)
+        return [Decoder(bodies[0], source, groups, parametric, short=short)] * (1 + levels)
     if len(bodies) > 1 + levels:
         raise MzcError(f"{len(bodies) - 1} level sections for {levels} wavelet levels", source=source, field="data")
     base = Decoder(bodies[0], source, SAME_SIZE, True)

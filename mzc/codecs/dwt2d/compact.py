@@ -41,17 +41,19 @@ FIELDS = {
     11: ("crs", "t"), 12: ("raster", "t"), 13: ("chart_count", "u"), 14: ("wavelet", "e"), 15: ("levels", "u"),
     16: ("steps", "d"), 17: ("slope_limit", "d"), 18: ("correction", "d"), 19: ("rounding", "e"),
     20: ("max_error", "d"), 21: ("colour_psnr", "d"), 22: ("colour_max_error", "d"), 23: ("source_vertices", "u"),
+    24: ("band_models", "u"),
 }
 COUNTED_MAJOR = 8               # the major whose header has source_vertices (field 23)
-SINCE = {23: COUNTED_MAJOR}     # field id -> the major that added it (the others are 7.0's)
+SINCE = {23: COUNTED_MAJOR, 24: 10}   # field id -> the major that added it (the others are 7.0's)
 IDS = {keyword: (number, kind) for number, (keyword, kind) in FIELDS.items()}
 # 10.0: the fields present as one bit each, in this order (the usual ones first, so the bits take 2 bytes), and
 # no value count where a field has one count (d2 left out when it equals d1, a transform whose rotation is
 # the identity given as its translation alone: TRANSLATION values)
-TIGHT_ORDER = (1, 2, 3, 4, 5, 6, 7, 8, 16, 23, 9, 10, 11, 12, 13, 14, 15, 17, 18, 19, 20, 21, 22)
+TIGHT_ORDER = (1, 2, 3, 4, 5, 6, 7, 8, 16, 23, 9, 10, 11, 12, 13, 14, 15, 17, 18, 19, 20, 21, 22, 24)
+TIGHT_PLACES = (23, 24)         # by minor: the places of TIGHT_ORDER a 10.0 file may use, and a 10.1 file (band_models)
 FIXED_COUNTS = {"rows": 1, "cols": 1, "d1": 1, "d2": 1, "origin": 2, "radius": 1, "chart_count": 1, "levels": 1,
                 "slope_limit": 1, "correction": 1, "max_error": 1, "colour_psnr": 1, "colour_max_error": 1,
-                "source_vertices": 1}
+                "source_vertices": 1, "band_models": 1}
 ROTATION = (0, 1, 2, 4, 5, 6, 8, 9, 10)   # the rotation's places among a transform's 12 values (row by row)
 TRANSLATION = 3
 COLOURED = ("colour_psnr", "colour_max_error")   # a 10.0 header with one of these has a colour section
@@ -114,9 +116,11 @@ def tight_bytes(lines, payload, colour=None):
     """The 10.0 file of the header ``lines`` and payload (and colour section, for a grid with colours):
     the magic line, the varint length of the header fields (``tight_fields``), the fields, the varint
     length of the payload when a colour section follows it, the payload, the colour section, then one
-    CRC-32 (little-endian) of every byte before it."""
+    CRC-32 (little-endian) of every byte before it. A file with ``band_models`` is 10.1, the first minor
+    that has the field (a 10.0 reader refuses it as newer)."""
     fields = tight_fields(lines)
-    head = magic_line((TIGHT_MAJOR, 0)) + varint(len(fields)) + fields
+    minor = int(any(line.split()[0] == "band_models" for line in lines))
+    head = magic_line((TIGHT_MAJOR, minor)) + varint(len(fields)) + fields
     body = payload if colour is None else varint(len(payload)) + payload + colour
     return head + body + CRC.pack(zlib.crc32(head + body))
 
@@ -334,16 +338,16 @@ def read_tight(data, source):
     if last < reader.position or zlib.crc32(reader.data[:last]) != CRC.unpack_from(reader.data, last)[0]:
         raise reader.error("checksum mismatch: the file is corrupt (damaged, cut short or added to)", CHECKSUM)
     _kind, file_major, minor = split_magic(bytes(reader.data[:reader.position]), source)
-    if minor:
-        raise MzcError(f"mzc-dwt2d version {file_major}.{minor} is newer than this mzc reads ({file_major}.0); "
-                       "upgrade mzc", source=source, line=1)
+    if minor >= len(TIGHT_PLACES):
+        raise MzcError(f"mzc-dwt2d version {file_major}.{minor} is newer than this mzc reads "
+                       f"({file_major}.{len(TIGHT_PLACES) - 1}); upgrade mzc", source=source, line=1)
     end = reader.varint(last)
     end += reader.position
     if end > last:
         raise reader.error("the header fields run past the end of the file")
     header = Header(source, file_major, projected=True, georeferenced=True, charted=True, counted=True)
     present = reader.varint(end)
-    if present >> len(TIGHT_ORDER):
+    if present >> TIGHT_PLACES[minor]:
         raise reader.error(f"unknown header field (bits {present:#x})")
     for place, number in enumerate(TIGHT_ORDER):
         if present >> place & 1:
