@@ -132,7 +132,7 @@ def chart_model(field):
     return correction_model(4) + field
 
 
-CHART_FIELDS = 7
+CHART_FIELDS = 7   # a chart record's fields (encode_charts), each with its model
 # the detail, sign and correction contexts are each mixed within a row: one class count each
 SAME_SIZE = (range(detail_model(0), detail_model(CONTEXTS)), range(sign_model(0), sign_model(2 * SIGN_CONTEXTS)),
              range(correction_model(0), correction_model(4)))
