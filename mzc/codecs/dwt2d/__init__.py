@@ -138,6 +138,13 @@ SAME_SIZE = (range(detail_model(0), detail_model(CONTEXTS)), range(sign_model(0)
              range(correction_model(0), correction_model(4)))
 
 
+def shared_detail_models(models):
+    """Model ids of a file with band models (detail_model) as a file without them numbers them: each band's
+    own detail models onto band 1's."""
+    first_own = detail_model(0, 2, True)
+    return np.where(models >= first_own, FIRST_DETAIL + (models - first_own) % CONTEXTS, models)
+
+
 def same_size(bands=0, band_models=False):
     """SAME_SIZE, and with ``band_models`` the group of each of the ``bands`` detail bands' own models."""
     if not band_models:
@@ -469,11 +476,12 @@ class Prepared:
                                    self.geometry.periodic)
         return qflat, z
 
-    def encode(self, step, max_error=None, decoded=None, rounded=None):
+    def encode(self, step, max_error=None, decoded=None, rounded=None, band_models=None):
         """(file bytes, the heights a decoder gets from them) for one detail step; with ``max_error``
         a correction layer bounds every valid node. ``decoded``: what ``decoded(step)`` gives, when
         the caller has it already (it is changed). ``rounded``: the integer bound of a grid of
-        integer samples coded at ``max_error`` (rounding_bounds), whose decoded values are rounded."""
+        integer samples coded at ``max_error`` (rounding_bounds), whose decoded values are rounded.
+        ``band_models``: None to choose the smaller, or the layout to take (``payload``)."""
         qflat, decoded = self.decoded(step) if decoded is None else decoded
         version = written_version(self.grid, rounded is not None, self.compact)
         correction, k = 0.0, None
@@ -486,8 +494,7 @@ class Prepared:
             decoded[self.valid] = rounded_values(decoded[self.valid], self.grid.raster.sample)   # as the decoder
             max_error = rounded
         decoded[~self.valid] = np.nan
-        payload, band_models = min(((self.payload(version, qflat, step, k, layout), layout)
-                                    for layout in self.layouts(version)), key=lambda option: len(option[0]))
+        payload, band_models = self.payload(version, qflat, step, k, band_models)
         lines = self.header_lines(BAND_MODELS_VERSION if band_models else version, step, correction, max_error,
                                   rounded is not None, band_models)
         if version[0] >= COMPACT_VERSION[0]:
@@ -495,28 +502,54 @@ class Prepared:
             return compact.file_bytes(lines[1:-1], payload, colour, version[0]), decoded
         return file_bytes(lines, payload), decoded
 
-    def layouts(self, version):
-        """The layouts of the detail models ``encode`` tries, the first kept on a tie: shared by every
-        band (10.0), and in 10.x with wavelet levels one set per band (10.1's ``band_models``)."""
-        return (False, True) if version == TIGHT_VERSION and self.levels else (False,)
-
-    def payload(self, version, qflat, step, k=None, band_models=False):
-        """The payload of ``version`` (9.0: the list of its sections' bodies) of the integer bands ``qflat``
-        at the detail step ``step``, the corrections ``k`` (a grid, or None) and the grid's charts;
-        ``band_models``: 10.1's models of each detail band's own (``encode`` writes the smaller)."""
-        encoders = self.encoders(version, band_models)
+    def payload(self, version, qflat, step, k=None, band_models=None):
+        """(payload, band_models) of ``version`` (9.0: the list of its sections' bodies) of the integer bands
+        ``qflat`` at the detail step ``step``, the corrections ``k`` (a grid, or None) and the grid's charts.
+        In 10.x with wavelet levels the detail magnitudes are added with each band's own models: kept so
+        (10.1's ``band_models``) where the estimate from their class counts (prefers_band_models) says they
+        may pay and the payload is then smaller than with the shared models (its one-byte tables are the
+        shared models' worst case), else coded with the shared ones (10.0's), never a byte more than 10.0.
+        ``band_models`` True or False takes that layout whatever it costs (the spec's example, fixtures)."""
+        per_band = version == TIGHT_VERSION and self.levels > 0
+        encoders = self.encoders(version, per_band)
         encoder = encoders[0]
         if version >= FLIPS_VERSION:   # the mask's bits go through the rANS coder before everything else
             encoder.leading = functools.partial(flips.encode, valid=self.valid)
         else:
             encode_mask(encoder, self.valid)
         encode_bands(encoders, qflat, self.relevant, expand_steps(header_steps(step, self.levels), len(qflat)),
-                     band_models)
+                     per_band)
         if k is not None:
             encode_corrections(encoders[-1], k, self.valid)   # with the finest level: 9.0's last section
         if self.grid.charts is not None:
             encode_charts(encoder, self.grid.charts)
-        return section_payloads(encoders) if version == PROGRESSIVE_VERSION else encoder.finish()
+        if version == PROGRESSIVE_VERSION:
+            return section_payloads(encoders), False
+        if not per_band:
+            return encoder.finish(), False
+        shared = encoder.relabelled(shared_detail_models)
+        if band_models is None and self.prefers_band_models(
+                encoder.class_counts(detail_model(CONTEXTS, 3 * self.levels, True))):
+            own, other = encoder.finish(), shared.finish()
+            return (own, True) if len(own) < len(other) else (other, False)
+        return (encoder.finish(), True) if band_models else (shared.finish(), False)
+
+    def prefers_band_models(self, counts):
+        """True when the class ``counts`` (a row per model id) of the detail magnitudes, added with each band's
+        own models, cost fewer bits so than summed onto the shared models: each model's symbols under its
+        best one-byte table (10.0's usual record), and a byte for each record the band models add (every
+        model id up to the last one used, unused ones included, and two where a band's class count
+        changes). ``payload`` makes both payloads only where this says band models may pay: making them for
+        every grid took half of a face's encode again."""
+        from mzc.codecs.dwt2d.entropy import short_table_bits
+
+        own = [counts[detail_model(0, band, True):detail_model(CONTEXTS, band, True)]
+               for band in range(1, 3 * self.levels + 1)]
+        bits, sizes = zip(*(short_table_bits(rows) for rows in own))
+        used = np.flatnonzero(counts.any(axis=1))   # band 0's model at least
+        added = used[-1] - used[used < detail_model(0, 2, True)][-1] + 2 * sum(
+            a != b for a, b in zip(sizes, sizes[1:]))
+        return sum(bits) + 8 * added < short_table_bits(sum(own))[0]
 
     def encoders(self, version, band_models=False):
         """The entropy encoder of each level of bands (band_level): 9.0's one per section, its own

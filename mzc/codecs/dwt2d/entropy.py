@@ -156,6 +156,16 @@ def short_tables(size):
     return freq, elementary.log2(freq / (1 << TABLE_BITS))
 
 
+def short_table_bits(counts):
+    """(bits, class count) of the class ``counts`` (a row per model) under each model's best one-byte table
+    of one class count, the largest class used + 1 (a group's, Encoder.table_sizes): what 10.0 mostly writes."""
+    used = counts[counts.any(axis=1)]
+    if not len(used):
+        return 0.0, 2
+    size = max(2, int(np.flatnonzero(used.any(axis=0))[-1]) + 1)
+    return float((-(used[:, :size] @ short_tables(size)[1].T)).min(axis=1).sum()), size
+
+
 def table_codes(counts):
     """Weight codes for class counts: the code nearest each count on the log scale, with the
     largest count at the top code (codes step by 2**(1/4), so frequencies are within about
@@ -272,6 +282,14 @@ class Encoder:
         models = np.concatenate(self.models or [np.zeros(0, np.int64)])
         values = np.concatenate(self.values or [np.zeros(0, np.int64)])
         return models, values, classes(values)
+
+    def relabelled(self, function):
+        """A copy of this encoder whose symbols have the model ids ``function`` maps theirs to (an array of
+        ids to one), the same values."""
+        copy = Encoder(self.same_size, self.parametric, self.short)
+        copy.values, copy.signed, copy.leading, copy.prior = self.values, self.signed, self.leading, self.prior
+        copy.models = [function(models) for models in self.models]
+        return copy
 
     def class_counts(self, count=0):
         """The count of each class under each model (a row per model id, at least ``count`` rows)."""
