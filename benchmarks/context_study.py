@@ -67,8 +67,8 @@ def file_bands(data):
     seen = []
     original = dwt2d.decode_bands
 
-    def capture(decoders, relevant, steps):
-        qflat = original(decoders, relevant, steps)
+    def capture(decoders, relevant, steps, band_models=False):
+        qflat = original(decoders, relevant, steps, band_models)
         seen.append((qflat, relevant, steps))
         return qflat
 
