@@ -17,6 +17,7 @@ from typing import TYPE_CHECKING, Any, Literal, TypedDict
 from mzc.codecs import DEFAULT_CODEC
 from mzc.errors import MzcError
 from mzc.limits import check_colour_scale
+from mzc.streams import path_of
 
 if TYPE_CHECKING:
     from collections.abc import Sequence
@@ -170,15 +171,6 @@ def vector(value: Any, name: str) -> tuple[float, float, float] | None:
     return None if value is None else tuple(finite(value, name, 3).tolist())
 
 
-def path_of(path: Any, name: str = "path") -> str:
-    """A path argument as a string: a str or an os.PathLike, else an MzcError naming it."""
-    if not isinstance(path, (str, os.PathLike)) or isinstance(os.fspath(path), bytes):
-        raise MzcError(f"must be a file name (a str or a path), not a {type(path).__name__}", field=name)
-    if "\0" in os.fspath(path):
-        raise MzcError("a file name holds no NUL character", field=name)
-    return os.fspath(path)
-
-
 def as_grid(grid: ZGrid | np.ndarray) -> ZGrid:
     """``grid`` itself, or a 2D array as a planar z-grid of unit spacing (NaN = no value), its
     shape and values checked as every ZGrid's are."""
@@ -217,21 +209,15 @@ def slice(surface: Any, d1: float | None = None, d2: float | None = None, *, row
     numbers = slicing_numbers({"d1": d1, "d2": d2, "rows": rows, "cols": cols, "center": center, "axis": axis,
                                "classes": classes, "tap": tap, "colour_scale": colour_scale})
     if prior is not None:
+        from mzc.prior import as_prior, refuse_shaping, sliced
+
         shaping = {"d1": d1, "d2": d2, "rows": rows, "cols": cols, "center": center, "axis": axis,
                    "align": align != "none" or None, "projection": projection != "auto" or None,
                    "view": view != "auto" or None, "thesis_grid": thesis_grid or None,
                    "charts": charts not in ("auto", 1) or None, "tap": tap or None,
                    "colour_scale": colour_scale != 1 or None}
-        refused = next((name for name, value in shaping.items() if value is not None), None)
-        if refused:
-            raise MzcError("the prior's lattice shapes the grid, so this option does not apply beside it",
-                           field=refused, options=(refused,))
-        from mzc.prior import as_prior, slice_on
-
-        mesh = as_mesh(surface)
-        mesh = mesh if numbers.get("classes") is None else mesh.with_classes(numbers["classes"])
-        grid = slice_on(mesh, as_prior(prior).mean)
-        return grid if units is None else grid.with_z(grid.z, units=units)
+        refuse_shaping(name for name, value in shaping.items() if value is not None)
+        return sliced(as_mesh(surface), as_prior(prior), numbers.get("classes"), units)
     surface = given(surface)
     read = read_file(surface) if isinstance(surface, str) else surface
     grid = slice_surface(read, align=align, units=units, projection=projection, view=view, thesis_grid=thesis_grid,
@@ -502,8 +488,11 @@ def batch_encode(sources: Any, dest: PathLike, codec: str = DEFAULT_CODEC, *,
     slicing = {k: v for k, v in given.items() if v not in (None, ()) and v != defaults[k]}
     settings = {"codec": chosen.name, "codec_options": chosen.checked(codec_options), "slice_options": slicing}
     if prior is not None:
+        from mzc.prior import refuse_shaping
+
         if chosen.name != "dwt2d":
             raise MzcError(f"a prior codes with dwt2d, not {chosen.name}", field="prior")
+        refuse_shaping(slicing)
         settings["prior"] = batch_prior(prior)
     return run_batch_job("encode", sources, dest, settings, sliceable_extensions(), chosen.extension, verify=verify,
                          scheduler=scheduler, workers=workers, chunk_size=chunk_size, listener=listener)

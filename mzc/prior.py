@@ -90,8 +90,7 @@ def as_prior(prior: Any, name: str = "prior") -> Prior:
     if isinstance(prior, (bytes, bytearray, memoryview)):
         return read_prior(bytes(prior))
     if isinstance(prior, (str, os.PathLike)):
-        from mzc.api import path_of
-        from mzc.streams import display_name, read_input
+        from mzc.streams import display_name, path_of, read_input
 
         path = path_of(prior, name)
         return read_prior(read_input(path), display_name(path))
@@ -156,6 +155,32 @@ def covering(grid: ZGrid, meshes: list) -> ZGrid:
         start[0], counts[0] = origin[0], grid.shape[1]
     return ZGrid(np.full((int(counts[1]), int(counts[0])), np.nan), grid.d1, grid.d2, origin=tuple(start.tolist()),
                  transform=grid.transform, units=grid.units, projection=grid.projection, radius=grid.radius)
+
+
+# the options of ``mzc slice`` that apply beside a prior: the others shape a grid, as its lattice does
+UNSHAPING = frozenset({"classes", "cloud", "units"})
+
+
+def refuse_shaping(options: Any) -> None:
+    """Refuse the first of ``options`` (the names of slice's options given, away from their
+    defaults) that shapes a grid: beside a prior, its lattice shapes it."""
+    refused = next((name for name in options if name not in UNSHAPING), None)
+    if refused:
+        raise MzcError("the prior's lattice shapes the grid, so this option does not apply beside it",
+                       field=refused, options=(refused,))
+
+
+def sliced(surface: Any, prior: Prior, classes: Any = None, units: str | None = None) -> ZGrid:
+    """``surface`` (a mesh or cloud, or a grid taken as its mesh, a vertex at every node) cut on
+    ``prior``'s lattice (``mzc slice --prior``), keeping the ASPRS ``classes`` of a LAS cloud when
+    given, its values in ``units`` when given: the one home of the API's and the batch's."""
+    if isinstance(surface, ZGrid):
+        from mzc.ops.triangulation import grid_to_mesh
+
+        surface = grid_to_mesh(surface)
+    mesh = surface if classes is None else surface.with_classes(classes)
+    grid = slice_on(mesh, prior.mean)
+    return grid if units is None else grid.with_z(grid.z, units=units)
 
 
 def slice_on(mesh: Any, lattice: ZGrid) -> ZGrid:

@@ -64,6 +64,15 @@ def is_terminal(path):
     return is_stdio(path) and sys.stdout is not None and sys.stdout.isatty()
 
 
+def path_of(path, name="path"):
+    """A path argument as a string: a str or an os.PathLike, else an MzcError naming it."""
+    if not isinstance(path, (str, os.PathLike)) or isinstance(os.fspath(path), bytes):
+        raise MzcError(f"must be a file name (a str or a path), not a {type(path).__name__}", field=name)
+    if "\0" in os.fspath(path):
+        raise MzcError("a file name holds no NUL character", field=name)
+    return os.fspath(path)
+
+
 def display_name(path):
     """The name used for ``path`` in error messages."""
     return STDIN_NAME if is_stdio(path) else str(path)

@@ -279,6 +279,20 @@ def test_a_batch_item_is_cut_and_coded_against_the_prior_and_decoded_with_it(tmp
         mzc.batch_encode(str(mesh), tmp_path / "dct", "dct", prior=path, quality=20)
 
 
+def test_a_batch_refuses_an_option_that_shapes_a_grid_beside_a_prior_before_any_work(tmp_path, trained):
+    """The lattice is the prior's: --d1 beside --prior is refused once, naming it, not on every item."""
+    path, mesh = tmp_path / "p.mzp", tmp_path / "t.ply"
+    path.write_bytes(trained.data)
+    mzc.write(mesh, bump(8.2, 0.09))
+    with pytest.raises(MzcError, match="does not apply beside it") as error:
+        mzc.batch_encode(str(mesh), tmp_path / "out", slice_options={"d1": 0.5}, prior=path, rmse=0.02)
+    assert error.value.field == "d1" and not (tmp_path / "out").exists()
+    result = run_mzc("batch", "encode", str(mesh), "-o", str(tmp_path / "cli"), "--d1", "0.5", "--prior", str(path),
+                     "--dwt2d")
+    assert result.returncode != 0 and result.stderr.count(b"\n") == 1 and b"beside it" in result.stderr
+    assert not (tmp_path / "cli").exists()
+
+
 # --- hostile bytes ---------------------------------------------------------------------------
 
 FIXTURE_PRIOR = (PRIOR_FIXTURES / "prior-1.0.mzp").read_bytes()

@@ -255,14 +255,16 @@ def encode_item(job, item, data, row, timings):
     from mzc.colours import warn_uncoded
     from mzc.formats import read
     from mzc.ops.slicing import slice_surface
+    from mzc.prior import sliced
 
     settings, source = job.settings, item.source
     with timings.stage("read"):
         surface = read(data, source, path=source)
     prior = job_prior(settings)
     with timings.stage("slice"), about(source, "slicing it"):
-        grid = slice_surface(surface, **settings["slice_options"]) if prior is None else \
-            sliced_on_prior(surface, prior, settings["slice_options"])
+        options = settings["slice_options"]
+        grid = slice_surface(surface, **options) if prior is None else \
+            sliced(surface, prior, options.get("classes"), options.get("units"))
     codec = get_codec(settings["codec"])
     with timings.stage("encode"), about(source, f"encoding it with {codec.name}"):
         if prior is None:
@@ -301,14 +303,6 @@ def loaded_prior(path, digest):
     if prior.name != digest:
         raise MzcError(f"the prior changed since the batch started (its SHA-256 was {digest})", source=path)
     return prior
-
-
-def sliced_on_prior(surface, prior, options):
-    """``surface`` (a mesh or cloud, or a raster's grid) cut on ``prior``'s lattice with the slicing
-    ``options`` that do not shape a grid (``mzc.api.slice`` refuses the others)."""
-    from mzc.api import slice as slice_surface
-
-    return slice_surface(surface, prior=prior, **options)
 
 
 def surface_distances(surface, grid, decoded):
