@@ -4,6 +4,7 @@ has no side effects (no environment, no ``sys.path``), so scripts that time subp
 as freely as the others.
 """
 
+import sys
 from pathlib import Path
 
 DATA = Path(__file__).resolve().parents[2] / "shared" / "data"
@@ -17,3 +18,14 @@ def mesh_files(folder):
     shared data is not on every machine, and a benchmark then says so and skips)."""
     folder = Path(folder)
     return sorted(p for p in folder.glob("*") if p.suffix in MESH_SUFFIXES) if folder.is_dir() else []
+
+
+def faces_measured(script, quick, least=1, quick_count=4):
+    """The faces a benchmark measures: every one, or with ``quick`` the first ``quick_count``; the
+    ``script`` exits naming the folder when fewer than ``least`` are there (a prior needs others to
+    learn from)."""
+    faces = mesh_files(FACES)
+    faces = faces[:quick_count] if quick else faces
+    if len(faces) < least:
+        sys.exit(f"{script}: needs {least} or more faces under {FACES}")
+    return faces

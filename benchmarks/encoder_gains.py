@@ -24,7 +24,6 @@ encoder-gains-results.md and encoder-gains-results.json into --out (default: thi
 import contextlib
 import datetime
 import json
-import sys
 import time
 from unittest import mock
 
@@ -32,7 +31,7 @@ import startup  # noqa: F401 - first: one thread per process, set before numpy l
 
 # isort: split
 import numpy as np
-from corpora import FACES, mesh_files
+from corpora import faces_measured
 from report import benchmark_parser, bytes_at, git_commit, machine, pareto, terminal_progress, versions
 
 PACKAGES = ("numpy", "PyWavelets", "constriction")
@@ -219,10 +218,7 @@ def main(argv=None):
     arguments = benchmark_parser(__doc__, f"the first {QUICK_FACES} faces").parse_args(argv)
     from mzc.codecs import dwt2d
 
-    paths = mesh_files(FACES)
-    if not paths:
-        sys.exit(f"encoder_gains: no faces in {FACES}")
-    paths = paths[:QUICK_FACES] if arguments.quick else paths
+    paths = faces_measured("encoder_gains", arguments.quick, quick_count=QUICK_FACES)
     progress = terminal_progress()
     started = time.perf_counter()
     settings = {"quick": arguments.quick, "commit": git_commit(), "samples": SAMPLES, "ladder": LADDER,

@@ -34,7 +34,7 @@ import startup  # noqa: F401  first: one thread per process, set before numpy lo
 # isort: split
 import numpy as np
 import prior_study
-from corpora import FACES, mesh_files
+from corpora import faces_measured
 from objects import QUICK_SAMPLES, Surface
 from prior_study import LADDER, TARGETS, ratios, rebuilt_error, zstd_dictionary
 from report import benchmark_parser, bytes_at, fmt, pareto, stamped, write_report
@@ -126,11 +126,8 @@ def markdown(document):
 
 def main():
     args = benchmark_parser(__doc__, "four faces, fewer samples").parse_args()
-    faces = mesh_files(FACES)
-    if args.quick:
-        faces, prior_study.SAMPLES = faces[:4], QUICK_SAMPLES
-    if len(faces) < 3:
-        sys.exit(f"prior: needs the faces under {FACES}")
+    faces = faces_measured("prior", args.quick, least=3)
+    prior_study.SAMPLES = QUICK_SAMPLES if args.quick else prior_study.SAMPLES
     started = time.perf_counter()
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")   # example.obj's texture coordinates, named by every read

@@ -32,7 +32,7 @@ import startup  # noqa: F401 - first: one thread per process, set before numpy l
 
 # isort: split
 import numpy as np
-from corpora import FACES, mesh_files
+from corpora import faces_measured
 from objects import QUICK_SAMPLES, Surface, errors
 from report import benchmark_parser, bytes_at, fmt, pareto, stamped, write_report
 
@@ -169,11 +169,8 @@ def markdown(document):
 def main():
     args = benchmark_parser(__doc__, "four faces, fewer samples").parse_args()
     global SAMPLES
-    faces = mesh_files(FACES)
-    if args.quick:
-        faces, SAMPLES = faces[:4], QUICK_SAMPLES
-    if len(faces) < 3:
-        sys.exit(f"prior_study: needs the faces under {FACES}")
+    faces = faces_measured("prior_study", args.quick, least=3)
+    SAMPLES = QUICK_SAMPLES if args.quick else SAMPLES
     started = time.perf_counter()
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")   # example.obj's texture coordinates, named by every read

@@ -2,12 +2,12 @@
 
     python benchmarks/progressive.py [--quick] [--out DIR]
 
-Every face is sliced (the default grid) and coded at ``--rmse`` 0.05, 0.1 and 0.2 mm twice: as 8.0
-(the default) and with ``--progressive`` as 9.0, whose levels come in sections coarsest first, so
+Every face is sliced (the default grid) and coded at ``--rmse`` 0.05, 0.1 and 0.2 mm twice: as the
+default file (mzc-dwt2d 10.x: one section) and with ``--progressive`` as 9.0, whose levels come in sections coarsest first, so
 that a prefix of whole sections decodes to band 0 and the coarsest levels. For each file: its bytes
-(9.0's overhead over 8.0's), how many of its level sections keep the tables of the section before
+(9.0's overhead over the default's), how many of its level sections keep the tables of the section before
 whole, and the median encode and decode times of each version in the same run (one thread). For f18
-and the median face (by 8.0's bytes at 0.05 mm), at 0.05 mm, every prefix of whole sections (K = 0:
+and the median face (by the default's bytes at 0.05 mm), at 0.05 mm, every prefix of whole sections (K = 0:
 the header and base section, band 0 alone, up to K = L: the whole file): its bytes and the
 whole-surface RMS of its rebuild against the whole file's (benchmarks/objects.py's ``errors``:
 area-weighted samples each way, point to surface; both rebuilt by ``triangulate --vertices all``),
@@ -22,7 +22,7 @@ import startup  # noqa: F401 - first: one thread per process, set before numpy l
 
 # isort: split
 import numpy as np
-from corpora import FACES, mesh_files
+from corpora import faces_measured
 from objects import QUICK_SAMPLES, Surface, errors
 from report import benchmark_parser, stamped, write_report
 
@@ -51,16 +51,16 @@ def kept_sections(data):
 
 
 def face_files(grid):
-    """Per target: the 8.0 and 9.0 files' bytes, encode and decode seconds, and 9.0's kept sections."""
+    """Per target: the default and 9.0 files' bytes, encode and decode seconds, and 9.0's kept sections."""
     import mzc
 
     rows = []
     for target in TARGETS:
         row = {"target": target}
-        for version, options in (("8.0", {}), ("9.0", {"progressive": True})):
+        for version, options in (("default", {}), ("9.0", {"progressive": True})):
             encode_s, data = median_seconds(1, mzc.encode, grid, "dwt2d", rmse=target, **options)
             decode_s, _grid = median_seconds(TIMING_REPEATS, mzc.decode, data)
-            assert data.startswith(f"mzc-dwt2d {version}\n".encode())
+            assert options or not data.startswith(b"mzc-dwt2d 9.0\n")
             row[version] = {"bytes": len(data), "encode_s": encode_s, "decode_s": decode_s}
             if version == "9.0":
                 row["kept_sections"] = kept_sections(data)
@@ -102,9 +102,9 @@ def run(faces):
     files = {}
     for name, grid in grids.items():
         files[name] = face_files(grid)
-        print(f"{name}: " + "; ".join(f"{r['target']} mm {r['8.0']['bytes']} -> {r['9.0']['bytes']} B"
+        print(f"{name}: " + "; ".join(f"{r['target']} mm {r['default']['bytes']} -> {r['9.0']['bytes']} B"
                                       for r in files[name]), file=sys.stderr)
-    by_size = sorted(grids, key=lambda n: files[n][0]["8.0"]["bytes"])
+    by_size = sorted(grids, key=lambda n: files[n][0]["default"]["bytes"])
     median = by_size[len(by_size) // 2]
     shown = list(dict.fromkeys(n for n in ("f18", median) if n in grids))
     return files, median, {name: prefixes(grids[name]) for name in shown}
@@ -123,25 +123,25 @@ def markdown(document):
              f"{document['commit']}, {document['date']}, on {document['machine']}; {document['seconds']:.0f} s. "
              "Package versions: " + ", ".join(f"{k} {v}" for k, v in document["versions"].items()) + ".", "",
              (__doc__ or "").split("\n\n", 2)[2].split("Writes")[0].strip(), "",
-             "## 9.0's bytes over 8.0's, and the times (medians over the faces)", "",
-             "| --rmse | 8.0 bytes | 9.0 bytes | overhead (min-max) | level sections keeping the tables whole "
-             "| encode 8.0 / 9.0 s | decode 8.0 / 9.0 ms |", "|---|---|---|---|---|---|---|"]
+             "## 9.0's bytes over the default's, and the times (medians over the faces)", "",
+             "| --rmse | default bytes | 9.0 bytes | overhead (min-max) | level sections keeping the tables whole "
+             "| encode default / 9.0 s | decode default / 9.0 ms |", "|---|---|---|---|---|---|---|"]
     for i, target in enumerate(TARGETS):
-        over = [rows[i]["9.0"]["bytes"] - rows[i]["8.0"]["bytes"] for rows in files.values()]
+        over = [rows[i]["9.0"]["bytes"] - rows[i]["default"]["bytes"] for rows in files.values()]
         kept = sum(rows[i]["kept_sections"] for rows in files.values())
         sections = sum(rows[i]["level_sections"] for rows in files.values())
         lines.append(
-            f"| {target} | {medians(files, i, lambda r: r['8.0']['bytes']):.0f} "
+            f"| {target} | {medians(files, i, lambda r: r['default']['bytes']):.0f} "
             f"| {medians(files, i, lambda r: r['9.0']['bytes']):.0f} | +{np.median(over):.0f} B "
             f"({min(over)}-{max(over)}) | {kept} of {sections} "
-            f"| {medians(files, i, lambda r: r['8.0']['encode_s']):.2f} / "
+            f"| {medians(files, i, lambda r: r['default']['encode_s']):.2f} / "
             f"{medians(files, i, lambda r: r['9.0']['encode_s']):.2f} "
-            f"| {1000 * medians(files, i, lambda r: r['8.0']['decode_s']):.0f} / "
+            f"| {1000 * medians(files, i, lambda r: r['default']['decode_s']):.0f} / "
             f"{1000 * medians(files, i, lambda r: r['9.0']['decode_s']):.0f} |")
-    lines += ["", "## Bytes by face (8.0 -> 9.0)", "",
+    lines += ["", "## Bytes by face (default -> 9.0)", "",
               "| face | " + " | ".join(f"{t} mm" for t in TARGETS) + " |", "|---" * (len(TARGETS) + 1) + "|"]
     for name, rows in files.items():
-        lines.append(f"| {name} | " + " | ".join(f"{r['8.0']['bytes']} -> {r['9.0']['bytes']}" for r in rows) + " |")
+        lines.append(f"| {name} | " + " | ".join(f"{r['default']['bytes']} -> {r['9.0']['bytes']}" for r in rows) + " |")
     for name, steps in document["prefixes"].items():
         label = " (the median face)" if name == document["median"] else ""
         lines += ["", f"## {name}{label} at --rmse {PREFIX_TARGET}: each prefix of whole sections", "",
@@ -154,11 +154,8 @@ def markdown(document):
 def main():
     args = benchmark_parser(__doc__, "four faces, fewer samples").parse_args()
     global SAMPLES
-    faces = mesh_files(FACES)
-    if args.quick:
-        faces, SAMPLES = faces[:4], QUICK_SAMPLES
-    if not faces:
-        sys.exit(f"progressive: needs the faces under {FACES}")
+    faces = faces_measured("progressive", args.quick)
+    SAMPLES = QUICK_SAMPLES if args.quick else SAMPLES
     started = time.perf_counter()
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", UserWarning)   # example.obj's texture coordinates, named by every read
