@@ -75,11 +75,9 @@ def normalised(weights):
     """
     weights = np.asarray(weights, dtype=np.int64)   # summing to at most 2**48 (parametric), so w * 2**14 fits
     total = 1 << TABLE_BITS
-    spare = total - weights.shape[-1]
-    freq = 1 + (weights * spare) // np.maximum(weights.sum(axis=-1, keepdims=True), 1)
-    top = np.argmax(weights, axis=-1)[..., None]
-    np.put_along_axis(freq, top, np.take_along_axis(freq, top, -1) + total - freq.sum(axis=-1, keepdims=True), -1)
-    return freq
+    freq = 1 + (weights * (total - weights.shape[-1])) // np.maximum(weights.sum(axis=-1, keepdims=True), 1)
+    first_top = np.arange(weights.shape[-1]) == np.argmax(weights, axis=-1)[..., None]
+    return freq + first_top * (total - freq.sum(axis=-1, keepdims=True))
 
 
 # 7.0's parametric tables: P(0) = z/256, and a nonzero |v| - 1 geometric of ratio theta, 1 - theta =
@@ -107,15 +105,19 @@ def parametric_weights(size, zero, ratio, zeros=ZERO_CODES):
     """Integer weights of ``size`` classes: class 0 ``zero``/``zeros`` of the mass (``zeros``: 256 in 7.0's
     records, SHORT_ZERO_CODES in 10.0's one-byte records); class k >= 1 holds |v| in
     2**(k-1) .. 2**k - 1, whose share of the rest is its step (parametric_steps)."""
-    return scaled_steps(zero, np.array(parametric_steps(size, ratio), dtype=np.int64), zeros)
+    return scaled_steps(zero, parametric_steps(size, ratio), zeros)
 
 
+@functools.cache
 def parametric_steps(size, ratio):
-    """Unscaled weights of classes 1..size-1 of the ratio code ``ratio``: theta**(2**(k-1) - 1) - theta**(2**k - 1)
-    for class k, the last class taking the whole tail theta**(2**(size-2) - 1) (exact integers below 2**33)."""
+    """Unscaled weights of classes 1..size-1 of the ratio code ``ratio`` (int64, read-only: cached, as a
+    decoder meets a few codes many times): theta**(2**(k-1) - 1) - theta**(2**k - 1) for class k, the
+    last class taking the whole tail theta**(2**(size-2) - 1) (exact integers below 2**33)."""
     theta = (1 << PARAMETRIC_BITS) - (ROOTS[ratio % 16] >> (ratio // 16))
     tails = [power(theta, (1 << (k - 1)) - 1) for k in range(1, size)] + [0]
-    return [tails[k] - tails[k + 1] for k in range(size - 1)]
+    steps = np.array([tails[k] - tails[k + 1] for k in range(size - 1)], dtype=np.int64)
+    steps.flags.writeable = False
+    return steps
 
 
 @functools.cache
@@ -294,6 +296,7 @@ class Encoder:
         self.leading = None            # 8.0: pushes the mask's binary decisions onto the coder, to decode first
         self.prior = None              # 9.0's level sections: the base section's tables, which ``01`` keeps
         self.tables = None             # the tables written, once finished
+        self.value_cache = []          # value_data once computed; one list with the relabelled copies
 
     def add(self, model, values, signed=True):
         """Append ``values`` (ints) coded with context ``model``: one id, or one id per value.
@@ -303,18 +306,29 @@ class Encoder:
         self.models.append(model)
         self.values.append(values)
         self.signed.append(np.full(values.shape, int(signed), dtype=np.int64))
+        self.value_cache.clear()
+
+    def value_data(self):
+        """(values, magnitude classes, raw-bit bytes) of everything added, in order: computed once for this
+        encoder and its relabelled copies (10.1 makes a payload with each of two sets of models)."""
+        if not self.value_cache:
+            values = np.concatenate(self.values or [np.zeros(0, np.int64)])
+            cls = classes(values)
+            signed = np.concatenate(self.signed or [np.zeros(0, np.int64)])
+            self.value_cache.append((values, cls, np.packbits(raw_bits(values, cls, signed)).tobytes()))
+        return self.value_cache[0]
 
     def symbols(self):
         """(model ids, values, magnitude classes) of everything added, in order."""
-        models = np.concatenate(self.models or [np.zeros(0, np.int64)])
-        values = np.concatenate(self.values or [np.zeros(0, np.int64)])
-        return models, values, classes(values)
+        values, cls, _bits = self.value_data()
+        return np.concatenate(self.models or [np.zeros(0, np.int64)]), values, cls
 
     def relabelled(self, function):
         """A copy of this encoder whose symbols have the model ids ``function`` maps theirs to (an array of
         ids to one), the same values."""
         copy = Encoder(self.same_size, self.parametric, self.short)
         copy.values, copy.signed, copy.leading, copy.prior = self.values, self.signed, self.leading, self.prior
+        copy.value_cache = self.value_cache
         copy.models = [function(models) for models in self.models]
         return copy
 
@@ -327,7 +341,7 @@ class Encoder:
         """Payload bytes: tables, rANS words, raw bits (layout in spec/dwt2d.md section 'payload').
         ``shared``: the class counts to choose the tables by instead of the payload's own (9.0's base
         section: the whole file's, so that its level sections can keep them, ``keeps_all``)."""
-        models, values, cls = self.symbols()
+        models, _values, cls = self.symbols()
         counts = model_class_counts(models, cls, 0 if shared is None else len(shared))
         chosen = counts if shared is None else shared
         sizes = self.table_sizes(chosen)
@@ -344,8 +358,7 @@ class Encoder:
             tables, head = self.prior, varint(0)
         self.tables = tables
         words = ans_encode(tables, models, cls, self.leading)
-        return (head + varint(len(words)) + words.astype("<u4").tobytes()
-                + np.packbits(raw_bits(values, cls, np.concatenate(self.signed or [np.zeros(0, np.int64)]))).tobytes())
+        return head + varint(len(words)) + words.astype("<u4").tobytes() + self.value_data()[2]
 
     def table_sizes(self, counts):
         """Class count of each model's table: its largest class + 1, or its group's (at least 2)."""
