@@ -514,7 +514,7 @@ class Prepared:
         encoders = self.encoders(version, per_band)
         encoder = encoders[0]
         if version >= FLIPS_VERSION:   # the mask's bits go through the rANS coder before everything else
-            encoder.leading = functools.partial(flips.encode, valid=self.valid)
+            encoder.leading = functools.partial(flips.push, decided=flips.decisions(self.valid))
         else:
             encode_mask(encoder, self.valid)
         encode_bands(encoders, qflat, self.relevant, expand_steps(header_steps(step, self.levels), len(qflat)),

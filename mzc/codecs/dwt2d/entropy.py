@@ -67,7 +67,7 @@ def frequencies(codes):
 
 
 def normalised(weights):
-    """The table (frequencies >= 1 summing to 2**TABLE_BITS) of integer ``weights``.
+    """The table (frequencies >= 1 summing to 2**TABLE_BITS) of integer ``weights`` (or one per row of them).
 
     Each class gets 1 plus its share of the rest in proportion to its weight (floored); what
     the flooring leaves goes to the first class of largest weight. Integer arithmetic only,
@@ -75,10 +75,9 @@ def normalised(weights):
     """
     weights = np.asarray(weights, dtype=np.int64)   # summing to at most 2**48 (parametric), so w * 2**14 fits
     total = 1 << TABLE_BITS
-    spare = total - len(weights)
-    freq = 1 + (weights * spare) // max(int(weights.sum()), 1)
-    freq[np.argmax(weights)] += total - int(freq.sum())
-    return freq
+    freq = 1 + (weights * (total - weights.shape[-1])) // np.maximum(weights.sum(axis=-1, keepdims=True), 1)
+    first_top = np.arange(weights.shape[-1]) == np.argmax(weights, axis=-1)[..., None]
+    return freq + first_top * (total - freq.sum(axis=-1, keepdims=True))
 
 
 # 7.0's parametric tables: P(0) = z/256, and a nonzero |v| - 1 geometric of ratio theta, 1 - theta =
@@ -105,11 +104,34 @@ def power(theta, n):
 def parametric_weights(size, zero, ratio, zeros=ZERO_CODES):
     """Integer weights of ``size`` classes: class 0 ``zero``/``zeros`` of the mass (``zeros``: 256 in 7.0's
     records, SHORT_ZERO_CODES in 10.0's one-byte records); class k >= 1 holds |v| in
-    2**(k-1) .. 2**k - 1, whose share of the rest is theta**(2**(k-1) - 1) - theta**(2**k - 1), the last
-    class taking the whole tail theta**(2**(size-2) - 1)."""
+    2**(k-1) .. 2**k - 1, whose share of the rest is its step (parametric_steps)."""
+    return scaled_steps(zero, parametric_steps(size, ratio), zeros)
+
+
+@functools.cache
+def parametric_steps(size, ratio):
+    """Unscaled weights of classes 1..size-1 of the ratio code ``ratio`` (int64, read-only: cached, as a
+    decoder meets a few codes many times): theta**(2**(k-1) - 1) - theta**(2**k - 1) for class k, the
+    last class taking the whole tail theta**(2**(size-2) - 1) (exact integers below 2**33)."""
     theta = (1 << PARAMETRIC_BITS) - (ROOTS[ratio % 16] >> (ratio // 16))
     tails = [power(theta, (1 << (k - 1)) - 1) for k in range(1, size)] + [0]
-    return [zero << PARAMETRIC_BITS] + [(zeros - zero) * (tails[k] - tails[k + 1]) for k in range(size - 1)]
+    steps = np.array([tails[k] - tails[k + 1] for k in range(size - 1)], dtype=np.int64)
+    steps.flags.writeable = False
+    return steps
+
+
+@functools.cache
+def ratio_steps(size):
+    """parametric_steps of ``size`` classes for every ratio code, a row each (int64): the encoder's, which fits
+    them all."""
+    return np.array([parametric_steps(size, ratio) for ratio in range(RATIO_CODES)], dtype=np.int64)
+
+
+def scaled_steps(zero, steps, zeros):
+    """Integer weights (int64, below 2**48) of a zero code and the steps of classes 1..: ``zero`` << PARAMETRIC_BITS,
+    then (``zeros`` - ``zero``) times each step; or one row per zero code and row of steps."""
+    zero = np.asarray(zero, dtype=np.int64)[..., None]
+    return np.concatenate([zero << PARAMETRIC_BITS, (zeros - zero) * steps], axis=-1)
 
 
 def parametric_table(size, zero, ratio):
@@ -118,14 +140,14 @@ def parametric_table(size, zero, ratio):
 
 
 def fit_parametric(counts):
-    """(zero code, ratio code) of the parametric table nearest ``counts`` (per class): z from the
-    share of zeros, t the best of all 256 by the ideal cost of the nonzero classes."""
+    """(zero code, ratio code) (int64 arrays) of the parametric table nearest ``counts`` (per class; or
+    a pair of arrays for rows of them): z from the share of zeros, t the best of all 256 by the ideal
+    cost of the nonzero classes."""
     counts = np.asarray(counts, dtype=np.float64)
-    total = counts.sum()
-    zero = int(np.clip(np.rint(ZERO_CODES * counts[0] / max(total, 1)), 1, ZERO_CODES - 1))
-    shares = ratio_shares(len(counts))
-    cost = -(np.log2(np.maximum(shares, 1e-300)) * counts[1:]).sum(axis=1)
-    return zero, int(np.argmin(cost))
+    total = counts.sum(axis=-1)   # whole numbers: exact in any order
+    zero = np.clip(np.rint(ZERO_CODES * counts[..., 0] / np.maximum(total, 1)), 1, ZERO_CODES - 1).astype(np.int64)
+    cost = -(ratio_logs(counts.shape[-1]) * counts[..., None, 1:]).sum(axis=-1)
+    return zero, np.argmin(cost, axis=-1)
 
 
 # 10.0's short table records (spec/dwt2d.md, Version 10.0): one byte per model in the common case. A
@@ -140,6 +162,7 @@ SHORT_ZEROS = (1179, 2903, 6881, 15004, 28118, 42952, 54263, 60565, 63477, 64707
 SHORT_RATIOS = (0, 4, 8, 12, 16, 20, 24, 30, 36, 44, 52, 62, 74, 88, 104, 124)
 REPEAT, PARAMETRIC, CODED, RESIZED = 0, 241, 242, 243
 SHORT_CODES = len(SHORT_ZEROS) * len(SHORT_RATIOS)   # 240: record bytes 1..240
+RECORD_WIDTH = 3 + (MAX_CLASSES * CODE_BITS + 7) // 8   # the longest record: RESIZED, S, CODED, the weight codes
 
 
 def short_table(size, code):
@@ -167,22 +190,23 @@ def short_table_bits(counts):
 
 
 def table_codes(counts):
-    """Weight codes for class counts: the code nearest each count on the log scale, with the
-    largest count at the top code (codes step by 2**(1/4), so frequencies are within about
-    9% of the counts' proportions; measured: 0.1-0.3% more bits than exact tables)."""
+    """Weight codes for class counts (or for rows of them): the code nearest each count on the log
+    scale, with the largest count at the top code (codes step by 2**(1/4), so frequencies are within
+    about 9% of the counts' proportions; measured: 0.1-0.3% more bits than exact tables); all 0 for
+    no counts."""
     counts = np.asarray(counts, dtype=np.float64)
-    if not counts.any():
-        return np.zeros(len(counts), dtype=np.int64)
-    target = elementary.log2(np.maximum(counts, 1e-300) * (CODE_WEIGHTS[-1] / counts.max()))
-    distance = np.abs(target[:, None] - elementary.log2(np.maximum(CODE_WEIGHTS[1:], 1))[None, :])
-    return np.where(counts > 0, 1 + np.argmin(distance, axis=1), 0)
+    top = counts.max(axis=-1, keepdims=True)
+    target = elementary.log2(np.maximum(counts, 1e-300) * (CODE_WEIGHTS[-1] / np.where(top > 0, top, 1)))
+    distance = np.abs(target[..., None] - elementary.log2(CODE_WEIGHTS[1:]))
+    return np.where(counts > 0, 1 + np.argmin(distance, axis=-1), 0)
 
 
 @functools.cache
-def ratio_shares(size):
-    """For every ratio code, the shares of classes 1..size-1 among the nonzero values (float: to fit only)."""
-    shares = np.array([parametric_weights(size, 0, ratio)[1:] for ratio in range(RATIO_CODES)], dtype=np.float64)
-    return shares / np.maximum(shares.sum(axis=1, keepdims=True), 1)
+def ratio_logs(size):
+    """For every ratio code, the log2 shares of classes 1..size-1 among the nonzero values (float: to fit only)."""
+    shares = (ZERO_CODES * ratio_steps(size)).astype(np.float64)
+    shares /= np.maximum(shares.sum(axis=1, keepdims=True), 1)
+    return np.log2(np.maximum(shares, 1e-300))
 
 
 def table_cost_bits(codes, counts):
@@ -193,9 +217,14 @@ def table_cost_bits(codes, counts):
 
 
 def encode_table(codes):
-    """Table bytes: class count C, then the C weight codes, CODE_BITS each, MSB first, zero-padded."""
-    bits = (np.asarray(codes, dtype=np.int64)[:, None] >> np.arange(CODE_BITS - 1, -1, -1)) & 1
-    return bytes([len(codes)]) + np.packbits(bits.ravel().astype(np.uint8)).tobytes()
+    """Table bytes: class count C, then the C weight codes (packed_codes)."""
+    return bytes([len(codes)]) + packed_codes(codes).tobytes()
+
+
+def packed_codes(codes):
+    """Weight codes as bytes (uint8): CODE_BITS each, MSB first, zero-padded; a row of bytes per row of codes."""
+    bits = (np.asarray(codes, dtype=np.int64)[..., None] >> np.arange(CODE_BITS - 1, -1, -1)) & 1
+    return np.packbits(bits.reshape(*bits.shape[:-2], -1).astype(np.uint8), axis=-1)
 
 
 def varint(value):
@@ -267,6 +296,7 @@ class Encoder:
         self.leading = None            # 8.0: pushes the mask's binary decisions onto the coder, to decode first
         self.prior = None              # 9.0's level sections: the base section's tables, which ``01`` keeps
         self.tables = None             # the tables written, once finished
+        self.value_cache = []          # value_data once computed; one list with the relabelled copies
 
     def add(self, model, values, signed=True):
         """Append ``values`` (ints) coded with context ``model``: one id, or one id per value.
@@ -276,18 +306,29 @@ class Encoder:
         self.models.append(model)
         self.values.append(values)
         self.signed.append(np.full(values.shape, int(signed), dtype=np.int64))
+        self.value_cache.clear()
+
+    def value_data(self):
+        """(values, magnitude classes, raw-bit bytes) of everything added, in order: computed once for this
+        encoder and its relabelled copies (10.1 makes a payload with each of two sets of models)."""
+        if not self.value_cache:
+            values = np.concatenate(self.values or [np.zeros(0, np.int64)])
+            cls = classes(values)
+            signed = np.concatenate(self.signed or [np.zeros(0, np.int64)])
+            self.value_cache.append((values, cls, np.packbits(raw_bits(values, cls, signed)).tobytes()))
+        return self.value_cache[0]
 
     def symbols(self):
         """(model ids, values, magnitude classes) of everything added, in order."""
-        models = np.concatenate(self.models or [np.zeros(0, np.int64)])
-        values = np.concatenate(self.values or [np.zeros(0, np.int64)])
-        return models, values, classes(values)
+        values, cls, _bits = self.value_data()
+        return np.concatenate(self.models or [np.zeros(0, np.int64)]), values, cls
 
     def relabelled(self, function):
         """A copy of this encoder whose symbols have the model ids ``function`` maps theirs to (an array of
         ids to one), the same values."""
         copy = Encoder(self.same_size, self.parametric, self.short)
         copy.values, copy.signed, copy.leading, copy.prior = self.values, self.signed, self.leading, self.prior
+        copy.value_cache = self.value_cache
         copy.models = [function(models) for models in self.models]
         return copy
 
@@ -300,7 +341,7 @@ class Encoder:
         """Payload bytes: tables, rANS words, raw bits (layout in spec/dwt2d.md section 'payload').
         ``shared``: the class counts to choose the tables by instead of the payload's own (9.0's base
         section: the whole file's, so that its level sections can keep them, ``keeps_all``)."""
-        models, values, cls = self.symbols()
+        models, _values, cls = self.symbols()
         counts = model_class_counts(models, cls, 0 if shared is None else len(shared))
         chosen = counts if shared is None else shared
         sizes = self.table_sizes(chosen)
@@ -317,8 +358,7 @@ class Encoder:
             tables, head = self.prior, varint(0)
         self.tables = tables
         words = ans_encode(tables, models, cls, self.leading)
-        return (head + varint(len(words)) + words.astype("<u4").tobytes()
-                + np.packbits(raw_bits(values, cls, np.concatenate(self.signed or [np.zeros(0, np.int64)]))).tobytes())
+        return head + varint(len(words)) + words.astype("<u4").tobytes() + self.value_data()[2]
 
     def table_sizes(self, counts):
         """Class count of each model's table: its largest class + 1, or its group's (at least 2)."""
@@ -359,7 +399,7 @@ def choose_records(counts, sizes, prior=None):
     for model, (model_counts, size) in enumerate(zip(counts, sizes)):
         model_counts = model_counts[:size]
         codes = table_codes(model_counts)
-        zero, ratio = fit_parametric(model_counts)
+        zero, ratio = map(int, fit_parametric(model_counts))
         options = [(parametric_table(size, zero, ratio), varint(2 * size + 1) + bytes([zero, ratio])),
                    (frequencies(codes), varint(2 * size) + encode_table(codes)[1:])]
         if tables and len(tables[-1]) == size:
@@ -376,24 +416,75 @@ def choose_short_records(counts, sizes):
     """(frequencies, bytes) of 10.0's short table records, one per model: each the cheapest, by the ideal
     bits of its symbols plus the record's own, of REPEAT (the previous table, of as many classes), the
     best one-byte parametric table, 7.0's parametric table and a table of weight codes, each but REPEAT
-    led by RESIZED and its class count where that is not the previous table's."""
-    tables, out, current = [], [], 2
-    for model_counts, size in zip(counts, sizes):
-        model_counts = model_counts[:size]
-        lead = b"" if size == current else bytes([RESIZED]) + varint(size)
-        freq, logs = short_tables(size)
-        best = int(np.argmin(-(logs * model_counts).sum(axis=1)))
-        codes, fitted = table_codes(model_counts), fit_parametric(model_counts)
-        options = [(freq[best], lead + bytes([1 + best])),
-                   (parametric_table(size, *fitted), lead + bytes([PARAMETRIC, *fitted])),
-                   (frequencies(codes), lead + bytes([CODED]) + encode_table(codes)[1:])]
-        if tables and len(tables[-1]) == size:
-            options.append((tables[-1], bytes([REPEAT])))
-        table, record = min(options, key=lambda option: ideal_bits(option[0], model_counts) + 8 * len(option[1]))
-        tables.append(table)
-        out.append(record)
-        current = size
-    return tables, b"".join(out)
+    led by RESIZED and its class count where that is not the previous table's (a tie goes to the first of
+    the last three in that order; REPEAT must cost less).
+
+    Every model's own options are costed at once, a class count at a time (short_options); then the
+    REPEATs are settled (short_repeats), and the records are cut from one matrix of their bytes: no loop
+    over the models but building the list of tables (a loop over them was the hot spot of 10.1's encoder).
+    The floating-point sums are those of a model at a time (each row summed as alone): the same choices,
+    bytes and tables.
+    """
+    sizes = np.asarray(sizes, dtype=np.int64)
+    count = len(sizes)
+    resized = sizes != np.concatenate([[2], sizes[:-1]])
+    may_repeat = ~resized & (np.arange(count) > 0)
+    own = np.zeros((count, MAX_CLASSES), dtype=np.int64)     # each model's own table, in its first classes
+    source = np.arange(count)                                # the model whose own table each one takes
+    rows = np.zeros((count, RECORD_WIDTH), dtype=np.uint8)   # each model's record: RESIZED, S, then its body
+    kept = np.zeros(rows.shape, dtype=bool)                  # ...of which these bytes
+    for size in np.unique(sizes).tolist():
+        group = np.flatnonzero(sizes == size)
+        model_counts = counts[group, :size]
+        tables, cost, body, length = short_options(model_counts, resized[group])
+        own[group, :size] = tables
+        source[group] = group[short_repeats(model_counts, tables, cost, may_repeat[group])]
+        rows[group, :2] = RESIZED, size
+        rows[group, 2:2 + body.shape[1]] = body
+        kept[group, :2] = resized[group, None]
+        kept[group, 2:] = np.arange(RECORD_WIDTH - 2) < length[:, None]
+    repeated = source != np.arange(count)
+    rows[repeated], kept[repeated] = REPEAT, np.arange(RECORD_WIDTH) == 2
+    return [own[model, :size] for model, size in zip(source.tolist(), sizes[source].tolist())], rows[kept].tobytes()
+
+
+def short_options(counts, resized):
+    """The cheapest own record of each model of one class count (``counts``: a row per model; ``resized``:
+    whether its record is led by RESIZED and the count, two bytes): (its table, its bits with the record's,
+    its body bytes (the record byte and what follows it; a row per model), the body's length)."""
+    size = counts.shape[1]
+    freq, logs = short_tables(size)
+    best = np.argmin(-(logs * counts[:, None, :]).sum(axis=-1), axis=-1)
+    zero, ratio = fit_parametric(counts)
+    codes = table_codes(counts)
+    options = np.stack([freq[best], normalised(scaled_steps(zero, ratio_steps(size)[ratio], ZERO_CODES)),
+                        frequencies(codes)], axis=1)
+    packed = packed_codes(codes)
+    lengths = np.array([1, 3, 1 + packed.shape[1]])
+    cost = ideal_bits(options, counts[:, None, :]) + 8 * (2 * resized[:, None] + lengths)
+    choice = np.argmin(cost, axis=1)
+    bodies = np.zeros((len(counts), 3, 1 + packed.shape[1]), dtype=np.uint8)
+    bodies[:, 0, 0] = 1 + best
+    bodies[:, 1, :3] = np.stack([np.full_like(zero, PARAMETRIC), zero, ratio], axis=1)
+    bodies[:, 2, 0], bodies[:, 2, 1:] = CODED, packed
+    chosen = np.arange(len(counts)), choice
+    return options[chosen], cost[chosen], bodies[chosen], lengths[choice]
+
+
+def short_repeats(counts, tables, cost, may_repeat):
+    """Which model's own table (``tables``, ``cost``: short_options') each model of one class count takes,
+    as an index: its own, or where ``may_repeat`` (the previous model has this class count) and the
+    previous model's table with a REPEAT byte costs fewer bits than its own record, the table the
+    previous one took. That depends on the previous model's outcome, so it is a fixed point, found a
+    pass over all the models at a time: each pass settles at least the next model in order."""
+    own = np.arange(len(counts))
+    source = own
+    while True:
+        previous = np.roll(source, 1)   # where may_repeat, the source of the model before
+        taken = np.where(may_repeat & (ideal_bits(tables[previous], counts) + 8 < cost), previous, own)
+        if np.array_equal(taken, source):
+            return source
+        source = taken
 
 
 def keeps_all(prior, counts, own, own_bytes):
@@ -408,8 +499,10 @@ def keeps_all(prior, counts, own, own_bytes):
 
 
 def ideal_bits(freq, counts):
-    """Bits of ``counts`` symbols per class under the table ``freq``."""
-    return float(-(counts * elementary.log2(freq[: len(counts)] / (1 << TABLE_BITS))).sum())
+    """Bits of ``counts`` symbols per class under the table ``freq``; or an array of them, one per row
+    of both (broadcast), each summed as alone."""
+    bits = -(counts * elementary.log2(freq[..., :np.shape(counts)[-1]] / (1 << TABLE_BITS))).sum(axis=-1)
+    return bits if np.ndim(bits) else float(bits)
 
 
 def table_records(tables):

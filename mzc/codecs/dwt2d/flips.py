@@ -142,17 +142,23 @@ def ideal_bits(valid):
     return float(-np.log2(np.where(bits == 1, f1, 1 - f1)).sum())
 
 
-def encode(coder, valid):
-    """Push the mask's decisions onto constriction's AnsCoder ``coder`` (last to first, so they
-    decode first to last): call it after everything the payload decodes after the mask."""
-    import constriction  # the encoder only
-
+def decisions(valid):
+    """(bits, weights) of the mask's decisions, as ``push`` takes them: made once for a payload that
+    10.1 writes with each of two sets of models."""
     bits, models = binarised(*integers(valid))
     f1 = probabilities(bits, models)
     # Categorical(perfect=False) gives class s the probability (w_s + 1) / 2**24 when the weights sum
     # to 2**24 - 2: F - 1 per class reproduces F0 = 2**24 - F1 and F1 exactly (entropy.family_weights)
-    weights = np.stack([(1 << PRECISION) - f1 - 1, f1 - 1], axis=1).astype(np.float64)
-    coder.encode_reverse(bits.astype(np.int32), constriction.stream.model.Categorical(perfect=False), weights)
+    return bits.astype(np.int32), np.stack([(1 << PRECISION) - f1 - 1, f1 - 1], axis=1).astype(np.float64)
+
+
+def push(coder, decided):
+    """Push the mask's ``decided`` (``decisions``) onto constriction's AnsCoder ``coder`` (last to
+    first, so they decode first to last): call it after everything the payload decodes after the mask."""
+    import constriction  # the encoder only
+
+    bits, weights = decided
+    coder.encode_reverse(bits, constriction.stream.model.Categorical(perfect=False), weights)
 
 
 def alone(valid):
@@ -163,7 +169,7 @@ def alone(valid):
     from mzc.codecs.dwt2d.entropy import varint
 
     coder = constriction.stream.stack.AnsCoder()
-    encode(coder, valid)
+    push(coder, decisions(valid))
     words = coder.get_compressed()
     return varint(0) + varint(len(words)) + words.astype("<u4").tobytes()
 
