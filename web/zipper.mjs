@@ -15,7 +15,7 @@ const CANDIDATES = 8;     // the nearest boundary vertices looked at for a partn
 const FACING = -0.5;      // cosine of normals that face each other
 const AHEAD = 0.5;        // cosine within which a point lies ahead of a surface, not beside it
 const WELD = 1e-9;        // spacings: boundary vertices of two charts this close are one
-const LONGEST = 6.0;      // spacings: the longest edge a filling may add to a face on a rim
+const LONGEST = 6.0;      // spacings: the longest edge a filling may add (a face on a rim that needs more stays open)
 const RIM_SHARE = 0.25;   // a face more of whose vertices have no other chart near lies on a rim
 const QUALITY = 0.05;     // the least quality an ear's cost divides by
 const SHARP = 0.94;       // cosine of 20 degrees: ends whose tangent planes bend by 20-160 degrees meet in a crease
@@ -609,17 +609,18 @@ class Gap {
       for (let d = 0; d < 3; d++) reference[3 * h + d] = u[9 * this.source[h] + 6 + d] + u[9 * this.target[h] + 6 + d];
     }
     const { triangles, added } = fill(this.p, this.source, this.target, this.next, this.gapCount, reference, this.edges,
-      this.longest(), (a, b) => this.key(a, b));
+      LONGEST * this.spacing, this.rims(), (a, b) => this.key(a, b));
     const stitches = Uint32Array.from(triangles, (v) => (v < this.size ? this.vertex[v] : v - this.size + this.pointCount));
     return { added: Float64Array.from(added), stitches };
   }
 
-  /** The longest cut the filling of each half-edge's face may make: LONGEST spacings when more
-   * than RIM_SHARE of its half-edges start on a rim (not `seam`), else none. */
-  longest() {
+  /** Whether each half-edge's face lies on a rim: more than RIM_SHARE of its half-edges start on
+   * one (not `seam`). Its filling stays open where it would cut longer than LONGEST spacings; a
+   * gap between charts makes no such cut and is closed, by fans where it must. */
+  rims() {
     const face = walks(this.next), rim = new Float64Array(this.next.length), all = new Float64Array(this.next.length);
     face.forEach((f, h) => { all[f] += 1; rim[f] += this.seam[this.source[h]] ? 0 : 1; });
-    return Float64Array.from(face, (f) => (rim[f] > RIM_SHARE * all[f] ? LONGEST * this.spacing : Infinity));
+    return Uint8Array.from(face, (f) => (rim[f] > RIM_SHARE * all[f] ? 1 : 0));
   }
 }
 
@@ -627,8 +628,9 @@ class Gap {
  * that fill every closed face of the half-edges (source, target, next; the first `rungs`
  * the gap's, the rest the rungs' a -> b then b -> a), each face by ear clipping as
  * spec/zgrid.md says; `reference` (3 per half-edge) the normal beside each, `edges` the keys
- * (`key`) of the edges that exist, `longest` per half-edge its face's longest cut. */
-function fill(p, source, target, next, rungs, reference, edges, longest, key) {
+ * (`key`) of the edges that exist, `longest` the longest cut, `rim` per half-edge whether its
+ * face lies on a rim (left open past `longest`; a gap's face makes no longer cut). */
+function fill(p, source, target, next, rungs, reference, edges, longest, rim, key) {
   const n = p.length / 3, k = source.length;
   const edgeSet = new Set(edges);
   for (let h = 0; h < k; h++) edgeSet.add(key(source[h], target[h]));
@@ -636,7 +638,7 @@ function fill(p, source, target, next, rungs, reference, edges, longest, key) {
   const version = new Float64Array(k + 1), ref = new Float64Array(3 * (k + 1));
   const depth = new Int32Array(n).fill(-1), walked = new Int32Array(n).fill(-1), crossed = new Uint8Array(k - rungs + 1);
   const out = [], added = [], heap = [];
-  let longestHere = Infinity;
+  let rimHere = false;
   const area = [0, 0, 0];
   const point = (v) => [p[3 * v], p[3 * v + 1], p[3 * v + 2]];
   const distance2 = (a, b) => { const d = [p[3 * b] - p[3 * a], p[3 * b + 1] - p[3 * a + 1], p[3 * b + 2] - p[3 * a + 2]]; return dot3(d, d); };
@@ -676,28 +678,30 @@ function fill(p, source, target, next, rungs, reference, edges, longest, key) {
     const fold = size === 0 || folds(normal, size, refAt(a)) || folds(normal, size, refAt(b)) || folds(normal, size, area);
     return [fold ? 1 : 0, quality, normal];
   };
-  const consider = (i) => {
+  const consider = (i) => {   // a gap's ear that cuts longer than `longest` is not considered
     const j = prev[i], l = nxt[i];
     version[i]++;
     if (vertex[j] === vertex[l] || hasEdge(vertex[j], vertex[l])) return;
+    const length = Math.sqrt(distance2(vertex[j], vertex[l]));
+    if (!rimHere && !(length <= longest)) return;
     const [fold, quality] = earFolds(j, i, l);
-    push({ fold, cost: Math.sqrt(distance2(vertex[j], vertex[l])) / quality, at: i, version: version[i] });
+    push({ fold, cost: length / quality, at: i, version: version[i] });
   };
   const quadFolds = (a, b, c, d) => {   // [folds, cost], or null when the cut exists or is too long
     const length = Math.sqrt(distance2(vertex[a], vertex[c]));
-    if (vertex[a] === vertex[c] || hasEdge(vertex[a], vertex[c]) || !(length <= longestHere)) return null;
+    if (vertex[a] === vertex[c] || hasEdge(vertex[a], vertex[c]) || !(length <= longest)) return null;
     const [f1, q1, first] = earFolds(a, b, c), [f2, q2, second] = earFolds(c, d, a);
     const s1 = Math.sqrt(dot3(first, first)), s2 = Math.sqrt(dot3(second, second));
     const count = f1 + f2 + (dot3(first, second) < FACING * s1 * s2 ? 1 : 0);
     return [count, length / (q1 < q2 ? q1 : q2)];
   };
-  const fan = (at) => {   // a fan about the mean of the positions `at`: true, or false for a spoke too long
+  const fan = (at) => {   // a fan about the mean of the positions `at`: true, or false for a rim's spoke too long
     const centre = [0.0, 0.0, 0.0];
     for (const i of at) for (let d = 0; d < 3; d++) centre[d] += p[3 * vertex[i] + d];
     for (let d = 0; d < 3; d++) centre[d] /= at.length;
     for (const i of at) {
       const a = point(vertex[i]), d = [a[0] - centre[0], a[1] - centre[1], a[2] - centre[2]];
-      if (!(Math.sqrt(dot3(d, d)) <= longestHere)) return false;
+      if (rimHere && !(Math.sqrt(dot3(d, d)) <= longest)) return false;
     }
     const made = n + added.length / 3;
     added.push(...centre);
@@ -753,7 +757,7 @@ function fill(p, source, target, next, rungs, reference, edges, longest, key) {
       if (ear.version !== version[i]) continue;
       const j = prev[i], l = nxt[i], u = vertex[j], w = vertex[l];
       if (hasEdge(u, w)) { version[i]++; continue; }
-      if (!(Math.sqrt(distance2(u, w)) <= longestHere)) { open = true; break; }
+      if (!(Math.sqrt(distance2(u, w)) <= longest)) { open = true; break; }   // on a rim: a gap's are not considered
       out.push(u, vertex[i], w);
       cut(u, w);
       ref.set(normalOf(p, u, vertex[i], w), 3 * j);
@@ -825,7 +829,7 @@ function fill(p, source, target, next, rungs, reference, edges, longest, key) {
     const walk = [];
     let h = h0;
     for (; h >= 0 && !done[h]; h = next[h]) { done[h] = 1; walk.push(h); }
-    longestHere = longest[h0];
+    rimHere = rim[h0] === 1;
     if (h === h0) fillWalk(walk);
   }
   return { triangles: out, added };

@@ -25,7 +25,7 @@
  *   walk       int64 (k): written with the walk of each, the weakly connected components of
  *              the graph of the nexts, numbered 0.. in the order of their first half-edges
  *   Returns the number of walks (a union-find).
- * fill(points, source, target, next, rungs, reference, edges, longest, triangles, added) -> (triangles, points)
+ * fill(points, source, target, next, rungs, reference, edges, longest, rim, triangles, added) -> (triangles, points)
  *   points     float64 (n, 3): the vertices the faces run through
  *   source, target  int64 (k): each half-edge's first and last vertex, in 0..n-1
  *   next       int64 (k): the half-edge after each around its face (where its target is the
@@ -35,8 +35,9 @@
  *   reference  float64 (k, 3): the normal of the surface on the other side of each half-edge
  *   edges      int64 (e, 2): the edges between the vertices that exist already (no new
  *              triangle may add one of them again)
- *   longest    float64 (k): the longest edge a filling of each half-edge's face may add (the
- *              same for a whole face): a cycle that needs a longer one stays open
+ *   longest    the longest edge a filling may cut: a face on a rim that needs a longer one
+ *              stays open, a gap between charts makes none (what is left is fanned)
+ *   rim        bool (k): whether each half-edge's face lies on a rim (the same for a whole face)
  *   triangles  int64 (k, 3): written with the new triangles, over 0..n-1 and n + i for
  *              added point i
  *   added      float64 (k, 3): written with the points added
@@ -65,9 +66,11 @@
  * its two whose triangles fold least, against their edges' references and each other. What
  * is left with no ear that adds no existing edge (rare: both diagonals of a quad exist
  * elsewhere) is closed by fans about new points, the means of the vertices of each simple
- * cycle it runs: their edges are all new. A polygon whose filling would add an edge longer
- * than its face's `longest` is no gap between charts but a rim, or a hole of the surface: it
- * is left open (its triangles, points and edges taken back).
+ * cycle it runs: their edges are all new. On a gap between charts an ear whose cut is longer
+ * than `longest` is not taken (a long cut across a wide gap, where many charts meet, lies far
+ * inside a curved surface): what is left without another ear is fanned. A polygon on a rim
+ * whose filling would cut longer is no gap between charts but a rim, or a hole of the
+ * surface: it is left open (its triangles, points and edges taken back).
  *
  * Every triangle uses each half-edge of its face in the face's direction, and adds only
  * edges that do not exist, so no edge is ever in more than two triangles, and one in two
@@ -358,7 +361,8 @@ typedef struct {
     int64_t *cuts;            /* the edges added while a cycle is filled: (u, w) pairs */
     int64_t *stack, *depth;   /* fans' stack of positions, and per vertex where its is on it (-1) */
     int64_t *walked;          /* per vertex, where its half-edge is on a walk's stack (-1) */
-    double longest;           /* the longest edge the filling of the face at hand may add */
+    double longest;           /* the longest edge a filling may cut */
+    int rim;                  /* whether the face at hand lies on a rim: left open, not fanned, past longest */
     double area[3];           /* the vector area of the cycle being filled: a reference for each ear */
     Py_ssize_t rungs, k;      /* the first rung's half-edge (those before are the boundary's), all */
     unsigned char *crossed;   /* per rung half-edge: whether the walk at hand crosses it (0) */
@@ -436,14 +440,17 @@ static int ear_folds(Filler *f, int64_t u, int64_t v, int64_t w, double *quality
            folds(normal, size, f->area);
 }
 
-/* Pushes the ear at position i (unless it would add an existing edge). */
+/* Pushes the ear at position i (unless it would add an existing edge, or on a gap between
+   charts cut longer than f->longest). */
 static void consider(Filler *f, int64_t i) {
     int64_t j = f->prev[i], k = f->next[i];
     f->version[i]++;
     if (f->vertex[j] == f->vertex[k] || has_edge(&f->edges, f->vertex[j], f->vertex[k])) return;
+    double length = sqrt(distance2(f->p, f->vertex[j], f->vertex[k]));
+    if (!f->rim && !(length <= f->longest)) return;
     double quality, normal[3];
     int fold = ear_folds(f, j, i, k, &quality, normal);
-    Ear ear = {fold, sqrt(distance2(f->p, f->vertex[j], f->vertex[k])) / quality, i, f->version[i]};
+    Ear ear = {fold, length / quality, i, f->version[i]};
     push(f, ear);
 }
 
@@ -470,7 +477,7 @@ static void emit(Filler *f, int64_t a, int64_t b, int64_t c) {
 }
 
 /* Closes the simple cycle of the `count` live positions `at` with a fan about a new point, the
-   mean of its vertices: 0, or -1 when a spoke would be longer than f->longest. */
+   mean of its vertices: 0, or -1 on a rim when a spoke would be longer than f->longest. */
 static int fan(Filler *f, const int64_t *at, Py_ssize_t count) {
     double *centre = f->added + 3 * f->added_count;
     centre[0] = centre[1] = centre[2] = 0.0;
@@ -480,7 +487,7 @@ static int fan(Filler *f, const int64_t *at, Py_ssize_t count) {
     for (Py_ssize_t c = 0; c < count; c++) {
         const double *a = f->p + 3 * f->vertex[at[c]];
         double d[3] = {a[0] - centre[0], a[1] - centre[1], a[2] - centre[2]};
-        if (!(sqrt(dot3(d, d)) <= f->longest)) return -1;
+        if (f->rim && !(sqrt(dot3(d, d)) <= f->longest)) return -1;
     }
     int64_t point = f->n + f->added_count++;
     for (Py_ssize_t c = 0; c < count; c++) emit(f, f->vertex[at[c]], f->vertex[at[(c + 1) % count]], point);
@@ -490,7 +497,7 @@ static int fan(Filler *f, const int64_t *at, Py_ssize_t count) {
 /* Closes the live cycle of `count` positions from `start` with a fan for each simple cycle it
    runs: where it comes back to a vertex it has left, the positions since close one (a stack of
    them, f->depth[v] where v's is on it); a cycle of two is a rung walked both ways and needs
-   no triangle. 0, or -1 when a spoke would be longer than f->longest. */
+   no triangle. 0, or -1 on a rim when a spoke would be longer than f->longest. */
 static int fans(Filler *f, int64_t start, Py_ssize_t count) {
     Py_ssize_t top = 0;
     int status = 0;
@@ -535,8 +542,8 @@ static int fillable(const Filler *f, const int64_t *hs, Py_ssize_t count, const 
 /* Fills the closed walk of half-edges hs (count >= 3; a vertex may come twice: a chart's corner
    touching the rest of it, a rung walked both ways): ears, then fans if it is stuck. A walk of
    the boundary's half-edges alone is filled only when its area faces as the surface beside it
-   (a hole in a chart, not the chart); one that would need an edge longer than f->longest (a
-   rim, not a gap) is left open: its triangles, points and edges are taken back. */
+   (a hole in a chart, not the chart). On a rim one that would need an edge longer than
+   f->longest (a rim, not a gap) is left open: its triangles, points and edges are taken back. */
 static void clip(Filler *f, const int64_t *hs, Py_ssize_t count, const int64_t *source, const double *reference) {
     for (Py_ssize_t i = 0; i < count; i++) {
         f->vertex[i] = source[hs[i]];
@@ -560,7 +567,7 @@ static void clip(Filler *f, const int64_t *hs, Py_ssize_t count, const int64_t *
             f->version[i]++;
             continue;
         }
-        if (!(sqrt(distance2(f->p, u, w)) <= f->longest)) {
+        if (!(sqrt(distance2(f->p, u, w)) <= f->longest)) {   /* on a rim: a gap's are not considered */
             open = 1;
             break;
         }
@@ -648,7 +655,7 @@ static void fill_walk(Filler *f, int64_t *walk, Py_ssize_t count, const int64_t 
 
 /* Fills every face (every closed walk); 0, or -1 without memory. */
 static int fill_faces(Filler *f, Py_ssize_t k, const int64_t *source, const int64_t *next, const double *reference,
-                      const double *longest) {
+                      const unsigned char *rim) {
     unsigned char *done = calloc((size_t)k + 1, 1);
     int64_t *walk = malloc(((size_t)k + 1) * sizeof(int64_t));
     int status = done && walk ? 0 : -1;
@@ -660,7 +667,7 @@ static int fill_faces(Filler *f, Py_ssize_t k, const int64_t *source, const int6
             done[h] = 1;
             walk[count++] = h;
         }
-        f->longest = longest[h0];
+        f->rim = rim[h0] != 0;
         if (h == h0) fill_walk(f, walk, count, source, reference);
     }
     free(done);
@@ -670,10 +677,11 @@ static int fill_faces(Filler *f, Py_ssize_t k, const int64_t *source, const int6
 
 static PyObject *fill(PyObject *self, PyObject *args) {
     (void)self;
-    Py_buffer points, sources, targets, nexts, references, edges, longests, triangles, added;
+    Py_buffer points, sources, targets, nexts, references, edges, rims, triangles, added;
     Py_ssize_t rungs;
-    if (!PyArg_ParseTuple(args, "y*y*y*y*ny*y*y*w*w*", &points, &sources, &targets, &nexts, &rungs, &references,
-                          &edges, &longests, &triangles, &added))
+    double longest;
+    if (!PyArg_ParseTuple(args, "y*y*y*y*ny*y*dy*w*w*", &points, &sources, &targets, &nexts, &rungs, &references,
+                          &edges, &longest, &rims, &triangles, &added))
         return NULL;
     const Py_ssize_t word = (Py_ssize_t)sizeof(int64_t);   /* and of a double */
     Py_ssize_t n = points.len / (3 * word), k = sources.len / word, e = edges.len / (2 * word);
@@ -681,7 +689,7 @@ static PyObject *fill(PyObject *self, PyObject *args) {
     int status = 1;   /* 1: sizes, 2: an index, 3: memory */
     Filler f = {0};
     if (points.len == 3 * n * word && sources.len == k * word && targets.len == k * word && nexts.len == k * word &&
-        references.len == 3 * k * word && edges.len == 2 * e * word && longests.len == k * word &&
+        references.len == 3 * k * word && edges.len == 2 * e * word && rims.len == k &&
         triangles.len == 3 * k * word && added.len == 3 * k * word && n < ((Py_ssize_t)1 << 31) && rungs >= 0 &&
         rungs <= k && (k - rungs) % 2 == 0) {
         status = 0;
@@ -705,6 +713,7 @@ static PyObject *fill(PyObject *self, PyObject *args) {
         f.rungs = rungs;
         f.k = k;
         f.added = added.buf;
+        f.longest = longest;
         f.vertex = malloc(((size_t)k + 1) * sizeof(int64_t));
         f.prev = malloc(((size_t)k + 1) * sizeof(int64_t));
         f.next = malloc(((size_t)k + 1) * sizeof(int64_t));
@@ -726,7 +735,7 @@ static PyObject *fill(PyObject *self, PyObject *args) {
         Py_BEGIN_ALLOW_THREADS
         for (Py_ssize_t i = 0; i < e; i++) add_edge(&f.edges, edge[2 * i], edge[2 * i + 1]);
         for (Py_ssize_t h = 0; h < k; h++) add_edge(&f.edges, source[h], target[h]);
-        if (fill_faces(&f, k, source, next, references.buf, longests.buf)) status = 3;
+        if (fill_faces(&f, k, source, next, references.buf, rims.buf)) status = 3;
         Py_END_ALLOW_THREADS
     }
     free(f.edges.keys);
@@ -747,7 +756,7 @@ static PyObject *fill(PyObject *self, PyObject *args) {
     PyBuffer_Release(&nexts);
     PyBuffer_Release(&references);
     PyBuffer_Release(&edges);
-    PyBuffer_Release(&longests);
+    PyBuffer_Release(&rims);
     PyBuffer_Release(&triangles);
     PyBuffer_Release(&added);
     if (status == 1) return PyErr_Format(PyExc_ValueError, "fill: buffers whose sizes do not fit");
@@ -765,7 +774,7 @@ static PyMethodDef methods[] = {
      "nearest(points, reach, candidate, distance): each point's nearest within reach, nearest first."},
     {"walks", walks, METH_VARARGS, "walks(next, walk) -> count: number the walks along next."},
     {"fill", fill, METH_VARARGS,
-     "fill(points, source, target, next, rungs, reference, edges, longest, triangles, added) -> "
+     "fill(points, source, target, next, rungs, reference, edges, longest, rim, triangles, added) -> "
      "(triangles, points): triangulate "
      "the chosen faces."},
     {NULL, NULL, 0, NULL},

@@ -36,7 +36,10 @@ surface) leaves it open.
    than RIM_SHARE of whose vertices have no other chart's boundary near lies on a rim (of
    an open scan, a hole of the surface): if its filling would need a cut longer than
    LONGEST spacings it stays open. Other faces are gaps between charts, however wide
-   (where many small charts meet), and are closed.
+   (where many small charts meet), and are closed, with no cut longer than LONGEST spacings
+   either (across a wide gap on a curved surface such a cut lies far inside it: 0.5% of the
+   ogre's diagonal, 2.6 spacings): an ear that would make one is not taken, and what is left
+   without another ear is closed by fans about new points (rare).
 7. The creases are put back (``creased``). Charts part where the surface turns (each element
    goes with the direction its normal faces), so a seam lies on a bend, and a stitch that
    runs straight from one chart's last node to the other's, up to a cell or two away, cuts
@@ -58,7 +61,7 @@ CANDIDATES = 8     # the nearest boundary vertices looked at for a partner
 FACING = -0.5      # cosine of normals that face each other
 AHEAD = 0.5        # cosine within which a point lies ahead of a surface, not beside it
 WELD = 1e-9        # spacings: boundary vertices of two charts this close are one
-LONGEST = 6.0      # spacings: the longest edge a filling may add to a face on a rim (one that needs more is a rim)
+LONGEST = 6.0      # spacings: the longest edge a filling may add (a face on a rim that needs more stays open)
 RIM_SHARE = 0.25   # a face more of whose vertices have no other chart near lies on a rim
 SHARP = 0.94       # cosine of 20 degrees: tangent planes of two ends that bend by 20-160 degrees meet in a crease
 CREASE_REACH = 0.5   # the crease point lies at most this share of its edge's length from the edge's middle
@@ -428,20 +431,19 @@ class Gap:
         reference = np.concatenate([self.beside, self.frame[2][source[rung]] + self.frame[2][target[rung]]])
         triangles, added = np.empty((len(source), 3), dtype=np.int64), np.empty((len(source), 3))
         made, points = _zipper.fill(self.p, source, target, self.next, self.gap_count, np.ascontiguousarray(reference),
-                                    self.edges, self.longest(), triangles, added)
+                                    self.edges, LONGEST * self.spacing, self.rims(), triangles, added)
         triangles, size = triangles[:made], len(self.p)
         triangles = np.where(triangles < size, self.vertex[np.minimum(triangles, size - 1)],
                              triangles - size + self.point_count)
         return added[:points], triangles
 
-    def longest(self):
-        """The longest cut the filling of each half-edge's face may make: LONGEST spacings when
-        more than RIM_SHARE of its vertices lie on a rim (not ``seam``), where a long cut would
-        close a rim or a hole of the surface; none on a face whose vertices lie on seams, a gap
-        between charts however wide (where many small charts meet)."""
+    def rims(self):
+        """Whether each half-edge's face lies on a rim: more than RIM_SHARE of its vertices on one
+        (not ``seam``). Its filling stays open where it would need a cut longer than LONGEST
+        spacings (which would close a rim or a hole of the surface); a gap between charts,
+        however wide (where many small charts meet), is closed, by fans where it must."""
         face = walks(self.next)
-        rim = np.bincount(face, weights=~self.seam[self.source]) > RIM_SHARE * np.bincount(face)
-        return np.where(rim, LONGEST * self.spacing, np.inf)[face]
+        return (np.bincount(face, weights=~self.seam[self.source]) > RIM_SHARE * np.bincount(face))[face]
 
 
 def edge_keys(a, b, size):
