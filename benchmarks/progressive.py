@@ -3,8 +3,8 @@
     python benchmarks/progressive.py [--quick] [--out DIR]
 
 Every face is sliced (the default grid) and coded at ``--rmse`` 0.05, 0.1 and 0.2 mm twice: as the
-default file (mzc-dwt2d 10.x: one section) and with ``--progressive`` as 9.0, whose levels come in sections coarsest first, so
-that a prefix of whole sections decodes to band 0 and the coarsest levels. For each file: its bytes
+default file (mzc-dwt2d 10.x: one section) and with ``--progressive`` as 9.0, whose levels come in
+sections coarsest first, so that a prefix of whole sections decodes to band 0 and the coarsest levels. For each file: its bytes
 (9.0's overhead over the default's), how many of its level sections keep the tables of the section before
 whole, and the median encode and decode times of each version in the same run (one thread). For f18
 and the median face (by the default's bytes at 0.05 mm), at 0.05 mm, every prefix of whole sections (K = 0:
@@ -141,7 +141,8 @@ def markdown(document):
     lines += ["", "## Bytes by face (default -> 9.0)", "",
               "| face | " + " | ".join(f"{t} mm" for t in TARGETS) + " |", "|---" * (len(TARGETS) + 1) + "|"]
     for name, rows in files.items():
-        lines.append(f"| {name} | " + " | ".join(f"{r['default']['bytes']} -> {r['9.0']['bytes']}" for r in rows) + " |")
+        pairs = (f"{r['default']['bytes']} -> {r['9.0']['bytes']}" for r in rows)
+        lines.append(f"| {name} | " + " | ".join(pairs) + " |")
     for name, steps in document["prefixes"].items():
         label = " (the median face)" if name == document["median"] else ""
         lines += ["", f"## {name}{label} at --rmse {PREFIX_TARGET}: each prefix of whole sections", "",
