@@ -5,13 +5,13 @@
 Every face is sliced (the default grid) and coded at ``--rmse`` 0.05, 0.1 and 0.2 mm twice: as the
 default file (mzc-dwt2d 10.x: one section) and with ``--progressive`` as 9.0, whose levels come in
 sections coarsest first, so that a prefix of whole sections decodes to band 0 and the coarsest
-levels. For each file: its bytes (9.0's overhead over the default's), how many of its level
-sections keep the tables of the section before whole, and the median encode and decode times of each version in the same run (one thread). For f18
-and the median face (by the default's bytes at 0.05 mm), at 0.05 mm, every prefix of whole sections (K = 0:
-the header and base section, band 0 alone, up to K = L: the whole file): its bytes and the
-whole-surface RMS of its rebuild against the whole file's (benchmarks/objects.py's ``errors``:
-area-weighted samples each way, point to surface; both rebuilt by ``triangulate --vertices all``),
-in mm. Writes progressive-results.md and .json.
+levels. For each file: its bytes (9.0's overhead over the default's), how many of its level sections
+keep the tables of the section before whole, and the median encode and decode times of each version
+in the same run (one thread). For f18 and the median face (by the default's bytes at 0.05 mm), at
+0.05 mm, every prefix of whole sections (K = 0: the header and base section, band 0 alone, up to K =
+L: the whole file): its bytes and the whole-surface RMS of its rebuild against the whole file's
+(benchmarks/objects.py's ``errors``: area-weighted samples each way, point to surface; both rebuilt
+by ``triangulate --vertices all``), in mm. Writes progressive-results.md and .json.
 """
 
 import sys
