@@ -64,13 +64,14 @@ def is_terminal(path):
     return is_stdio(path) and sys.stdout is not None and sys.stdout.isatty()
 
 
-def path_of(path, name="path"):
+def path_of(path: object, name: str = "path") -> str:
     """A path argument as a string: a str or an os.PathLike, else an MzcError naming it."""
-    if not isinstance(path, (str, os.PathLike)) or isinstance(os.fspath(path), bytes):
+    text = os.fspath(path) if isinstance(path, (str, os.PathLike)) else None
+    if not isinstance(text, str):
         raise MzcError(f"must be a file name (a str or a path), not a {type(path).__name__}", field=name)
-    if "\0" in os.fspath(path):
+    if "\0" in text:
         raise MzcError("a file name holds no NUL character", field=name)
-    return os.fspath(path)
+    return text
 
 
 def display_name(path):

@@ -81,6 +81,8 @@ def choose_view(mesh, frame, projection="auto", center=None, axis=None, view="au
     if (center is not None or axis is not None) and projection == "planar":
         raise MzcError("--center and --axis need a central projection (cylindrical or spherical)",
                        field="projection")
+    if center is not None:   # refused before any scoring divides by its distances
+        center = finite_point(center, "center")
     surface = Facets.of_mesh(mesh)
     rotation, planar_score = planar_view(surface, rotation, view)
     if projection == "planar" or (projection == "auto" and mesh.is_point_cloud):
@@ -230,7 +232,7 @@ def axis_candidate(surface, kind, view, direction, center):
         return surface.box_centre - s * surface.half_diagonal * view
 
     if center is not None:
-        centre = np.asarray(center, dtype=float)
+        centre = center
     else:
         along_axis = kind == "cylindrical" and abs(dotted(direction, view)) > 0.999
         centre = behind(0.0 if along_axis else best_offset(lambda s: score(behind(s)),
@@ -296,12 +298,18 @@ def unit(vector, name):
     return vector / size
 
 
+def finite_point(point, name):
+    """``point`` as three finite floats, or an error naming the option."""
+    point = np.asarray(point, dtype=float)
+    if point.shape != (3,) or not np.isfinite(point).all():
+        raise MzcError("must be three finite numbers", field=name)
+    return point
+
+
 def central_view(points, kind, centre, axis, view):
     """The View of a central projection about ``centre`` and ``axis``, azimuth 0 towards the
     middle of the azimuths the surface covers (towards ``view`` for a full turn)."""
-    centre = np.asarray(centre, dtype=float)
-    if centre.shape != (3,) or not np.isfinite(centre).all():
-        raise MzcError("must be three finite numbers", field="center")
+    centre = finite_point(centre, "center")
     offset = np.asarray(points, dtype=float) - centre
     axis = unit(axis, "axis")
     across = offset - dotted(offset, axis)[:, None] * axis
