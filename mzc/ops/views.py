@@ -82,7 +82,9 @@ def choose_view(mesh, frame, projection="auto", center=None, axis=None, view="au
         raise MzcError("--center and --axis need a central projection (cylindrical or spherical)",
                        field="projection")
     if center is not None:   # refused before any scoring divides by its distances
-        center = finite_point(center, "center")
+        from mzc.grid import finite
+
+        center = finite(center, "center", 3)
     surface = Facets.of_mesh(mesh)
     rotation, planar_score = planar_view(surface, rotation, view)
     if projection == "planar" or (projection == "auto" and mesh.is_point_cloud):
@@ -298,19 +300,11 @@ def unit(vector, name):
     return vector / size
 
 
-def finite_point(point, name):
-    """``point`` as three finite floats, or an error naming the option."""
-    point = np.asarray(point, dtype=float)
-    if point.shape != (3,) or not np.isfinite(point).all():
-        raise MzcError("must be three finite numbers", field=name)
-    return point
-
-
 def central_view(points, kind, centre, axis, view):
     """The View of a central projection about ``centre`` and ``axis``, azimuth 0 towards the
-    middle of the azimuths the surface covers (towards ``view`` for a full turn)."""
-    centre = finite_point(centre, "center")
-    offset = np.asarray(points, dtype=float) - centre
+    middle of the azimuths the surface covers (towards ``view`` for a full turn); ``centre`` is
+    finite (``choose_view`` checked a given one)."""
+    offset = np.asarray(points, dtype=float) - np.asarray(centre, dtype=float)
     axis = unit(axis, "axis")
     across = offset - dotted(offset, axis)[:, None] * axis
     reference = perpendicular(view, axis)
