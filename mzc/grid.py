@@ -87,9 +87,11 @@ class Chart:
             raise MzcError("a chart's block starts at row and column 0 or later and has a row and a column",
                            field="charts")
 
-    def block(self) -> tuple[slice, slice]:
-        """The chart's (rows, columns) of the grid's values."""
-        return slice(self.row0, self.row0 + self.rows), slice(self.col0, self.col0 + self.cols)
+    def block(self, scale: int = 1) -> tuple[slice, slice]:
+        """The chart's (rows, columns) of the grid's values, or with ``scale`` K of its colours K
+        times finer than the nodes (``ZGrid.fine_colors``): the samples from its first node to its last."""
+        return (slice(self.row0 * scale, (self.row0 + self.rows - 1) * scale + 1),
+                slice(self.col0 * scale, (self.col0 + self.cols - 1) * scale + 1))
 
     def words(self) -> list[str]:
         """The chart's seven values on the header's ``charts`` line."""
@@ -135,13 +137,28 @@ def fine_lattice(count, scale):
     return low, low + (rest > 0), rest / scale
 
 
-def fine_mask(valid, scale):
+def chart_labels(shape, charts):
+    """(rows, cols): the number of the chart each node of a multi-chart grid of ``shape`` lies in,
+    -1 outside them."""
+    label = np.full(shape, -1, dtype=np.int64)
+    for number, chart in enumerate(charts):
+        label[chart.block()] = number
+    return label
+
+
+def fine_mask(valid, scale, charts=None):
     """The validity of the colour samples of a grid ``scale`` times finer than its ``valid`` nodes:
-    a sample is valid where every node of the cell (edge, node) it lies in is (spec/zgrid.md,
-    Colours finer than the nodes), so that nothing beside the node mask need be stored."""
-    (row_low, row_high, _), (col_low, col_high, _) = (fine_lattice(n, scale) for n in valid.shape)
-    mask = valid[np.ix_(row_low, col_low)] & valid[np.ix_(row_high, col_high)]
-    return mask & valid[np.ix_(row_low, col_high)] & valid[np.ix_(row_high, col_low)]
+    a sample is valid where every node of the cell (edge, node) it lies in is, and of a multi-chart
+    grid's ``charts`` lies in one chart (spec/zgrid.md, Colours finer than the nodes), so that
+    nothing beside the node mask and the charts need be stored."""
+    lattices = [fine_lattice(n, scale) for n in valid.shape]
+    cells = [np.ix_(rows, cols) for rows in (lattices[0][0], lattices[0][1]) for cols in (lattices[1][0], lattices[1][1])]
+    mask = valid[cells[0]] & valid[cells[1]] & valid[cells[2]] & valid[cells[3]]
+    if charts is None:
+        return mask
+    label = chart_labels(valid.shape, charts)
+    first = label[cells[0]]
+    return mask & (label[cells[1]] == first) & (label[cells[2]] == first) & (label[cells[3]] == first)
 
 
 def fine_scale(shape, node_shape):
@@ -257,10 +274,6 @@ class ZGrid:
 
     def __post_init__(self) -> None:
         self.z = real_array(self.z, "heights", check_shape)
-        if self.fine_colors is not None:
-            self.take_fine_colours()
-        if self.colors is not None:
-            self.colors = node_colours(self.colors, self.valid)
         self.transform = finite(self.transform, "transform", 12).reshape(3, 4)
         self.origin = tuple(finite(self.origin, "origin", 2).tolist())
         self.d1, self.d2 = (float(finite(getattr(self, name), name, 1)[0]) for name in ("d1", "d2"))
@@ -292,6 +305,10 @@ class ZGrid:
                            field="crs" if self.crs else "raster")
         if self.charts is not None:
             self.check_charts()
+        if self.fine_colors is not None:
+            self.take_fine_colours()
+        if self.colors is not None:
+            self.colors = node_colours(self.colors, self.valid)
 
     def take_fine_colours(self) -> None:
         """Check ``fine_colors`` and make ``colors`` its node samples: the one image holds both, so
@@ -302,9 +319,7 @@ class ZGrid:
         if scale == 1:
             self.colors, self.fine_colors = fine, None
             return
-        if self.charts is not None:
-            raise MzcError("a multi-chart grid has colours at its nodes alone (colour scale 1)", field="fine_colors")
-        mask = fine_mask(self.valid, scale)
+        mask = fine_mask(self.valid, scale, self.charts)
         if fine[~mask].any():
             fine = fine.copy()
             fine[~mask] = 0
@@ -380,11 +395,12 @@ class ZGrid:
         its frame (the grid's, turned to look along the chart's view); [self] without charts."""
         if self.charts is None:
             return [self]
-        rotation, shift = self.transform[:, :3], self.transform[:, 3:]
+        rotation, shift, scale = self.transform[:, :3], self.transform[:, 3:], self.colour_scale
         return [ZGrid(z=self.z[chart.block()], d1=self.d1, d2=self.d2, origin=(chart.i0 * self.d2, chart.j0 * self.d1),
                       transform=np.hstack([matrix_product(rotation, projections.view_rotation(chart.view)), shift]),
                       units=self.units, nodata=self.nodata,
-                      colors=None if self.colors is None else self.colors[chart.block()])
+                      colors=None if self.colors is None else self.colors[chart.block()],
+                      fine_colors=None if self.fine_colors is None else self.fine_colors[chart.block(scale)])
                 for chart in self.charts]
 
     def with_z(self, z: np.ndarray, **changes) -> "ZGrid":

@@ -87,7 +87,7 @@ SLICE_OPTIONS = [   # the grid's options, shared with 'mzc batch encode'
                       "are dense at the grid's spacing."),
     click.option("--colour-scale", type=click.IntRange(1, 8), default=1, show_default=True, metavar="K",
                  help="Sample a coloured surface's colour K times finer than the nodes (1..8), for texture detail "
-                      "(triangulate --texture); one grid only (--charts 1)."),
+                      "(triangulate --texture)."),
 ]
 
 

@@ -326,7 +326,7 @@ def textured(grid_mesh, obj_path, png_path):
     if grid.colors is None:
         raise MzcError("the grid has no colours to write as a texture", field="texture")
     scale = grid.colour_scale
-    colours = padded(grid.colors if scale == 1 else grid.fine_colors, fine_mask(grid.valid, scale))
+    colours = padded(grid.colors if scale == 1 else grid.fine_colors, fine_mask(grid.valid, scale, grid.charts))
     rows, cols = colours.shape[:2]
     row, col = np.divmod(np.flatnonzero(grid_mesh.used), grid.shape[1])
     uv = np.column_stack([(col * scale + 0.5) / cols, (row * scale + 0.5) / rows])

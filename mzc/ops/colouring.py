@@ -33,21 +33,31 @@ def coloured(mesh, grid, scale=1):
 
 
 def fine_colours(grid, mesh, scale):
-    """((rows - 1) K + 1, (cols - 1) K + 1, 3) uint8 colours of one grid's surface sampled K =
-    ``scale`` times finer than its nodes, 0 where invalid (``mzc.grid.fine_mask``): sample (a, b)
-    at node position (a / K, b / K), whose value is the bilinear mix of its cell's nodes' values
-    (along the node lines: a point between the grid mesh's, on any projection), coloured as a
-    node is at the surface's point nearest it (``surface_colours``). Node (r, c)'s is sample (rK, cK),
-    the colour ``sampled_colours`` gives it."""
-    from mzc.grid import fine_lattice
+    """((rows - 1) K + 1, (cols - 1) K + 1, 3) uint8 colours of a grid's surface sampled K =
+    ``scale`` times finer than its nodes, 0 where invalid (``mzc.grid.fine_mask``); a multi-chart
+    grid's charts each sample their own block (``chart_fine_colours``), and the samples between
+    two charts' blocks are invalid."""
     from mzc.limits import check_colour_scale
 
     check_colour_scale(scale, *grid.shape, field="colour_scale")
     if mesh.colors is None:
         raise MzcError("a colour scale samples the source's colours, and it has none", field="colour_scale")
-    if grid.charts is not None:
-        raise MzcError("a colour scale above 1 needs one grid, not a multi-chart grid (give --charts 1)",
-                       field="colour_scale")
+    if grid.charts is None:
+        return chart_fine_colours(grid, mesh, scale)
+    colours = np.zeros(((grid.shape[0] - 1) * scale + 1, (grid.shape[1] - 1) * scale + 1, 3), dtype=np.uint8)
+    for chart, part in zip(grid.charts, grid.chart_grids()):
+        colours[chart.block(scale)] = chart_fine_colours(part, mesh, scale)
+    return colours
+
+
+def chart_fine_colours(grid, mesh, scale):
+    """The colours of one grid (no charts) ``scale`` K times finer than its nodes: sample (a, b) at
+    node position (a / K, b / K), whose value is the bilinear mix of its cell's nodes' values
+    (along the node lines: a point between the grid mesh's, on any projection), coloured as a
+    node is at the surface's point nearest it (``surface_colours``). Node (r, c)'s is sample (rK, cK),
+    the colour ``sampled_colours`` gives it."""
+    from mzc.grid import fine_lattice
+
     (row_low, row_high, t), (col_low, col_high, s) = (fine_lattice(n, scale) for n in grid.shape)
     t, s, z = t[:, None], s[None, :], grid.z
     values = ((1 - t) * ((1 - s) * z[np.ix_(row_low, col_low)] + s * z[np.ix_(row_low, col_high)])

@@ -239,14 +239,6 @@ def charted_mesh(grid, jump_angle=None):
     return Mesh(zipped, stitched, grid=grid, colors=colors)
 
 
-def chart_labels(grid):
-    """(rows, cols): the number of the chart each node of a multi-chart grid lies in, -1 outside them."""
-    label = np.full(grid.shape, -1, dtype=np.int64)
-    for number, chart in enumerate(grid.charts):
-        label[chart.block()] = number
-    return label
-
-
 def chart_meshes(grid, angle):
     """(points, triangles, chart and node of each point): the GridMeshes of a multi-chart grid's charts
     (``ZGrid.chart_grids``) at jump angle ``angle``, one after the other, made at once over the
@@ -255,7 +247,9 @@ def chart_meshes(grid, angle):
     grids', but for those across two charts; the triangles and points come in each chart's
     order (its 1-2-3s row by row, then its 2-4-3s; its used nodes row by row) and each point
     as its chart grid's ``to_input_frame`` makes it, operation for operation."""
-    label, cols = chart_labels(grid), grid.shape[1]
+    from mzc.grid import chart_labels
+
+    label, cols = chart_labels(grid.shape, grid.charts), grid.shape[1]
     kept = kept_cells(grid.valid, False, jump_edges(grid, angle))
     kept[..., 0] &= (label[:-1, :-1] == label[:-1, 1:]) & (label[:-1, :-1] == label[1:, :-1])
     kept[..., 1] &= (label[:-1, 1:] == label[1:, 1:]) & (label[:-1, 1:] == label[1:, :-1])

@@ -794,7 +794,7 @@ def colour_section(grid, psnr=None, max_error=None):
     from mzc.codecs.dwt2d.colour import encode_colour
 
     image = grid.colors if grid.fine_colors is None else grid.fine_colors
-    coded = functools.partial(encode_colour, image, grid.valid, scale=grid.colour_scale)
+    coded = functools.partial(encode_colour, image, grid.valid, scale=grid.colour_scale, charts=grid.charts)
     if max_error is not None:
         return f"colour_max_error {int(max_error)}", coded(max_error=max_error)
     psnr = DEFAULT_COLOUR_PSNR if psnr is None else psnr
@@ -978,7 +978,7 @@ def read(data, source="<bytes>", wanted=None):
     if colour is not None:
         from mzc.codecs.dwt2d.colour import decode_colour
 
-        fields["fine_colors"] = decode_colour(colour, valid, source)   # at the nodes alone when its scale is 1
+        fields["fine_colors"] = decode_colour(colour, valid, source, fields.get("charts"))   # its scale may be 1
     grid = ZGrid(z=z, **fields)
     coloured = header.has("colour_psnr") or header.has("colour_max_error")
     if progressive and (len(bodies) - 1 < levels or coloured and colour is None):   # cut short: said once decoded

@@ -5,7 +5,9 @@ pure functions over arrays (spec/colour.md gives every byte).
 appends them as a section; ``section_length`` says where they end), ``decode_colour(data, mask)``
 the image, 0 at invalid nodes. With ``scale`` K > 1 the image is the grid's colours sampled K
 times finer than the nodes of ``mask`` (``mzc.grid.fine_mask`` says which samples are valid),
-coded the same way in a version 2 section, whose header adds K; K = 1 writes version 1.
+coded the same way in a version 2 section, whose header adds K; K = 1 writes version 1. The
+fine colours of a multi-chart grid (``charts``) are a version 3 section, version 2's layout, whose
+valid samples lie in one chart each: a reader that knows no charts refuses it.
 
 The encoder takes the reversible YCoCg-R colour transform, fills
 invalid nodes with the harmonic fill of dwt2d (so no bits go on a jump at the mask's edge),
@@ -40,8 +42,10 @@ from mzc.errors import MzcError
 MAGIC = b"mzcC"
 VERSION = 1                               # colours at the nodes
 FINE_VERSION = 2                          # colours sampled K times finer than the nodes: the header adds K
+CHARTED_VERSION = 3                       # 2 on a multi-chart grid: no valid sample between two charts
 HEADERS = {VERSION: struct.Struct("<4sBIIBBHHHBII"),   # magic, version, rows, cols, levels, transform, 3 steps,
-           FINE_VERSION: struct.Struct("<4sBIIBBBHHHBII")}   # correction, length, crc32; 2: K after cols
+           FINE_VERSION: struct.Struct("<4sBIIBBBHHHBII"),   # correction, length, crc32; 2 and 3: K after cols
+           CHARTED_VERSION: struct.Struct("<4sBIIBBBHHHBII")}
 LENGTH = 10                               # read_header's index of the payload's length
 LEAD = struct.Struct("<4sB")              # magic and version: which header follows
 CRC_BYTES = 4                             # the CRC-32 (last in the header) covers the header before it and the payload
@@ -219,9 +223,9 @@ class Prepared:
     """An image ready to be coded at any steps: its three filled YCoCg-R channels, and their bands
     by each transform tried (taken once: the searches quantise them at every step they try)."""
 
-    def __init__(self, rgb, mask, levels=None, scale=1):
+    def __init__(self, rgb, mask, levels=None, scale=1, version=VERSION):
         rgb, self.mask = check_image(rgb, mask)
-        self.scale = scale
+        self.scale, self.version = scale, version
         self.rgb = rgb.astype(np.int64)
         self.levels = w2.default_levels(self.mask.shape, COARSEST) if levels is None else levels
         self.planes = [filled(channel, self.mask) for channel in ycocg(rgb)]
@@ -274,8 +278,8 @@ class Prepared:
             for channel in range(3):
                 encode_corrections(encoder, k[..., channel], self.mask)
             decoded = clipped(decoded + correction * k, self.mask)   # as the decoder adds them
-        return section_bytes(self.mask.shape, self.scale, self.levels, transform.number, steps, correction,
-                             encoder.finish()), decoded
+        return section_bytes(self.mask.shape, self.version, self.scale, self.levels, transform.number, steps,
+                             correction, encoder.finish()), decoded
 
 
 def filled(channel, mask):
@@ -308,10 +312,11 @@ def check_image(rgb, mask):
     return rgb, mask
 
 
-def encode_colour(rgb, mask, *, max_error=None, psnr=None, levels=None, scale=1):
+def encode_colour(rgb, mask, *, max_error=None, psnr=None, levels=None, scale=1, charts=None):
     """Section bytes of an (R, C, 3) uint8 image at the True nodes of ``mask``; with ``scale`` K > 1,
     of the ((R - 1) K + 1, (C - 1) K + 1, 3) image of colours K times finer than the nodes of the
-    R x C ``mask``, at its valid samples (``mzc.grid.fine_mask``).
+    R x C ``mask``, at its valid samples (``mzc.grid.fine_mask``, of the grid's ``charts`` when it
+    has them: version 3).
 
     ``max_error`` E (whole 8-bit levels, 0..127): |decoded - rgb| <= E at every valid node (E = 0:
     lossless); ``psnr`` (dB): the largest luma step found whose PSNR over the valid nodes meets it;
@@ -335,8 +340,9 @@ def encode_colour(rgb, mask, *, max_error=None, psnr=None, levels=None, scale=1)
 
         mask = np.asarray(mask)
         scale = check_colour_scale(scale, *mask.shape, field="scale")
-        mask = fine_mask(mask, scale) if mask.ndim == 2 and mask.dtype == bool else mask   # else check_image says
-    prepared = Prepared(rgb, mask, levels, scale)
+        mask = fine_mask(mask, scale, charts) if mask.ndim == 2 and mask.dtype == bool else mask   # else check_image
+    version = VERSION if scale == 1 else FINE_VERSION if charts is None else CHARTED_VERSION
+    prepared = Prepared(rgb, mask, levels, scale, version)
     if max_error is not None:
         return bounded_section(prepared, int(max_error))
     return psnr_section(prepared, target)
@@ -365,12 +371,12 @@ def psnr_section(prepared, target):
     return section if prepared.squared_error(decoded) <= limit else bounded_section(prepared, 0)
 
 
-def section_bytes(shape, scale, levels, transform, steps, correction, payload):
-    """The header (with the CRC-32 of it and the payload) and the payload: version 1 at ``scale`` 1,
-    byte for byte as before colour scales, else version 2 with the scale after the columns."""
+def section_bytes(shape, version, scale, levels, transform, steps, correction, payload):
+    """The header (with the CRC-32 of it and the payload) and the payload: version 1 (at ``scale`` 1)
+    byte for byte as before colour scales, else ``version`` 2 or 3 with the scale after the columns."""
     fields = (levels, transform, *steps, correction, len(payload), 0)
-    head = (HEADERS[VERSION].pack(MAGIC, VERSION, *shape, *fields) if scale == 1
-            else HEADERS[FINE_VERSION].pack(MAGIC, FINE_VERSION, *shape, scale, *fields))
+    head = (HEADERS[VERSION].pack(MAGIC, VERSION, *shape, *fields) if version == VERSION
+            else HEADERS[version].pack(MAGIC, version, *shape, scale, *fields))
     crc = zlib.crc32(payload, zlib.crc32(head[:-CRC_BYTES]))
     return head[:-CRC_BYTES] + struct.pack("<I", crc) + payload
 
@@ -386,13 +392,13 @@ def section_length(data, source="<bytes>"):
 
 def read_header(data, source):
     """The header's fields (magic and version checked) in version 1's order, then the colour scale
-    (version 2's field after the columns; 1 in version 1), or an MzcError."""
+    (versions 2 and 3's field after the columns; 1 in version 1), or an MzcError."""
     magic, version = LEAD.unpack_from(data) if len(data) >= LEAD.size else (bytes(data[:4]), None)
     if magic != MAGIC:
         raise MzcError(f"not a colour section (starts {bytes(magic)!r}, not {MAGIC!r})", source=source,
                        field="colour")
     if version not in HEADERS:
-        raise MzcError(f"colour section version {version} (this mzc reads {VERSION} and {FINE_VERSION})",
+        raise MzcError(f"colour section version {version} (this mzc reads {', '.join(map(str, HEADERS))})",
                        source=source, field="colour")
     header = HEADERS[version]
     if len(data) < header.size:
@@ -402,23 +408,24 @@ def read_header(data, source):
     return fields + (1,) if version == VERSION else fields[:4] + fields[5:] + fields[4:5]
 
 
-def decode_colour(data, mask, source="<bytes>"):
-    """The (R, C, 3) uint8 image of a colour section that spans ``data``, 0 at invalid nodes;
-    any damage or a mask of another shape raises an MzcError."""
+def decode_colour(data, mask, source="<bytes>", charts=None):
+    """The (R, C, 3) uint8 image of a colour section that spans ``data``, 0 at invalid nodes (of
+    a multi-chart grid, ``charts`` its charts: version 3); any damage, a mask of another shape, or
+    a section of another kind of grid raises an MzcError."""
     from mzc.codecs.dwt2d.entropy import Decoder
 
     data = bytes(data)
     _magic, version, rows, cols, levels, number, *rest = read_header(data, source)
     steps, (correction, length, crc, scale) = rest[:3], rest[3:]
     mask = np.asarray(mask, dtype=bool)
-    fault = scale_fault(scale, version, mask.shape) or section_fault(
+    fault = charts_fault(version, charts) or scale_fault(scale, version, mask.shape) or section_fault(
         data, HEADERS[version].size, (rows, cols), fine_shape(mask.shape, scale), levels, number, steps, length, crc)
     if fault:
         raise MzcError(fault, source=source, field="colour")
     if scale > 1:
         from mzc.grid import fine_mask
 
-        mask = fine_mask(mask, scale)
+        mask = fine_mask(mask, scale, charts)
     transform = TRANSFORMS[number]
     decoder = Decoder(data[HEADERS[version].size:], source, SAME_SIZE)
     relevant = w2.flatten(lifting.relevance(mask, transform.wavelet, levels))
@@ -445,8 +452,19 @@ def fine_shape(shape, scale):
     return tuple((n - 1) * scale + 1 for n in shape)
 
 
+def charts_fault(version, charts):
+    """What is wrong with a section's version on a grid with or without ``charts`` (None when
+    nothing is): version 3, colours finer than the nodes of a multi-chart grid, on such a grid
+    alone, and no version 2 on it (its samples between the charts would be valid)."""
+    if version == CHARTED_VERSION and charts is None:
+        return "a colour section of version 3 belongs to a multi-chart grid, and this grid has no charts"
+    if version == FINE_VERSION and charts is not None:
+        return "a colour section of version 2 belongs to a grid without charts, and this grid has charts"
+    return None
+
+
 def scale_fault(scale, version, mask_shape):
-    """What is wrong with a version 2 section's scale (None when nothing is): 2..MAX_COLOUR_SCALE, its
+    """What is wrong with a version 2 or 3 section's scale (None when nothing is): 2..MAX_COLOUR_SCALE, its
     image within the grid limits (checked before the shapes are compared, and anything allocated)."""
     from mzc.limits import MAX_COLOUR_SCALE, check_colour_scale
 
