@@ -151,8 +151,8 @@ def fine_mask(valid, scale, charts=None):
     a sample is valid where every node of the cell (edge, node) it lies in is, and of a multi-chart
     grid's ``charts`` lies in one chart (spec/zgrid.md, Colours finer than the nodes), so that
     nothing beside the node mask and the charts need be stored."""
-    lattices = [fine_lattice(n, scale) for n in valid.shape]
-    cells = [np.ix_(rows, cols) for rows in (lattices[0][0], lattices[0][1]) for cols in (lattices[1][0], lattices[1][1])]
+    (row_low, row_high, _), (col_low, col_high, _) = (fine_lattice(n, scale) for n in valid.shape)
+    cells = [np.ix_(rows, cols) for rows in (row_low, row_high) for cols in (col_low, col_high)]
     mask = valid[cells[0]] & valid[cells[1]] & valid[cells[2]] & valid[cells[3]]
     if charts is None:
         return mask

@@ -1,7 +1,8 @@
-"""Colour finer than the nodes (issue 32: slice --colour-scale K): the sample lattice and its mask,
-the z-grid 6.0 and the colour section version 2 that carry it, and the pipeline slice | encode
---dwt2d | decode | triangulate --texture on VTK's fran, whose texture comes back finer and closer
-to the source than at the nodes alone.
+"""Colour finer than the nodes (issue 32: slice --colour-scale K): the sample lattice and its mask
+(of one grid, and of a multi-chart grid, whose charts each hold their block), the z-grid 6.0 and
+the colour sections of version 2 and 3 that carry it, and the pipeline slice | encode --dwt2d |
+decode | triangulate --texture on VTK's fran, whose texture comes back finer and closer to the
+source than at the nodes alone.
 """
 
 import numpy as np
@@ -40,20 +41,50 @@ def fine_grids(draw):
     return ZGrid(z, 0.5, 0.25, units="mm", fine_colors=fine), scale
 
 
-def brute_fine_mask(valid, scale):
+def brute_fine_mask(valid, scale, label=None):
     """The sample mask by its definition, one sample at a time: every node of the rows and columns
-    floor(a / K), ceil(a / K) and floor(b / K), ceil(b / K) valid."""
+    floor(a / K), ceil(a / K) and floor(b / K), ceil(b / K) valid, and with a chart ``label`` for
+    each node, of one chart."""
     rows, cols = ((n - 1) * scale + 1 for n in valid.shape)
-    return np.array([[all(valid[r, c] for r in {a // scale, -(-a // scale)} for c in {b // scale, -(-b // scale)})
-                      for b in range(cols)] for a in range(rows)], dtype=bool).reshape(rows, cols)
+    label = np.zeros(valid.shape, dtype=int) if label is None else label
+
+    def valid_sample(a, b):
+        nodes = [(r, c) for r in {a // scale, -(-a // scale)} for c in {b // scale, -(-b // scale)}]
+        return all(valid[node] for node in nodes) and len({label[node] for node in nodes}) == 1
+
+    return np.array([[valid_sample(a, b) for b in range(cols)] for a in range(rows)], dtype=bool).reshape(rows, cols)
+
+
+@st.composite
+def side_by_side_charts(draw, shape):
+    """Charts that tile a grid of ``shape`` in blocks: its columns cut at some places, each piece's
+    rows at others (views and lattice offsets any: the mask reads the blocks alone)."""
+    from mzc.grid import Chart
+
+    rows, cols = shape
+    cuts = sorted(draw(st.sets(st.integers(1, cols - 1), max_size=3))) if cols > 1 else []
+    charts = []
+    for col0, col1 in zip([0, *cuts], [*cuts, cols]):
+        row_cuts = sorted(draw(st.sets(st.integers(1, rows - 1), max_size=2))) if rows > 1 else []
+        charts += [Chart(draw(st.sampled_from(["+x", "-y", "+z"])), row0, col0, row1 - row0, col1 - col0, 0, 0)
+                   for row0, row1 in zip([0, *row_cuts], [*row_cuts, rows])]
+    return tuple(charts)
 
 
 @settings(max_examples=100, deadline=None)
-@given(arrays(bool, st.tuples(st.integers(1, 7), st.integers(1, 7))), st.integers(1, 5))
-def test_the_sample_mask_is_every_node_of_the_samples_cell(valid, scale):
+@given(arrays(bool, st.tuples(st.integers(1, 7), st.integers(1, 7))), st.integers(1, 5), st.data())
+def test_the_sample_mask_is_every_node_of_the_samples_cell_in_one_chart(valid, scale, data):
+    from mzc.grid import chart_labels
+
     mask = fine_mask(valid, scale)
     assert mask.tolist() == brute_fine_mask(valid, scale).tolist()
     assert mask[::scale, ::scale].tolist() == valid.tolist()   # a node's sample is valid with it
+    charts = data.draw(side_by_side_charts(valid.shape))
+    charted = fine_mask(valid, scale, charts)
+    assert charted.tolist() == brute_fine_mask(valid, scale, chart_labels(valid.shape, charts)).tolist()
+    assert charted[::scale, ::scale].tolist() == valid.tolist()
+    if len(charts) == 1:
+        assert charted.tolist() == mask.tolist()
 
 
 @settings(max_examples=150, deadline=None)
@@ -177,12 +208,76 @@ def test_the_spec_version_2_example_decodes_to_the_image_it_shows():
     assert colour.encode_colour(rgb.astype(np.uint8), nodes, max_error=0, scale=2) == section   # as mzc wrote it
 
 
-def test_a_multi_chart_grid_has_no_colour_scale():
+def spec_example_3():
+    """(the version 3 worked example's bytes, its node mask, its charts, its image) from spec/colour.md."""
+    from pathlib import Path
+
     from mzc.grid import Chart
 
-    charts = (Chart("+z", 0, 0, 2, 2, 0, 0), Chart("-x", 0, 2, 2, 2, 5, 0))
-    with pytest.raises(MzcError, match="multi-chart"):
-        ZGrid(np.ones((2, 4)), 1, 1, charts=charts, fine_colors=np.zeros((3, 7, 3)))
+    text = (Path(__file__).resolve().parents[1] / "spec" / "colour.md").read_text()
+    blocks = text.split("```")
+    block = lambda name: next(b for b in blocks if b.startswith(name + "\n")).split("\n", 1)[1]  # noqa: E731
+    section = bytes.fromhex("".join(block("hex-3").split()))
+    samples = np.array([[c == "#" for c in row] for row in block("mask-3").split()])
+    rgb = np.array([[int(v) for v in row.split()] for row in block("rgb-3").strip().splitlines()])
+    words = text.split("The charts (view, row0, col0, rows, cols, i0, j0; the decoder is given them) are\n")[1]
+    charts = tuple(Chart(view, *map(int, numbers)) for view, *numbers in
+                   (chart.split() for chart in words.split("`")[1:4:2]))
+    return section, samples[::2, ::2], charts, rgb.reshape(*samples.shape, 3)
+
+
+def test_the_spec_version_3_example_decodes_to_the_image_it_shows():
+    section, nodes, charts, rgb = spec_example_3()
+    assert nodes.all() and [chart.col0 for chart in charts] == [0, 2]
+    samples = (rgb != 0).any(axis=-1)
+    assert fine_mask(nodes, 2, charts).tolist() == samples.tolist() and not samples[:, 3].any()
+    assert np.array_equal(colour.decode_colour(section, nodes, charts=charts), rgb)
+    assert colour.encode_colour(rgb.astype(np.uint8), nodes, max_error=0, scale=2, charts=charts) == section
+    with pytest.raises(MzcError, match="version 3 belongs to a multi-chart grid"):
+        colour.decode_colour(section, nodes, source="a.mzw2")
+
+
+def two_charts():
+    """Two charts side by side on a 2 x 4 grid: columns 0-1 looking along +z, 2-3 along -x."""
+    from mzc.grid import Chart
+
+    return Chart("+z", 0, 0, 2, 2, 0, 0), Chart("-x", 0, 2, 2, 2, 5, 0)
+
+
+def test_a_multi_chart_grid_holds_each_charts_finer_block_and_nothing_between():
+    """The samples between two charts' blocks are invalid (0 once in the grid), each chart grid
+    gets its block of the image, and the grid round-trips through the z-grid 6.0 and a dwt2d file."""
+    import mzc
+
+    fine = np.arange(3 * 7 * 3).reshape(3, 7, 3) % 200 + 50
+    grid = ZGrid(np.ones((2, 4)), 1, 1, charts=two_charts(), fine_colors=fine)
+    assert grid.colour_scale == 2 and not grid.fine_colors[:, 3].any()
+    assert grid.fine_colors[:, [0, 1, 2, 4, 5, 6]].tolist() == fine[:, [0, 1, 2, 4, 5, 6]].tolist()
+    left, right = grid.chart_grids()
+    assert left.fine_colors.tolist() == fine[:, :3].tolist() and right.fine_colors.tolist() == fine[:, 4:].tolist()
+    data = zgrid.write(grid, raw="float64")
+    assert data.startswith(b"mzc-zgrid 6.0\n") and zgrid.write(zgrid.read(data, "g.zg"), raw="float64") == data
+    coded = mzc.encode(grid, "dwt2d", max_error=0.01, colour_max_error=0)
+    back = mzc.decode(coded)
+    assert back.charts == grid.charts and back.fine_colors.tobytes() == grid.fine_colors.tobytes()
+
+
+@settings(max_examples=60, deadline=None)
+@given(fine_images(), st.sampled_from([0, 3]), st.data())
+def test_a_version_3_section_codes_a_multi_chart_grids_samples_within_the_bound(image, max_error, data):
+    rgb, mask, scale = image
+    charts = data.draw(side_by_side_charts(mask.shape))
+    section = colour.encode_colour(rgb, mask, max_error=max_error, scale=scale, charts=charts)
+    assert section[4] == colour.CHARTED_VERSION and section[13] == scale
+    decoded = colour.decode_colour(section, mask, charts=charts)
+    samples = fine_mask(mask, scale, charts)
+    assert not decoded[~samples].any()
+    assert np.abs(decoded.astype(int) - rgb)[samples].max(initial=0) <= max_error
+    with pytest.raises(MzcError, match="version 3 belongs to a multi-chart grid"):
+        colour.decode_colour(section, mask)
+    fine = colour.encode_colour(rgb, mask, max_error=max_error, scale=scale)
+    with pytest.raises(MzcError, match="version 2 belongs to a grid without charts"):
+        colour.decode_colour(fine, mask, charts=charts)
 
 
 def test_new_values_of_another_shape_or_new_colours_leave_the_fine_colours_behind():
@@ -242,6 +337,36 @@ def test_slice_samples_between_the_nodes_on_the_surface():
     assert samples.sum() > 3 * fine.valid.sum()
 
 
+def test_slice_samples_each_chart_of_a_multi_chart_grid_on_its_surface():
+    """On the ball whose colour is linear in the position, a 6-chart grid sampled twice as finely:
+    its node samples are the nodes' colours at scale 1, every valid sample is the colour at its
+    point within 3 levels (each chart's samples at the points its own node lines place them), and
+    no sample between two charts' blocks is valid."""
+    from test_colour import ball
+
+    from mzc.grid import fine_lattice
+    from mzc.ops.slicing import slice_surface
+
+    mesh, colour_of = ball()
+    plain, fine = slice_surface(mesh, charts=6), slice_surface(mesh, charts=6, colour_scale=2)
+    assert len(fine.charts) > 1 and fine.colors.tobytes() == plain.colors.tobytes()
+    errors = []
+    for part in fine.chart_grids():
+        (low, high, _), (left, right, _) = (fine_lattice(n, 2) for n in part.shape)
+        # at K = 2 the bilinear mix of a sample's cell is the mean of its (one, two or four) nodes
+        z = (part.z[low][:, left] + part.z[high][:, right] + part.z[low][:, right] + part.z[high][:, left]) / 4
+        v, u = np.mgrid[0:z.shape[0], 0:z.shape[1]] / 2.0
+        points = part.to_input_frame(np.stack([part.origin[0] + u * part.d2, part.origin[1] + v * part.d1, z], -1))
+        samples = fine_mask(part.valid, 2)
+        errors.append(np.abs(part.fine_colors[samples] - colour_of(points[samples])).max())
+    assert max(errors) <= 3.0, errors
+    between = np.ones(fine.fine_colors.shape[:2], dtype=bool)
+    for chart in fine.charts:
+        between[chart.block(2)] = False
+    assert between.any() and not fine_mask(fine.valid, 2, fine.charts)[between].any()
+    assert not fine.fine_colors[between].any()
+
+
 def test_slice_refuses_a_colour_scale_it_cannot_honour_in_one_line(tmp_path):
     from test_colour import ball, coloured_surface
 
@@ -256,7 +381,6 @@ def test_slice_refuses_a_colour_scale_it_cannot_honour_in_one_line(tmp_path):
             (["ball.ply", "--colour-scale", "0"], 2, b"--colour-scale"),
             (["ball.ply", "--colour-scale", "9"], 2, b"--colour-scale"),
             (["ball.ply", "--colour-scale", "2.5"], 2, b"--colour-scale"),
-            (["ball.ply", "--charts", "6", "--colour-scale", "2"], 1, b"multi-chart"),
             (["plain.ply", "--colour-scale", "2"], 1, b"has none"),
             (["g.zg", "--colour-scale", "2"], 1, b"colour_scale")):
         result = run_mzc("slice", *arguments, "-o", "out.zg", cwd=tmp_path)

@@ -1,16 +1,17 @@
-// The colour section, versions 1 and 2 (spec/colour.md): the R x C x 3 8-bit image of a grid's
-// nodes (version 2: of its colours sampled K times finer, ((R - 1) K + 1) x ((C - 1) K + 1) x 3)
-// from its bytes and the grid's validity mask. A dwt2d payload of the three YCoCg-R channels'
-// bands (the integer LeGall 5/3 or dwt2d 3.0's CDF 9/7), then an optional correction layer.
+// The colour section, versions 1, 2 and 3 (spec/colour.md): the R x C x 3 8-bit image of a grid's
+// nodes (version 2: of its colours sampled K times finer, ((R - 1) K + 1) x ((C - 1) K + 1) x 3;
+// version 3: version 2 on a multi-chart grid, no sample between two charts valid) from its bytes,
+// the grid's validity mask and its charts. A dwt2d payload of the three YCoCg-R channels' bands
+// (the integer LeGall 5/3 or dwt2d 3.0's CDF 9/7), then an optional correction layer.
 //
 //   import { decodeColour } from "./colour.mjs";
-//   const rgb = decodeColour(bytes, { rows, cols, valid });   // Uint8Array, rows * cols * 3 (version 1)
+//   const rgb = decodeColour(bytes, { rows, cols, valid, charts });   // Uint8Array, rows * cols * 3 (version 1)
 
-import { fail, crc32 } from "./header.mjs";
+import { fail, crc32, chartLabels } from "./header.mjs";
 import { Payload, bandShapes, relevance3, decodeBand0, decodeDetail, decodeCorrection, inverse3 } from "./dwt2d.mjs";
 
 const MAGIC = [0x6d, 0x7a, 0x63, 0x43];   // "mzcC"
-const HEADERS = { 1: 30, 2: 31 };         // a version's header bytes (version 2 adds the scale K after cols)
+const HEADERS = { 1: 30, 2: 31, 3: 31 };  // a version's header bytes (versions 2 and 3 add the scale K after cols)
 const MAX_SCALE = 8;
 const MAX_NODES = 100_000_000;
 const UNIT = 16;                          // a step's sixteenths of a level
@@ -21,20 +22,21 @@ const STEP_FACTORS = [[177, 116, 63], [177, 116, 63], [256, 199, 116]];   // H, 
 const BAND0_FACTOR = 248;
 
 /** A grid decoded by `decodeCompact` with its colours: its `colourSection` decoded over its valid
- * nodes into `colors` (spec/dwt2d.md, Colours of 7.0), and for a version 2 section the finer image
- * as `fineColors` with its `colourScale`, `colors` then its node samples; a grid without one as it is. */
+ * nodes and its charts (a multi-chart grid's chart records) into `colors` (spec/dwt2d.md, Colours
+ * of 7.0), and for a version 2 or 3 section the finer image as `fineColors` with its `colourScale`,
+ * `colors` then its node samples; a grid without one as it is. */
 export function withColours({ colourSection, ...grid }) {
   if (!colourSection) return grid;
   const valid = Uint8Array.from(grid.z, (v) => (Number.isNaN(v) ? 0 : 1));
-  const image = decodeColour(colourSection, { rows: grid.rows, cols: grid.cols, valid });
+  const image = decodeColour(colourSection, { rows: grid.rows, cols: grid.cols, valid, charts: grid.charts });
   const scale = colourScale(colourSection);
   if (scale === 1) return { ...grid, colors: image };
   return { ...grid, colors: nodeSamples(image, grid.rows, grid.cols, scale), fineColors: image, colourScale: scale };
 }
 
-/** K of a colour section (1 for version 1). */
+/** K of a decoded colour section (1 for version 1). */
 function colourScale(bytes) {
-  return bytes[4] === 2 ? bytes[13] : 1;
+  return bytes[4] === 1 ? 1 : bytes[13];
 }
 
 /** The nodes' colours (rows * cols * 3) of an image of colours `scale` times finer: samples (rK, cK). */
@@ -48,29 +50,32 @@ export function nodeSamples(image, rows, cols, scale) {
 }
 
 /** The validity (0/1, row by row) of the colour samples `scale` times finer than a grid's `valid`
- * nodes: a sample is valid where every node of the cell, edge or node it lies in is (spec/zgrid.md,
- * Colours finer than the nodes). */
-export function fineMask(valid, rows, cols, scale) {
+ * nodes: a sample is valid where every node of the cell, edge or node it lies in is, and of a
+ * multi-chart grid's `charts` lies in one chart (spec/zgrid.md, Colours finer than the nodes). */
+export function fineMask(valid, rows, cols, scale, charts) {
   const fineRows = (rows - 1) * scale + 1, fineCols = (cols - 1) * scale + 1;
+  const label = charts ? chartLabels(charts, rows, cols) : new Int32Array(rows * cols);   // without charts, one
   const out = new Uint8Array(fineRows * fineCols);
   for (let a = 0; a < fineRows; a++) {
-    const r0 = Math.floor(a / scale), r1 = Math.ceil(a / scale);
+    const r0 = Math.floor(a / scale) * cols, r1 = Math.ceil(a / scale) * cols;
     for (let b = 0; b < fineCols; b++) {
-      const c0 = Math.floor(b / scale), c1 = Math.ceil(b / scale);
-      out[a * fineCols + b] = valid[r0 * cols + c0] && valid[r0 * cols + c1] && valid[r1 * cols + c0] && valid[r1 * cols + c1] ? 1 : 0;
+      const c0 = Math.floor(b / scale), c1 = Math.ceil(b / scale), first = label[r0 + c0];
+      out[a * fineCols + b] = valid[r0 + c0] && valid[r0 + c1] && valid[r1 + c0] && valid[r1 + c1]
+        && label[r0 + c1] === first && label[r1 + c0] === first && label[r1 + c1] === first ? 1 : 0;
     }
   }
   return out;
 }
 
 /** The image (Uint8Array, rows * cols * 3: red, green, blue a node, 0 at invalid nodes) of a colour
- * section that spans `bytes`, decoded with `mask` ({rows, cols, valid: rows * cols 0/1}); any damage
- * or a mask of another shape throws an MzcError. */
+ * section that spans `bytes`, decoded with `mask` ({rows, cols, valid: rows * cols 0/1, charts: a
+ * multi-chart grid's, else absent}); any damage, a mask of another shape, or a section of another
+ * kind of grid (version 3 without charts, version 2 with them) throws an MzcError. */
 export function decodeColour(bytes, mask) {
   if (!(bytes instanceof Uint8Array)) bytes = new Uint8Array(bytes);
   const h = sectionHeader(bytes, mask);
   const nodes = Uint8Array.from(mask.valid, (v) => (v ? 1 : 0));
-  const valid = h.scale === 1 ? nodes : fineMask(nodes, mask.rows, mask.cols, h.scale);
+  const valid = h.scale === 1 ? nodes : fineMask(nodes, mask.rows, mask.cols, h.scale, mask.charts);
   const payload = new Payload(bytes.subarray(HEADERS[h.version]), false);
   const p = { v3: true, levels: h.levels, wavelet: WAVELETS[h.transform] };
   const shapes = bandShapes(h.rows, h.cols, p);
@@ -94,15 +99,16 @@ export function decodeColour(bytes, mask) {
   return Uint8Array.from(image);
 }
 
-/** The header's fields (Layout; of version 2, Layout of version 2), each checked, with the
- * section's length and CRC-32. */
+/** The header's fields (Layout; of versions 2 and 3, Layout of version 2), each checked, with the
+ * section's length and CRC-32; its version against the grid's charts first. */
 function sectionHeader(bytes, mask) {
   if (bytes.length >= 4 && MAGIC.some((b, i) => bytes[i] !== b)) fail("colour", "not a colour section (no mzcC)");
   const version = bytes[4];
-  if (bytes.length >= 5 && !HEADERS[version]) fail("colour", `colour section version ${version} (this decoder reads 1 and 2)`);
+  if (bytes.length >= 5 && !HEADERS[version]) fail("colour", `colour section version ${version} (this decoder reads ${Object.keys(HEADERS).join(", ")})`);
   const size = HEADERS[version] ?? HEADERS[1];
   if (bytes.length < size) fail("colour", `colour section of ${bytes.length} bytes ends inside its ${size}-byte header`);
-  const at = size - 30;   // version 2's fields after cols lie a byte further
+  checkVersionOnCharts(version, mask.charts);
+  const at = size - 30;   // versions 2 and 3's fields after cols lie a byte further
   const view = new DataView(bytes.buffer, bytes.byteOffset, size);
   const h = {
     version, rows: view.getUint32(5, true), cols: view.getUint32(9, true), scale: at ? bytes[13] : 1,
@@ -121,6 +127,14 @@ function sectionHeader(bytes, mask) {
   if (bytes.length !== size + length) fail("colour", `the section declares ${size + length} bytes and has ${bytes.length}`);
   if (crc32(bytes.subarray(0, size - 4), bytes.subarray(size)) !== view.getUint32(size - 4, true)) fail("colour", "the colour section's CRC-32 does not match");
   return h;
+}
+
+/** Refuses a section of version 3 (colours finer than the nodes of a multi-chart grid) on a grid
+ * without charts, and of version 2 on a grid with them: its sample mask would be another
+ * (mzc.codecs.dwt2d.colour.charts_fault, word for word). */
+function checkVersionOnCharts(version, charts) {
+  if (version === 3 && !charts) fail("colour", "a colour section of version 3 belongs to a multi-chart grid, and this grid has no charts");
+  if (version === 2 && charts) fail("colour", "a colour section of version 2 belongs to a grid without charts, and this grid has charts");
 }
 
 /** Transform 0's step of every band (sixteenths) from a channel's step S (Band steps). */

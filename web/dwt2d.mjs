@@ -26,8 +26,8 @@ export function decodeDwt2d(bytes, lines, body, magic) {
 /** Decodes a 7.0 file (bytes; the end of its magic line; its magic): its sections, the header's
  * fields read as the lines they stand for, the payload with 7.0's table records; section 3, a
  * grid's colours (Colours of 7.0), comes back undecoded as `colourSection` (colour.mjs's
- * `withColours` decodes it over the grid's valid nodes). A 10.0 file's CRC-32 is checked before
- * its minor version, as mzc does. */
+ * `withColours` decodes it over the grid's valid nodes and charts). A 10.0 file's CRC-32 is
+ * checked before its minor version, as mzc does. */
 export function decodeCompact(bytes, magicEnd, magic) {
   const newest = magic.major >= 10 ? TIGHT_PLACES.length - 1 : 0;
   const parts = magic.major >= 10 ? tightParts(bytes, magicEnd, Math.min(magic.minor, newest)) : null;

@@ -229,21 +229,29 @@ export function checkCharts(charts, grid, z) {
     fail("charts", "a multi-chart grid is planar, without crs or raster");
   }
   if (grid.origin[0] !== 0 || grid.origin[1] !== 0) fail("origin", "a multi-chart grid's origin is 0 0");
-  const owner = new Int32Array(grid.rows * grid.cols).fill(-1);
-  charts.forEach((c, n) => {
-    if (c.row0 < 0 || c.col0 < 0 || c.rows < 1 || c.cols < 1 || c.row0 + c.rows > grid.rows || c.col0 + c.cols > grid.cols) {
-      fail("charts", `chart ${n + 1} does not lie inside the ${grid.rows} x ${grid.cols} array`);
-    }
-    for (let r = c.row0; r < c.row0 + c.rows; r++) {
-      for (let col = c.col0; col < c.col0 + c.cols; col++) {
-        if (owner[r * grid.cols + col] >= 0) fail("charts", `charts ${owner[r * grid.cols + col] + 1} and ${n + 1} overlap`);
-        owner[r * grid.cols + col] = n;
-      }
-    }
-  });
+  const owner = chartLabels(charts, grid.rows, grid.cols);
   z.forEach((v, i) => {
     if (!Number.isNaN(v) && owner[i] < 0) fail("charts", "a valid node lies outside every chart");
   });
+}
+
+/** The number of the chart each node (row by row) of a rows x cols multi-chart grid lies in, -1
+ * outside them (mzc.grid.chart_labels), refusing charts that leave the array or overlap: the
+ * labels checkCharts reads, and colour.mjs's fineMask. */
+export function chartLabels(charts, rows, cols) {
+  const label = new Int32Array(rows * cols).fill(-1);
+  charts.forEach((c, n) => {
+    if (c.row0 < 0 || c.col0 < 0 || c.rows < 1 || c.cols < 1 || c.row0 + c.rows > rows || c.col0 + c.cols > cols) {
+      fail("charts", `chart ${n + 1} does not lie inside the ${rows} x ${cols} array`);
+    }
+    for (let r = c.row0; r < c.row0 + c.rows; r++) {
+      for (let col = c.col0; col < c.col0 + c.cols; col++) {
+        if (label[r * cols + col] >= 0) fail("charts", `charts ${label[r * cols + col] + 1} and ${n + 1} overlap`);
+        label[r * cols + col] = n;
+      }
+    }
+  });
+  return label;
 }
 
 // ---------------------------------------------------------------------------------------

@@ -1,6 +1,6 @@
 // The z-grid itself (spec/zgrid.md): `mzc decode` reads it as any grid and writes it again,
 // so decode() reads its plain (1.x, 2.x) and raw (3.x, 4.0, 5.x with colours, 6.0 with colours
-// finer than the nodes) bodies too.
+// finer than the nodes, of a multi-chart grid too: no sample between two charts valid) bodies too.
 
 import { fineMask, nodeSamples } from "./colour.mjs";
 import { fail, headerFields, fieldReader, gridFields, checkChecksum, checkCharts, VIEWS, words, bodyLines, COUNTED_SINCE } from "./header.mjs";
@@ -25,8 +25,7 @@ export function decodeZgrid(bytes, lines, body, magic) {
   const z = raw ? rawBody(h, data, grid) : plainBody(data, grid);
   if (charts) checkCharts(charts, grid, z);
   if (scale > 1) {
-    if (charts) fail("colour_scale", "a multi-chart grid has colours at its nodes alone");
-    const samples = fineMask(Uint8Array.from(z, (v) => (Number.isNaN(v) ? 0 : 1)), grid.rows, grid.cols, scale);
+    const samples = fineMask(Uint8Array.from(z, (v) => (Number.isNaN(v) ? 0 : 1)), grid.rows, grid.cols, scale, charts);
     samples.forEach((v, i) => v || colors.fill(0, 3 * i, 3 * i + 3));
     return { ...grid, z, charts, colors: nodeSamples(colors, grid.rows, grid.cols, scale), fineColors: colors, colourScale: scale };
   }
