@@ -50,9 +50,9 @@ def textured_error(grid, mesh, samples, reference, folder):
     from mzc.meshes import read_mesh
     from mzc.meshes.obj import textured
     from mzc.ops.colouring import surface_colours
-    from mzc.ops.triangulation import GridMesh
+    from mzc.ops.triangulation import node_mesh
 
-    for path, data in textured(GridMesh(grid, None), str(folder / "t.obj"), str(folder / "t.png")):
+    for path, data in textured(grid, node_mesh(grid), str(folder / "t.obj"), str(folder / "t.png")):
         Path(path).write_bytes(data)
     rebuilt = read_mesh(folder / "t.obj")
     distance = nearest_triangles(samples, rebuilt.points, rebuilt.triangles)[0]

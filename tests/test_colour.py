@@ -507,11 +507,29 @@ def test_triangulate_texture_writes_an_image_that_reads_back_as_the_nodes_colour
     for arguments in (["-o", tmp_path / "x.ply"], ["-o", tmp_path / "x.obj", "--vertices", "100"]):
         result = run_mzc("triangulate", tmp_path / "c.zg", *arguments, "--texture", tmp_path / "x.png")
         assert result.returncode == 2 and b"--texture" in result.stderr and b"Traceback" not in result.stderr
+    assert not [path.name for path in tmp_path.iterdir() if path.name.startswith("x.")]
+
+
+def test_triangulate_texture_of_a_multi_chart_grid_reads_back_as_its_vertex_coloured_mesh(tmp_path):
+    """--texture on the ball's 6 charts: the same points, the same triangles (the seams' first) and,
+    read back by mzc, every vertex its colour in the vertex-coloured mesh (a seam's triangle takes
+    one texel, and a vertex's own comes last)."""
+    from mzc.formats import zgrid
+    from mzc.meshes import read_mesh
+    from mzc.ops.slicing import slice_surface
+    from mzc.ops.triangulation import grid_to_mesh
+
+    from conftest import run_mzc
+
     charted = slice_surface(ball()[0], charts=6)
     (tmp_path / "charts.zg").write_bytes(zgrid.write(charted, raw="float64"))
-    result = run_mzc("triangulate", tmp_path / "charts.zg", "-o", tmp_path / "x.obj", "--texture", tmp_path / "x.png")
-    assert result.returncode == 1 and len(result.stderr.splitlines()) == 1 and b"multi-chart" in result.stderr
-    assert not [path.name for path in tmp_path.iterdir() if path.name.startswith("x.")]
+    run_mzc("triangulate", tmp_path / "charts.zg", "-o", tmp_path / "x.obj", "--texture", tmp_path / "x.png",
+            check=True)
+    back, expected = read_mesh(tmp_path / "x.obj"), grid_to_mesh(charted)
+    np.testing.assert_array_equal(back.points, expected.points)
+    as_set = lambda triangles: np.unique(triangles, axis=0)  # noqa: E731   (each corner order kept)
+    np.testing.assert_array_equal(as_set(back.triangles), as_set(expected.triangles))
+    np.testing.assert_array_equal(back.colors, expected.colors)
 
 
 @pytest.mark.parametrize("layout", ["texcoord", "texture_uv"])

@@ -77,12 +77,8 @@ def check_texture_request(input, output, file_format, vertices, texture):
 def write_textured(grid, jump_angle, output, texture):
     """Write the grid's mesh as an OBJ with texture coordinates, its material file and the PNG of
     its colours (``mzc.meshes.obj.textured``), all or none of them."""
-    from mzc.errors import MzcError
     from mzc.meshes.obj import textured
-    from mzc.ops.triangulation import GridMesh
+    from mzc.ops.triangulation import node_mesh
     from mzc.streams import write_outputs
 
-    if grid.charts is not None:
-        raise MzcError("--texture writes one grid's colour image; a multi-chart grid's mesh carries vertex colours "
-                       "(leave out --texture)", field="texture")
-    write_outputs(*textured(GridMesh(grid, jump_angle), output, texture))
+    write_outputs(*textured(grid, node_mesh(grid, jump_angle), output, texture))

@@ -312,31 +312,42 @@ def write(mesh: Mesh) -> bytes:
     return (vertices + faces).encode("ascii")
 
 
-def textured(grid_mesh, obj_path, png_path):
-    """[(path, bytes)] of a grid's mesh (a ``triangulation.GridMesh`` of a grid with colours) as
-    an OBJ at ``obj_path`` whose vertex k has the texture coordinate of its node (r, c), the
-    centre of pixel (R - 1 - rK, cK) of the grid's R x C colour image, K its colour scale (the
-    nodes' colours, K = 1, or ``fine_colors``), written as the PNG at ``png_path`` (its first row
-    the grid's last: v runs up; its invalid pixels padded, ``texture.padded``), and the material
-    file beside the OBJ (its name with .mtl) that names the PNG by its path from the OBJ's folder."""
-    from mzc.grid import fine_mask
+def textured(grid, mesh, obj_path, png_path):
+    """[(path, bytes)] of a grid's mesh (``mesh``: points, triangles and the grid node each point
+    stands for, ``triangulation.node_mesh``) as an OBJ at ``obj_path`` whose vertex k has the
+    texture coordinate of its node (r, c), the centre of pixel (R - 1 - rK, cK) of the grid's R x C
+    colour image, K its colour scale (the nodes' colours, K = 1, or ``fine_colors``), written as the
+    PNG at ``png_path`` (its first row the grid's last: v runs up; its invalid pixels padded,
+    ``texture.padded``), and the material file beside the OBJ (its name with .mtl) that names the
+    PNG by its path from the OBJ's folder. A triangle whose corners are nodes of two charts (the
+    seams of a multi-chart grid) takes its first corner's texture coordinate at all three (the
+    image between two charts' blocks is on neither's surface); those triangles come first, so a
+    reader that gives a vertex the colour at its last corner's coordinate gets its node's."""
+    from mzc.grid import chart_labels, fine_mask
     from mzc.meshes.texture import padded, png_bytes
 
-    grid = grid_mesh.grid
+    points, triangles, node = mesh
     if grid.colors is None:
         raise MzcError("the grid has no colours to write as a texture", field="texture")
     scale = grid.colour_scale
     colours = padded(grid.colors if scale == 1 else grid.fine_colors, fine_mask(grid.valid, scale, grid.charts))
     rows, cols = colours.shape[:2]
-    row, col = np.divmod(np.flatnonzero(grid_mesh.used), grid.shape[1])
+    row, col = np.divmod(node, grid.shape[1])
     uv = np.column_stack([(col * scale + 0.5) / cols, (row * scale + 0.5) / rows])
+    texels = triangles.copy()
+    if grid.charts is not None:
+        label = chart_labels(grid.shape, grid.charts).ravel()[node][triangles]
+        across = (label != label[:, :1]).any(axis=1)
+        texels[across] = texels[across, :1]
+        first = np.argsort(~across, kind="stable")   # the seams' first: a vertex's last corner is its own texel's
+        triangles, texels = triangles[first], texels[first]
     folder = os.path.dirname(os.path.abspath(obj_path))
     material = os.path.splitext(os.path.basename(obj_path))[0] + ".mtl"
     image = os.path.relpath(os.path.abspath(png_path), folder).replace(os.sep, "/")
-    vertices = write(Mesh(grid_mesh.points)).decode("ascii")   # the v lines alone
+    vertices = write(Mesh(points)).decode("ascii")   # the v lines alone
     texture = ("vt %r %r\n" * len(uv)) % tuple(uv.ravel().tolist())
-    faces = np.concatenate(list(grid_mesh.triangle_chunks()) or [np.empty((0, 3), dtype=np.int64)]) + 1
-    corners = ("f %d/%d %d/%d %d/%d\n" * len(faces)) % tuple(np.repeat(faces.ravel(), 2).tolist())
+    pairs = np.stack([triangles, texels], axis=-1) + 1   # each corner's vertex, then its texture coordinate
+    corners = ("f %d/%d %d/%d %d/%d\n" * len(triangles)) % tuple(pairs.ravel().tolist())
     obj = f"mtllib {material}\nusemtl grid_colours\n{vertices}{texture}{corners}"
     mtl = f"newmtl grid_colours\nKa 1 1 1\nKd 1 1 1\nmap_Kd {image}\n"
     return [(obj_path, obj.encode("ascii")), (os.path.join(os.path.dirname(obj_path), material), mtl.encode("utf-8")),

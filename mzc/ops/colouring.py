@@ -135,12 +135,19 @@ def point_triangles(count):
 
 def nearest_colours(points, sources, colours):
     """(n, 3) uint8: for each of ``points``, the colour of the nearest of ``sources`` (``colours``
-    theirs): the colour of a vertex a step adds, such as the zipper's (``mzc.ops.zipper``)."""
+    theirs): the colour of a vertex a step adds, such as the simplifier's."""
+    return colours[nearest_sources(points, sources)]
+
+
+def nearest_sources(points, sources):
+    """(n,) the number of the nearest of ``sources`` to each of ``points`` (the first of equals),
+    by mzc's exact search: what a vertex a step adds (the zipper's, ``mzc.ops.zipper``) takes
+    its colour and texel from."""
     from mzc.measure.metrics import nearest_triangles
 
     if not len(points):
-        return np.empty((0, 3), dtype=np.uint8)
-    return colours[nearest_triangles(points, sources, point_triangles(len(sources)))[1]]
+        return np.empty(0, dtype=np.int64)
+    return nearest_triangles(points, sources, point_triangles(len(sources)))[1]
 
 
 def densified_colours(colours, dense_valid, n):

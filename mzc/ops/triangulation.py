@@ -221,22 +221,40 @@ def mesh_of(grid, jump_angle=None):
 
 
 def charted_mesh(grid, jump_angle=None):
-    """The Mesh of a multi-chart grid (its ``grid`` set): each chart's GridMesh, one after the other,
-    its jumps those of CHART_JUMP_ANGLE unless ``jump_angle`` is given (spec/zgrid.md, Charts),
-    zipped along their seams into one surface (``mzc.ops.zipper``)."""
+    """The Mesh of a multi-chart grid (its ``grid`` set): its charts' meshes zipped into one
+    surface (``zipped_charts``), each vertex with its node's colour."""
     from mzc.meshes import Mesh
+
+    points, triangles, node = zipped_charts(grid, jump_angle)
+    colors = None if grid.colors is None else grid.colors.reshape(-1, 3)[node]
+    return Mesh(points, triangles, grid=grid, colors=colors)
+
+
+def zipped_charts(grid, jump_angle=None):
+    """(points, triangles, node of each point) of a multi-chart grid: each chart's GridMesh, one
+    after the other, its jumps those of CHART_JUMP_ANGLE unless ``jump_angle`` is given
+    (spec/zgrid.md, Charts), zipped along their seams into one surface (``mzc.ops.zipper``);
+    ``node`` is the flat number of the grid node each point is, or for a point the zipper adds,
+    of the charts' point nearest it (whose colour and texel it takes)."""
     from mzc.ops.zipper import zip_charts
 
     angle = CHART_JUMP_ANGLE if jump_angle is None else jump_angle
     points, triangles, chart, node = chart_meshes(grid, angle)
     zipped, stitched = zip_charts(points, triangles, chart, max(grid.d1, grid.d2))
-    colors = None
-    if grid.colors is not None:   # the zipper's points are the charts', then any it adds
-        from mzc.ops.colouring import nearest_colours
+    if len(zipped) > len(points):
+        from mzc.ops.colouring import nearest_sources
 
-        colors = grid.colors.reshape(-1, 3)[node]
-        colors = np.concatenate([colors, nearest_colours(zipped[len(points):], points, colors)])
-    return Mesh(zipped, stitched, grid=grid, colors=colors)
+        node = np.concatenate([node, node[nearest_sources(zipped[len(points):], points)]])
+    return zipped, stitched, node
+
+
+def node_mesh(grid, jump_angle=None):
+    """(points, triangles, node of each point) of a grid's mesh, whole: a GridMesh's used nodes,
+    or a multi-chart grid's ``zipped_charts`` (what a texture places in the grid's colour image)."""
+    if grid.charts is not None:
+        return zipped_charts(grid, jump_angle)
+    mesh = GridMesh(grid, jump_angle)
+    return mesh.points, mesh.triangles, np.flatnonzero(mesh.used)
 
 
 def chart_meshes(grid, angle):
