@@ -160,6 +160,7 @@ def test_a_batch_never_writes_over_a_file_it_did_not_write(tmp_path):
     decoded = run_mzc("batch", "decode", io, "-o", io, "--workers", "1")
     lines = decoded.stderr.decode().splitlines()
     assert decoded.returncode == 1 and lines[-1].endswith("0 skipped, 1 failed"), lines
+    assert lines[-1].startswith("mzc batch decode: 1 items, none done, "), lines   # not "0 B in, 0 B out"
     assert lines[:-1] == [f"mzc: {io / 'scan.ply'}: is there already and was not written by this batch (no row of "
                           "its manifest says so): move it away or give another -o"]
     assert (io / "scan.ply").read_bytes() == scan and rows_of(io)["scan.ply"]["status"] == "failed"

@@ -62,13 +62,15 @@ class Summary:
         return sum(int(row.get(column) or 0) for row in self.rows if row.get("status") == "ok")
 
     def line(self) -> str:
-        """The one-line summary: items, bytes in and out, ratio, rate, skipped and failed items."""
+        """The one-line summary: items, bytes in and out of those done (or that none is), ratio,
+        rate, skipped and failed items."""
         done_in, done_out = self.total("input_bytes"), self.total("output_bytes")
         ratio = f" ({done_in / done_out:.0f}x smaller)" if done_out and self.action == "encode" else ""
+        sizes = (f"{human_bytes(done_in)} in, {human_bytes(done_out)} out{ratio}"
+                 if len(self.failed) < len(self.rows) else "none done")
         rate = len(self.rows) / self.seconds if self.seconds > 0 else 0.0
-        return (f"mzc batch {self.action}: {len(self.rows)} items, {human_bytes(done_in)} in, {human_bytes(done_out)} "
-                f"out{ratio}, {rate:.2f} items/s in {self.seconds:.1f} s; {self.skipped} skipped, "
-                f"{len(self.failed)} failed")
+        return (f"mzc batch {self.action}: {len(self.rows)} items, {sizes}, {rate:.2f} items/s in {self.seconds:.1f} s; "
+                f"{self.skipped} skipped, {len(self.failed)} failed")
 
 
 def human_bytes(count):
