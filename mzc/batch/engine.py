@@ -69,8 +69,8 @@ class Summary:
         sizes = (f"{human_bytes(done_in)} in, {human_bytes(done_out)} out{ratio}"
                  if len(self.failed) < len(self.rows) else "none done")
         rate = len(self.rows) / self.seconds if self.seconds > 0 else 0.0
-        return (f"mzc batch {self.action}: {len(self.rows)} items, {sizes}, {rate:.2f} items/s in {self.seconds:.1f} s; "
-                f"{self.skipped} skipped, {len(self.failed)} failed")
+        return (f"mzc batch {self.action}: {len(self.rows)} items, {sizes}, {rate:.2f} items/s in "
+                f"{self.seconds:.1f} s; {self.skipped} skipped, {len(self.failed)} failed")
 
 
 def human_bytes(count):
