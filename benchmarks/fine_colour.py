@@ -4,8 +4,10 @@ colour error at K = 1, 2, 4 on the textured scans.
     python benchmarks/fine_colour.py [--quick] [--out DIR]
 
 Scans (tests/data/public): VTK's fran (a 256 x 256 photographic texture) and trimesh's fuze bottle
-(a 1024 x 1024 JPEG label), each sliced as one grid (``charts=1``: a multi-chart grid has no colour
-scale) at its default spacing with ``mzc.slice(..., colour_scale=K)``, coded by ``mzc.encode(grid,
+(a 1024 x 1024 JPEG label), each sliced as one grid (``charts=1``) and as its default multi-chart
+grid (``charts="auto"``, each chart's colours sampled on its own node lines, the samples between
+two charts' blocks invalid, colour section version 3) at its default spacing with
+``mzc.slice(..., colour_scale=K)``, coded by ``mzc.encode(grid,
 "dwt2d")`` (the default shape target) with its colours at ``colour_psnr`` 36 (the default) and
 40 dB, decoded, and written as ``triangulate --texture`` writes it (``mzc.meshes.obj.textured``:
 an OBJ whose vertices' texture coordinates point into the PNG of the colour image), read back by
@@ -37,6 +39,7 @@ PUBLIC = HERE.parent / "tests" / "data" / "public"
 SCANS = {"fran": PUBLIC / "fran" / "fran.obj", "fuze": PUBLIC / "fuze" / "fuze.obj"}
 CASES = ((1, 1), (2, 1), (4, 1), (1, 2))   # (colour scale K, nodes a default spacing): the last the K = 2 image's
                                            # samples as nodes, shape and all (slice --d1 at half the spacing)
+CHARTS = (1, "auto")   # one grid, and the default multi-chart grid
 PSNRS = (36.0, 40.0)   # dB: the colour section's targets
 SAMPLES, QUICK_SAMPLES = 200_000, 40_000
 NEAR = 2.0   # node spacings: a sample farther from the rebuilt surface is not seen by the grid
@@ -74,28 +77,31 @@ def run_scan(name, path, count):
 
     samples = samples_on(Surface.of(mesh), count, np.random.default_rng(32))
     reference = surface_colours(samples, mesh)
-    rows, spacing = [], None
+    rows = []
     with tempfile.TemporaryDirectory() as folder:
-        for scale, density in CASES:
-            start = time.perf_counter()
-            with warnings.catch_warnings():
-                warnings.simplefilter("ignore")
-                finer = {} if spacing is None else {"d1": spacing[0] / density, "d2": spacing[1] / density}
-                grid = mzc.slice(mesh, charts=1, colour_scale=scale, **finer)
-            sliced = time.perf_counter() - start
-            spacing = spacing or (grid.d1, grid.d2)
-            rms, psnr, seen = textured_error(grid, mesh, samples, reference, Path(folder))
-            rows.append({"scale": scale, "density": density, "target": None, "grid": list(grid.shape),
-                         "slice_s": sliced, "colour_rms": rms, "colour_psnr": psnr, "seen": seen})
-            for target in PSNRS:
+        for charts in CHARTS:
+            spacing = None
+            for scale, density in CASES:
                 start = time.perf_counter()
-                data = mzc.encode(grid, "dwt2d", colour_psnr=target)
-                encoded = time.perf_counter() - start
-                decoded = mzc.decode(data)
-                rms, psnr, seen = textured_error(decoded, mesh, samples, reference, Path(folder))
-                rows.append({"scale": scale, "density": density, "target": target, "bytes": len(data),
-                             "colour_bytes": len(compact.read(data, "mzc")[2]), "encode_s": encoded,
-                             "colour_rms": rms, "colour_psnr": psnr, "seen": seen})
+                with warnings.catch_warnings():
+                    warnings.simplefilter("ignore")
+                    finer = {} if spacing is None else {"d1": spacing[0] / density, "d2": spacing[1] / density}
+                    grid = mzc.slice(mesh, charts=charts, colour_scale=scale, **finer)
+                sliced = time.perf_counter() - start
+                spacing = spacing or (grid.d1, grid.d2)
+                case = {"scale": scale, "density": density, "charts": len(grid.charts or [grid])}
+                rms, psnr, seen = textured_error(grid, mesh, samples, reference, Path(folder))
+                rows.append({**case, "target": None, "grid": list(grid.shape), "slice_s": sliced, "colour_rms": rms,
+                             "colour_psnr": psnr, "seen": seen})
+                for target in PSNRS:
+                    start = time.perf_counter()
+                    data = mzc.encode(grid, "dwt2d", colour_psnr=target)
+                    encoded = time.perf_counter() - start
+                    decoded = mzc.decode(data)
+                    rms, psnr, seen = textured_error(decoded, mesh, samples, reference, Path(folder))
+                    rows.append({**case, "target": target, "bytes": len(data),
+                                 "colour_bytes": len(compact.read(data, "mzc")[2]), "encode_s": encoded,
+                                 "colour_rms": rms, "colour_psnr": psnr, "seen": seen})
     return {"scan": name, "path": str(path.relative_to(HERE.parent)), "rows": rows}
 
 
@@ -109,16 +115,16 @@ def markdown(document):
              f"{document['samples']} samples a scan.", ""]
     for s in document["scans"]:
         lines += [f"## {s['scan']}", "",
-                  "| K | spacing | colour target | grid | bytes (of them colour) | colour RMS | PSNR | samples seen | "
-                  "slice / encode s |", "|---" * 9 + "|"]
+                  "| charts | K | spacing | colour target | grid | bytes (of them colour) | colour RMS | PSNR | "
+                  "samples seen | slice / encode s |", "|---" * 10 + "|"]
         for r in s["rows"]:
             target = "uncoded" if r["target"] is None else f"{r['target']:g} dB"
             size = "" if r["target"] is None else f"{r['bytes']} ({r['colour_bytes']})"
             grid = f"{r['grid'][0]} x {r['grid'][1]}" if "grid" in r else ""
             seconds = fmt(r["slice_s"]) if r["target"] is None else fmt(r["encode_s"])
             spacing = "default" if r["density"] == 1 else f"1/{r['density']}"
-            lines.append(f"| {r['scale']} | {spacing} | {target} | {grid} | {size} | {fmt(r['colour_rms'])} | "
-                         f"{fmt(r['colour_psnr'])} | {100 * r['seen']:.0f}% | {seconds} |")
+            lines.append(f"| {r['charts']} | {r['scale']} | {spacing} | {target} | {grid} | {size} | "
+                         f"{fmt(r['colour_rms'])} | {fmt(r['colour_psnr'])} | {100 * r['seen']:.0f}% | {seconds} |")
         lines.append("")
     return "\n".join(lines)
 

@@ -11,14 +11,14 @@ CLI to the z-grid bytes `mzc decode` writes. Skipped when node is not installed.
 
 import dataclasses
 import random
-import re
 import zlib
 
 import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
-from test_colour_codec import SPEC, spec_example
+from test_colour_codec import spec_example
+from test_fine_colour import spec_example_2, spec_example_3
 from test_web_compact import node_json
 
 from mzc.codecs.dwt2d import colour, encode_grid
@@ -78,25 +78,6 @@ def mzc_decoded(section, mask, charts=None):
         return None
 
 
-def spec_fine_example(version):
-    """(the bytes, sample mask and image of spec/colour.md's worked example of ``version`` 2 or 3: its
-    blocks hex-N, mask-N and rgb-N; the node mask is the samples' every second row and column)."""
-    blocks = SPEC.read_text().split("```")
-    block = lambda name: next(b for b in blocks if b.startswith(f"{name}-{version}\n")).split("\n", 1)[1]  # noqa: E731
-    section = bytes.fromhex("".join(block("hex").split()))
-    samples = np.array([[c == "#" for c in row] for row in block("mask").split()])
-    rgb = np.array([[int(v) for v in row.split()] for row in block("rgb").strip().splitlines()])
-    return section, samples, rgb.reshape(*samples.shape, 3)
-
-
-def spec_example_3_charts():
-    """The charts of spec/colour.md's version 3 example, as its text gives them before its mask
-    (`view row0 col0 rows cols i0 j0` in backquotes)."""
-    text = SPEC.read_text().split("```mask-3")[0]
-    found = re.findall(r"`([+-][xyz]) (\d+) (\d+) (\d+) (\d+) (-?\d+) (-?\d+)`", text.rsplit("```", 1)[-1])
-    return tuple(Chart(view, *map(int, numbers)) for view, *numbers in found)
-
-
 def fixtures():
     """(section bytes, mask, image) of each colour fixture."""
     for path in sorted(COLOUR_FIXTURES.glob("*.bin")):
@@ -105,7 +86,7 @@ def fixtures():
 
 
 def test_fixtures_and_the_worked_example_decode_as_mzc_decodes_them():
-    section, samples, rgb = spec_fine_example(2)
+    section, samples, rgb = spec_example_2()
     cases = [*fixtures(), spec_example(), (section, samples[::2, ::2], rgb)]
     assert len(cases) == 5
     for (_section, _mask, rgb), made in zip(cases, web_decoded([case[:2] for case in cases]), strict=True):
@@ -197,9 +178,7 @@ def test_random_version_3_sections_decode_as_mzc_decodes_them(seed):
 def test_the_version_3_worked_example_decodes_as_mzc_decodes_it():
     """spec/colour.md's version 3 section on its 2 x 4 grid of two charts: the image it shows, the
     samples of column 3 (between the charts) 0, in web/ and mzc alike."""
-    section, samples, rgb = spec_fine_example(3)
-    charts = spec_example_3_charts()
-    nodes = samples[::2, ::2]
+    section, nodes, charts, rgb = spec_example_3()
     assert len(charts) == 2 and nodes.shape == (2, 4)
     assert web_decoded([(section, nodes, charts)]) == [rgb.astype(np.uint8).tobytes().hex()]
     assert mzc_decoded(section, nodes, charts) == rgb.astype(np.uint8).tobytes().hex()
