@@ -5,6 +5,8 @@ decode | triangulate --texture on VTK's fran, whose texture comes back finer and
 source than at the nodes alone.
 """
 
+import zlib
+
 import numpy as np
 import pytest
 from hypothesis import given, settings
@@ -232,9 +234,13 @@ def test_the_spec_version_3_example_decodes_to_the_image_it_shows():
     samples = (rgb != 0).any(axis=-1)
     assert fine_mask(nodes, 2, charts).tolist() == samples.tolist() and not samples[:, 3].any()
     assert np.array_equal(colour.decode_colour(section, nodes, charts=charts), rgb)
-    assert colour.encode_colour(rgb.astype(np.uint8), nodes, max_error=0, scale=2, charts=charts) == section
+    assert colour.encode_colour(rgb.astype(np.uint8), nodes, max_error=0, scale=2, levels=1, charts=charts) == section
     with pytest.raises(MzcError, match="version 3 belongs to a multi-chart grid"):
         colour.decode_colour(section, nodes, source="a.mzw2")
+    as_version_2 = bytearray(section)   # what a decoder that ignored the charts would read
+    as_version_2[4] = colour.FINE_VERSION
+    as_version_2[27:31] = zlib.crc32(as_version_2[31:], zlib.crc32(as_version_2[:27])).to_bytes(4, "little")
+    assert colour.decode_colour(bytes(as_version_2), nodes)[0, 3].tolist() == [103, 63, 123]   # the spec's words
 
 
 def two_charts():
