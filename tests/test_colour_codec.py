@@ -24,7 +24,8 @@ sys.path.insert(0, str(REPO / "benchmarks"))
 import colour as benchmark  # noqa: E402
 
 FIXTURES = REPO / "tests" / "fixtures" / "colour"
-FIXTURE_NAMES = {"colour-section-1": 1, "colour-section-1-integer": 0, "colour-section-2": 1}   # name: its transform
+FIXTURE_NAMES = {"colour-section-1": 1, "colour-section-1-integer": 0, "colour-section-2": 1,
+                 "colour-section-3": 1}   # name: its transform
 SPEC = REPO / "spec" / "colour.md"
 
 
@@ -201,16 +202,22 @@ def test_section_length_lets_a_container_append_more_sections():
 
 
 def fixture(name):
-    """(section bytes, mask, expected image) of a fixture of tests/fixtures/colour."""
+    """(section bytes, node mask, charts, expected image) of a fixture of tests/fixtures/colour; the
+    charts of a multi-chart grid's section (its ``views`` and ``blocks``), else None."""
+    from mzc.grid import Chart
+
     expected = np.load(FIXTURES / f"{name}.expected.npz")
-    return (FIXTURES / f"{name}.bin").read_bytes(), expected["mask"], expected["rgb"]
+    charts = (tuple(Chart(str(view), *map(int, block)) for view, block in zip(expected["views"], expected["blocks"]))
+              if "views" in expected else None)
+    return (FIXTURES / f"{name}.bin").read_bytes(), expected["mask"], charts, expected["rgb"]
 
 
 def test_the_fixtures_decode_to_their_expected_images_and_are_never_regenerated():
     for name, transform in FIXTURE_NAMES.items():
-        section, mask, rgb = fixture(name)
+        section, mask, charts, rgb = fixture(name)
         assert colour.read_header(section, name)[5] == transform
-        assert np.array_equal(colour.decode_colour(section, mask), rgb)
+        assert np.array_equal(colour.decode_colour(section, mask, charts=charts), rgb)
+    assert fixture("colour-section-3")[2] is not None and len(list(FIXTURES.glob("*.bin"))) == len(FIXTURE_NAMES)
     for line in (FIXTURES / "SHA256SUMS").read_text().splitlines():
         digest, name = line.split()
         assert hashlib.sha256((FIXTURES / name).read_bytes()).hexdigest() == digest, name
@@ -239,8 +246,8 @@ def decoded_digests():
     """{case: SHA-256 of the decoded image} of the fixture and of fresh sections of real images."""
     cases = {}
     for name in FIXTURE_NAMES:
-        section, mask, _rgb = fixture(name)
-        cases[name] = colour.decode_colour(section, mask)
+        section, mask, charts, _rgb = fixture(name)
+        cases[name] = colour.decode_colour(section, mask, charts=charts)
     rgb, mask = benchmark.height_field_image(64, 48, seed=5)
     cases["height field psnr 33"] = colour.decode_colour(colour.encode_colour(rgb, mask, psnr=33.0), mask)
     cases["height field section"] = np.frombuffer(colour.encode_colour(rgb, mask, max_error=2), dtype=np.uint8)

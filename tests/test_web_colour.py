@@ -17,7 +17,7 @@ import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
-from test_colour_codec import spec_example
+from test_colour_codec import FIXTURE_NAMES, fixture, spec_example
 from test_fine_colour import spec_example_2, spec_example_3
 from test_web_compact import node_json
 
@@ -27,10 +27,8 @@ from mzc.formats import zgrid
 from mzc.grid import Chart, ZGrid, fine_mask
 from mzc.projections import PLANAR_VIEWS
 
-from codec_contract import FIXTURES, rechecksummed
+from codec_contract import rechecksummed
 from web_node import needs_node
-
-COLOUR_FIXTURES = FIXTURES / "colour"
 
 pytestmark = needs_node
 
@@ -78,18 +76,12 @@ def mzc_decoded(section, mask, charts=None):
         return None
 
 
-def fixtures():
-    """(section bytes, mask, image) of each colour fixture."""
-    for path in sorted(COLOUR_FIXTURES.glob("*.bin")):
-        expected = np.load(path.with_name(path.stem + ".expected.npz"))
-        yield path.read_bytes(), expected["mask"], expected["rgb"]
-
-
 def test_fixtures_and_the_worked_example_decode_as_mzc_decodes_them():
     section, samples, rgb = spec_example_2()
-    cases = [*fixtures(), spec_example(), (section, samples[::2, ::2], rgb)]
-    assert len(cases) == 5
-    for (_section, _mask, rgb), made in zip(cases, web_decoded([case[:2] for case in cases]), strict=True):
+    cases = [fixture(name) for name in FIXTURE_NAMES]
+    cases += [(*spec_example()[:2], None, spec_example()[2]), (section, samples[::2, ::2], None, rgb)]
+    assert len(cases) == 6
+    for (*_case, rgb), made in zip(cases, web_decoded([case[:3] for case in cases]), strict=True):
         assert made == rgb.astype(np.uint8).tobytes().hex()
 
 
@@ -102,28 +94,28 @@ def with_crc(section):
     return bytes(changed)
 
 
-def damaged(section, mask, seed):
-    """Variants of a section: cut, bytes added, another mask, and 60 with 1 to 3 bytes changed under
-    a right CRC-32 (its header fields among them)."""
+def damaged(section, mask, charts, seed):
+    """Variants of a section (of a multi-chart grid's ``charts``, else None): cut, bytes added,
+    another mask, and 60 with 1 to 3 bytes changed under a right CRC-32 (its header fields among them)."""
     rng = random.Random(seed)
-    yield section[:-1], mask
-    yield section[:20], mask
-    yield section + b"\0", mask
-    yield section, mask[:-1]
-    yield section, ~mask
+    yield section[:-1], mask, charts
+    yield section[:20], mask, charts
+    yield section + b"\0", mask, charts
+    yield section, mask[:-1], charts
+    yield section, ~mask, charts
     for _ in range(60):
         changed = bytearray(section)
         for _ in range(rng.choice((1, 1, 2, 3))):
             at = rng.randrange(30 if rng.random() < 0.8 else 0, len(section))
             changed[at] = rng.randrange(256) if rng.random() < 0.5 else changed[at] ^ (1 << rng.randrange(8))
-        yield with_crc(changed), mask
+        yield with_crc(changed), mask, charts
 
 
 def test_damaged_sections_are_refused_or_decoded_as_mzc_decodes_them():
-    cases = [case for number, (section, mask, _rgb) in enumerate(fixtures()) for case in damaged(section, mask, number)]
+    cases = [case for number, name in enumerate(FIXTURE_NAMES) for case in damaged(*fixture(name)[:3], number)]
     made = web_decoded(cases)
-    for (section, mask), got in zip(cases, made, strict=True):
-        assert got == mzc_decoded(section, mask), section.hex()
+    for case, got in zip(cases, made, strict=True):
+        assert got == mzc_decoded(*case), case[0].hex()
     assert 0 < sum(got is None for got in made) < len(made)   # some refused, some decoded
 
 
