@@ -11,8 +11,12 @@ and example.obj names no material, so none is measured):
 - ``fran``: VTK's Cyberware scan of a woman's face (``fran_cut``), converted to a textured OBJ
   (benchmarks/fran_obj.py): a real face scan whose colour is a photographic texture.
 - ``milk``: PCL's Kinect RGB-D cloud of a milk carton (``rgba``), sliced by ``mzc.slice``.
+- ``tum``: a whole RGB-D frame of the TUM RGB-D benchmark (an office desk, 640 x 480, depth
+  1.5-9.3 m), made a coloured cloud (``rgbd_cloud``: the camera's default intrinsics, 248,250
+  points) and sliced on a spherical grid about the camera (``SLICING``): a frame is one view, and
+  its central projection sees every point of it, where planes across a room would not.
 
-mzc through its API only: ``mzc.slice(scan)`` with its defaults (and at COARSER times its
+mzc through its API only: ``mzc.slice(scan)`` with its defaults but SLICING's (and at COARSER times its
 spacing, ``d1``/``d2``: the sampling is a rate setting as Draco's bits are), ``mzc.encode(grid, "dwt2d",
 rmse=..., colour_psnr=...)`` at a ladder of RMS targets in % of D (the scan's bounding-box
 diagonal), ``mzc.decode`` and ``mzc.triangulate`` (its default: a mesh near the scan's vertex
@@ -42,7 +46,10 @@ from report import benchmark_parser, bytes_at, fmt, pareto, stamped, write_repor
 
 PUBLIC = HERE.parent / "tests" / "data" / "public"
 SCANS = {"fuze": PUBLIC / "fuze" / "fuze.obj", "fran": PUBLIC / "fran" / "fran.obj",
-         "milk": PUBLIC / "pcl-milk" / "milk_color.pcd"}
+         "milk": PUBLIC / "pcl-milk" / "milk_color.pcd", "tum": PUBLIC / "tum-rgbd" / "TUM_depth.png"}
+SLICING = {"tum": {"projection": "spherical", "center": (0.0, 0.0, 0.0)}}   # the camera's view of its frame
+RGBD_CAMERA = (525.0, 525.0, 319.5, 239.5)   # fx, fy, cx, cy in pixels: Open3D's default (PrimeSense) intrinsics
+TUM_DEPTH_SCALE = 5000.0                      # the TUM format's depth units a metre
 RMSE_LADDER = (0.01, 0.02, 0.035, 0.05, 0.1, 0.2)   # % of D
 DRACO_BITS = tuple(range(4, 15))   # 4-6 reach the milk cloud's grid, 0.3% D from its noisy points
 COLOUR_PSNRS = (30.0, 36.0)   # dB: the colour section's targets tried at every shape target
@@ -104,16 +111,43 @@ def draco_point(draco, mesh, bits, source, samples):
             "colour_rms": rms, "colour_psnr_measured": peak}
 
 
+def rgbd_cloud(depth_path):
+    """The coloured cloud (an mzc Mesh of points) of an RGB-D frame: the 16-bit TUM-format depth PNG
+    at ``depth_path`` and the colour PNG beside it (``_depth`` named ``_color``), each pixel with a
+    depth back-projected through RGBD_CAMERA: x = (u - cx) d / fx, y = -(v - cy) d / fy, z = -d (the
+    camera at the origin, looking along -z, y up), its colour the colour image's pixel."""
+    from PIL import Image
+
+    from mzc.meshes import Mesh
+
+    with Image.open(depth_path) as depth_image, Image.open(str(depth_path).replace("_depth", "_color")) as colour:
+        depth = np.asarray(depth_image, dtype=np.float64) / TUM_DEPTH_SCALE
+        rgb = np.asarray(colour.convert("RGB"))
+    fx, fy, cx, cy = RGBD_CAMERA
+    v, u = np.nonzero(depth > 0)
+    d = depth[v, u]
+    points = np.column_stack([(u - cx) * d / fx, -(v - cy) * d / fy, -d])
+    return Mesh(points, np.empty((0, 3), dtype=np.int64), colors=rgb[v, u])
+
+
+def read_scan(path):
+    """A scan as mzc reads it, or an RGB-D frame's depth PNG as its coloured cloud (``rgbd_cloud``)."""
+    import mzc
+
+    return rgbd_cloud(path) if path.suffix == ".png" else mzc.read(str(path))
+
+
 def run_scan(name, path, samples, quick, missing):
     """Every point of one scan: the uncoded grid (the floor), mzc's ladder at each colour target,
     Draco's ladder."""
     import mzc
 
+    slicing = SLICING.get(name, {})
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
-        mesh = mzc.read(str(path))
+        mesh = read_scan(path)
         source = Surface.of(mesh)
-        grid = mzc.slice(mesh)
+        grid = mzc.slice(mesh, **slicing)
         floor = mzc.triangulate(grid)
         every_node = mzc.triangulate(grid, vertices="all")
     result = {"scan": name, "path": str(path.relative_to(HERE.parent)), "points_in": len(mesh.points),
@@ -130,7 +164,7 @@ def run_scan(name, path, samples, quick, missing):
     for k in COARSER:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")   # the same warnings as the default slice's, kept above
-            coarse = mzc.slice(mesh, d1=k * grid.d1, d2=k * grid.d2)
+            coarse = mzc.slice(mesh, d1=k * grid.d1, d2=k * grid.d2, **slicing)
         result["points"] += [mzc_point(coarse, rmse, COLOUR_PSNRS[0], mesh, source, samples, k) for rmse in ladder]
     draco = load("DracoPy", missing, "Draco (DracoPy)")
     if draco:
@@ -165,7 +199,7 @@ def markdown(document):
              f"{document['samples']} area-weighted samples each way), % of D (the scan's bounding-box diagonal). "
              "Colour error: each rebuilt vertex's colour against the source colour at the nearest source point "
              "(on a textured mesh's surface (fuze, fran), its texture at the point's texture coordinates; of "
-             "the milk cloud, the nearest point's), "
+             "the milk and tum clouds, the nearest point's), "
              "RMS in 8-bit levels over the three channels, and PSNR; node colour RMS: the same of every node of "
              "the decoded grid (what `triangulate --texture` or `--vertices all` shows: the texture's detail "
              "finer than the scan's triangles, which slice samples at each node). "
