@@ -418,6 +418,33 @@ def test_encoding_a_coloured_grid_keeps_its_colours_or_names_them(tmp_path):
     assert mzc.decode(data).colors is None
 
 
+def test_a_coloured_grid_larger_than_a_tile_is_coded_whole_and_keeps_its_colours():
+    """A grid of more nodes than a default tile (1024 x 1024) is tiled, and tiles code the shape
+    alone: with colours, up to COLOURED_WHOLE nodes, it is coded whole unless tiles are asked for."""
+    import warnings
+
+    import mzc
+    from mzc.codecs.dwt2d.tiles import COLOURED_WHOLE, DEFAULT_TILE, is_tiled, tile_side
+    from mzc.errors import MzcWarning
+    from mzc.grid import ZGrid
+
+    rows, cols = 1100, 1000
+    y, x = np.mgrid[0:rows, 0:cols] / 100.0
+    colours = np.stack([x * 25, y * 23, 128 + 100 * np.sin(x + y)], axis=-1).astype(np.uint8)
+    grid = ZGrid(np.sin(x) * np.cos(y), 0.01, 0.01, colors=colours)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", MzcWarning)
+        data = mzc.encode(grid, "dwt2d", max_error=0.01, colour_max_error=4)
+    back = mzc.decode(data)
+    assert not is_tiled(data) and np.abs(back.colors.astype(int) - colours).max() <= 4
+    assert is_tiled(mzc.encode(grid.with_z(grid.z, colors=None), "dwt2d", max_error=0.01))
+    with pytest.warns(MzcWarning, match="the nodes' colours"):
+        assert is_tiled(mzc.encode(grid, "dwt2d", max_error=0.01, tile=DEFAULT_TILE))
+    side = int(np.sqrt(COLOURED_WHOLE)) + 1
+    assert tile_side((side, side), None, coloured=True) == DEFAULT_TILE
+    assert tile_side((side - 1, side - 1), None, coloured=True) is None
+
+
 def textured_obj(folder, image_name="skin.png", mtl_name="face.mtl", size=(64, 80)):
     """The height field as an OBJ with ``f v/vt`` corners, its material file naming a PNG texture
     (``size`` rows x cols) whose pixel (row, col) is the analytic colour at the surface point the

@@ -706,7 +706,7 @@ def encode_grid_with_decoded(grid, tile=None, compact=True, progressive=None, **
     or, when ``tile`` or its size says so, in tiles (mzc.codecs.dwt2d.tiles)."""
     from mzc.codecs.dwt2d import tiles
 
-    side = tiles.tile_side(grid.shape, tile, charted=grid.charts is not None)
+    side = tiles.tile_side(grid.shape, tile, charted=grid.charts is not None, coloured=grid.colors is not None)
     check_whole(progressive, side)
     if side is None:
         return encode_whole(grid, compact=PROGRESSIVE_VERSION if progressive else compact, **options)
@@ -806,7 +806,8 @@ def keeps_colour(grid, options):
     tiles of a 5.0 file are 3.x files, which code the shape alone)."""
     from mzc.codecs.dwt2d import tiles
 
-    return tiles.tile_side(grid.shape, options.get("tile"), charted=grid.charts is not None) is None
+    return tiles.tile_side(grid.shape, options.get("tile"), charted=grid.charts is not None,
+                           coloured=grid.colors is not None) is None
 
 
 def rounding_bounds(grid, max_error):
