@@ -31,8 +31,9 @@ from mzc.errors import MzcError
 from mzc.limits import check_grid_size
 
 DEFAULT_TILE = 1024        # a 1024 x 1024 tile encodes in about 0.25 GB (1.6 M nodes whole: 0.3 GB)
-COLOURED_WHOLE = 4 * DEFAULT_TILE * DEFAULT_TILE   # nodes of a coloured grid coded whole by default, since tiles
-                                                   # code the shape alone (2.1 M nodes with colours: 0.63 GB)
+COLOURED_WHOLE = 4 * DEFAULT_TILE * DEFAULT_TILE   # nodes of a coloured grid coded whole by default, which keeps
+                                                   # colours finer than the nodes that tiles (11.0) do not
+                                                   # (2.1 M nodes with colours: 0.63 GB)
 MIN_TILE, MAX_TILE = 4, 4096
 MAX_TILES = 1 << 22        # an index of at most 32 MB (a 10^6 x 10^6 grid in 1024-node tiles has 10^6)
 HEADER_LIMIT = 1 << 20     # the text header's bytes (a crs line is at most 16 KB)
@@ -45,8 +46,8 @@ TASKS_AHEAD = 64           # Dask tasks submitted at a time: their results wait,
 def tile_side(shape, tile, charted=False, coloured=False):
     """The side of the tiles of a grid of ``shape`` coded with the ``tile`` option (None: tiles of
     DEFAULT_TILE for a grid larger than one of them, unless it is ``charted``, whose charts are
-    blocks of their own, or ``coloured`` and of at most COLOURED_WHOLE nodes, whose colours only a
-    file coded whole keeps; 0: never), or None when it is coded whole."""
+    blocks of their own, or ``coloured`` and of at most COLOURED_WHOLE nodes, whose colours of
+    any scale a file coded whole keeps; 0: never), or None when it is coded whole."""
     nodes = shape[0] * shape[1]
     whole = charted or nodes <= DEFAULT_TILE * DEFAULT_TILE or (coloured and nodes <= COLOURED_WHOLE)
     if tile == 0 or (tile is None and whole):
