@@ -76,3 +76,15 @@ def warn_uncoded(grid, codec, options):
         warnings.warn(MzcWarning(f"not kept: the colours {grid.colour_scale} times finer than the nodes (this "
                                  f"mzc-{codec.kind} file in tiles keeps the nodes' colours; --tile 0 codes it "
                                  "whole, with them)"), stacklevel=2)
+
+
+def warn_raster_drops(raster):
+    """One MzcWarning that a ``raster`` (tif or asc) written of a grid with colours holds its
+    heights alone (issue 32: nothing dropped without a word)."""
+    import warnings
+
+    from mzc.errors import MzcWarning
+
+    name = {"tif": "GeoTIFF", "asc": "ESRI ASCII grid"}.get(raster, f"{raster} raster")
+    warnings.warn(MzcWarning(f"not kept: the nodes' colours (a {name} holds the heights alone; the z-grid and a "
+                             "dwt2d file keep them)"), stacklevel=2)

@@ -639,3 +639,29 @@ def test_slice_samples_a_texture_at_every_node_not_only_at_the_vertices(tmp_path
     away = np.abs(u * columns / 8 - np.round(u * columns / 8)) > 0.1   # off a stripe's edge
     measured = grid.colors[grid.valid][:, 0].astype(int)
     assert away.sum() > 1000 and np.abs(measured - red(u))[away].max() <= 2
+
+
+def test_a_raster_of_a_coloured_grid_names_the_colours_it_drops_and_refuses_charts(tmp_path):
+    """A GeoTIFF or ESRI grid holds heights alone: writing a grid with colours (whole, or a tiled
+    11.0 file tile by tile) says so in one warning; a multi-chart grid is no raster at all."""
+    import mzc
+    from mzc.formats import zgrid
+    from mzc.grid import ZGrid
+    from mzc.ops.slicing import slice_surface
+
+    from conftest import run_mzc
+    from test_fine_colour import two_charts
+
+    grid = slice_surface(coloured_surface(), d1=0.2)
+    (tmp_path / "c.zg").write_bytes(zgrid.write(grid, raw="float64"))
+    (tmp_path / "t.mzw2").write_bytes(mzc.encode(grid, "dwt2d", max_error=0.05, tile=16))
+    for source, output, name in (("c.zg", "c.asc", "ESRI ASCII grid"), ("c.zg", "c.tif", "GeoTIFF"),
+                                 ("t.mzw2", "t.tif", "GeoTIFF")):
+        result = run_mzc("decode", source, "-o", output, cwd=tmp_path, check=True)
+        assert result.stderr.decode() == (f"mzc: warning: not kept: the nodes' colours (a {name} holds the heights "
+                                          "alone; the z-grid and a dwt2d file keep them)\n"), source
+    charted = ZGrid(np.ones((2, 4)), 1, 1, charts=two_charts())
+    (tmp_path / "charts.zg").write_bytes(zgrid.write(charted, raw="float64"))
+    result = run_mzc("decode", "charts.zg", "-o", "charts.tif", cwd=tmp_path)
+    assert result.returncode == 1 and b"a raster holds one planar grid" in result.stderr
+    assert not (tmp_path / "charts.tif").exists()
