@@ -644,13 +644,14 @@ def test_slice_samples_a_texture_at_every_node_not_only_at_the_vertices(tmp_path
 def test_a_raster_of_a_coloured_grid_names_the_colours_it_drops_and_refuses_charts(tmp_path):
     """A GeoTIFF or ESRI grid holds heights alone: writing a grid with colours (whole, or a tiled
     11.0 file tile by tile) says so in one warning; a multi-chart grid is no raster at all."""
+    from test_fine_colour import two_charts
+
     import mzc
     from mzc.formats import zgrid
     from mzc.grid import ZGrid
     from mzc.ops.slicing import slice_surface
 
     from conftest import run_mzc
-    from test_fine_colour import two_charts
 
     grid = slice_surface(coloured_surface(), d1=0.2)
     (tmp_path / "c.zg").write_bytes(zgrid.write(grid, raw="float64"))
