@@ -2,7 +2,8 @@
 //
 //   import { decode, writeZgrid } from "./mzc.mjs";
 //   const grid = decode(bytes);     // {kind, version, rows, cols, z: Float64Array, d1, d2, ...,
-//                                   //  colors: Uint8Array rows * cols * 3 of a z-grid 5.x or 6.0,
+//                                   //  colors: Uint8Array rows * cols * 3 of a z-grid 5.x or 6.0
+//                                   //  or a dwt2d file with colours (7.0 to 10.x, 11.0's tiles),
 //                                   //  fineColors, colourScale: a 6.0's samples K times finer}
 //   const zg = writeZgrid(grid);    // the raw float64 z-grid `mzc decode` writes
 //

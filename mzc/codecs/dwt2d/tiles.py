@@ -327,8 +327,8 @@ class TiledFile:
         head = reader.read(0, min(reader.size, HEADER_LIMIT))
         end = head.find(b"\ndata\n")
         self.header, self.frame, self.tile, counts = self.read_header(head[:end + 6] if end >= 0 else head)
-        self.rounded = read_rounding(self.header, self.frame.fields, ROUNDED_TILED_VERSION)
-        self.coloured = self.header.major == COLOURED_TILED_VERSION[0]
+        self.coloured = self.header.major == COLOURED_TILED_VERSION[0]   # 11.0 has no rounding line
+        self.rounded = not self.coloured and read_rounding(self.header, self.frame.fields, ROUNDED_TILED_VERSION)
         index_start = end + 6
         count = counts[0] * counts[1]
         if index_start + LENGTH.size * count + INDEX_CHECK.size > reader.size:
