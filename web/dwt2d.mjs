@@ -12,14 +12,15 @@ import { cos } from "./elementary.mjs";
 import { sections, progressiveSections, tightParts, headerLines, compactMagic, HEADER, PAYLOAD, COLOUR, TIGHT_PLACES } from "./compact.mjs";
 import { inversePeriodized2d, relevantPeriodized2d } from "./pywt.mjs";
 import { decodeFlips } from "./mask.mjs";
-import { withColours } from "./colour.mjs";   // a cycle (colour.mjs reads payloads with this module's), used only in calls
 
 const WAVELETS_3 = ["bior4.4", "bior2.2"];
 const WAVELETS_2 = ["bior4.4", "bior2.2", "bior3.3", "db2", "db4", "sym4", "coif1", "haar"];
 
-/** Decodes a dwt2d file (bytes; its header lines; the payload's offset; its magic). */
-export function decodeDwt2d(bytes, lines, body, magic) {
-  if (magic.major === 5 || magic.major === 11) return decodeTiled(bytes, lines, body, magic);
+/** Decodes a dwt2d file (bytes; its header lines; the payload's offset; its magic); `withColours`
+ * (colour.mjs's, given by the caller: colour.mjs reads payloads with this module) decodes the colour
+ * sections of an 11.0 file's tiles. */
+export function decodeDwt2d(bytes, lines, body, magic, withColours) {
+  if (magic.major === 5 || magic.major === 11) return decodeTiled(bytes, lines, body, magic, withColours);
   const fields = headerFields(lines, false);
   checkChecksum(bytes, lines, fields, magic.major >= 4 || (magic.major === 3 && magic.minor >= 1));
   return decodeWhole(fields, [bytes.subarray(body)], magic);
@@ -113,7 +114,7 @@ function roundToSamples(z, grid) {
 /** Decodes a 5.x or 11.0 file: checks its header's checksum and lines, the index and its CRC-32,
  * then decodes every tile as a 3.x file (6.0 in a rounded 5.1 file, 10.x with its nodes' colours in
  * an 11.0 file) and puts its values, and its colours, in their place. */
-function decodeTiled(bytes, lines, body, magic) {
+function decodeTiled(bytes, lines, body, magic, withColours) {
   const fields = headerFields(lines, false);
   const h = fieldReader(fields);
   checkChecksum(bytes, lines, fields, true, body);
@@ -134,7 +135,7 @@ function decodeTiled(bytes, lines, body, magic) {
   let at = body + 8 * NR * NC + 4;
   for (let i = 0; i < NR; i++) {
     for (let j = 0; j < NC; j++) {
-      const tile = decodeTile(bytes.subarray(at, at + lengths[i * NC + j]), grid, T, i, j, major);
+      const tile = decodeTile(bytes.subarray(at, at + lengths[i * NC + j]), grid, T, i, j, major, withColours);
       place(z, tile.z, 1, tile, grid.cols, i * T, j * T);
       if (colors) place(colors, tile.colors, 3, tile, grid.cols, i * T, j * T);
       at += lengths[i * NC + j];
@@ -166,9 +167,9 @@ function tileIndex(bytes, body, n) {
 /** Tile (i, j): a whole mzc-dwt2d file of its block, of `major` (3: 3.x; 6: 6.0 of a rounded file,
  * with the header's raster line, its values integers; 10: 10.x of an 11.0 file, with its nodes'
  * colours), its lines those the header implies. */
-function decodeTile(bytes, grid, T, i, j, major) {
+function decodeTile(bytes, grid, T, i, j, major, withColours) {
   const name = `tile ${i + 1}, ${j + 1}`;
-  const { tile, fields } = major === 10 ? colouredTile(bytes, name) : textTile(bytes, name, major);
+  const { tile, fields } = major === 10 ? colouredTile(bytes, name, withColours) : textTile(bytes, name, major);
   const rounded = major === 6;
   const origin = [grid.origin[0] + j * T * grid.d2, grid.origin[1] + i * T * grid.d1];
   const ok = tile.rows === Math.min((i + 1) * T, grid.rows) - i * T && tile.cols === Math.min((j + 1) * T, grid.cols) - j * T
@@ -192,7 +193,7 @@ function textTile(bytes, name, major) {
 /** A tile of an 11.0 file, which must be an mzc-dwt2d 10.x file with a colour section of its nodes'
  * colours (version 1: finer colours are not tiled): its grid with those colours, decoded as a whole
  * 10.x file's are (`withColours`), and its fields as header lines. */
-function colouredTile(bytes, name) {
+function colouredTile(bytes, name, withColours) {
   const magic = compactMagic(bytes);
   if (magic?.major !== 10) fail("data", `${name} is not an mzc-dwt2d 10.x file`);
   const { grid, fields } = decodeTight(bytes, magic.end, magic);

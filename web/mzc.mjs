@@ -20,7 +20,7 @@ import { decodeZgrid } from "./zgrid.mjs";
 export { MzcError, writeZgrid, formatNumber };
 
 /** Each format's decoder by the kind of its magic line. */
-const DECODERS = { dwt2d: decodeDwt2d, zgrid: decodeZgrid, ...ROW_CODECS };
+const DECODERS = { dwt2d: (...file) => decodeDwt2d(...file, withColours), zgrid: decodeZgrid, ...ROW_CODECS };
 
 /** The major versions read of each kind, [oldest, newest] (tests/test_web.py asks for them). */
 export const READS = { dwt2d: [2, 11], zgrid: [1, 6], poly: [1, 2], dft: [1, 2], dct: [1, 2], dwt: [1, 2] };
