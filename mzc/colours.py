@@ -60,12 +60,31 @@ def unpack_rgb(values):
 
 def warn_uncoded(grid, codec, options):
     """One MzcWarning when ``grid`` has colours that the file ``codec`` (a Codec) writes with
-    ``options`` does not carry (the row codecs, zarr, a dwt2d file in tiles: ``Codec.keeps_colour``),
-    so that they are not lost without a word (issue 32)."""
-    if grid.colors is not None and not codec.keeps_colour(grid, options):
-        import warnings
+    ``options`` does not carry (the row codecs, zarr: ``Codec.keeps_colour``), or not as finely (a
+    dwt2d file in tiles keeps the nodes'), so that they are not lost without a word (issue 32)."""
+    if grid.colors is None:
+        return
+    import warnings
 
-        from mzc.errors import MzcWarning
+    from mzc.errors import MzcWarning
 
+    kept = codec.keeps_colour(grid, options)
+    if not kept:
         warnings.warn(MzcWarning(f"not kept: the nodes' colours (this mzc-{codec.kind} file codes the shape "
-                                 "alone; the z-grid and a dwt2d file coded whole keep them)"), stacklevel=2)
+                                 "alone; the z-grid and a dwt2d file keep them)"), stacklevel=2)
+    elif kept < grid.colour_scale:
+        warnings.warn(MzcWarning(f"not kept: the colours {grid.colour_scale} times finer than the nodes (this "
+                                 f"mzc-{codec.kind} file in tiles keeps the nodes' colours; --tile 0 codes it "
+                                 "whole, with them)"), stacklevel=2)
+
+
+def warn_raster_drops(raster):
+    """One MzcWarning that a ``raster`` (tif or asc) written of a grid with colours holds its
+    heights alone (issue 32: nothing dropped without a word)."""
+    import warnings
+
+    from mzc.errors import MzcWarning
+
+    name = {"tif": "GeoTIFF", "asc": "ESRI ASCII grid"}.get(raster, f"{raster} raster")
+    warnings.warn(MzcWarning(f"not kept: the nodes' colours (a {name} holds the heights alone; the z-grid and a "
+                             "dwt2d file keep them)"), stacklevel=2)

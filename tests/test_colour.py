@@ -387,9 +387,9 @@ def test_the_cli_pipeline_keeps_colours_from_a_coloured_ply_to_the_rebuilt_one(t
 
 
 def test_encoding_a_coloured_grid_keeps_its_colours_or_names_them(tmp_path):
-    """A dwt2d file coded whole carries the colours (no warning; they decode within the bound); the
-    formats that code the shape alone (a dwt2d file in tiles, the row codecs) say so in one warning
-    (the CLI and the API), and their files decode without colours."""
+    """A dwt2d file, coded whole or in tiles (11.0), carries the colours (no warning; they decode
+    within the bound); the formats that code the shape alone (the row codecs) say so in one
+    warning (the CLI and the API), and their files decode without colours."""
     import warnings
 
     import mzc
@@ -401,26 +401,28 @@ def test_encoding_a_coloured_grid_keeps_its_colours_or_names_them(tmp_path):
 
     grid = slice_surface(coloured_surface(), d1=0.2, align="pca")
     (tmp_path / "c.zg").write_bytes(zgrid.write(grid, raw="float64"))
-    kept = run_mzc("encode", "--dwt2d", "--max-error", "0.05", "--colour-max-error", "2", tmp_path / "c.zg",
-                   "-o", tmp_path / "c.mzw2", check=True)
-    assert "colours" not in kept.stderr.decode()
-    decoded = mzc.decode((tmp_path / "c.mzw2").read_bytes())
-    assert np.abs(decoded.colors.astype(int) - grid.colors)[grid.valid].max() <= 2
-    for flags in (["--dwt2d", "--tile", "16"], ["--dct", "--quality", "20"]):
-        result = run_mzc("encode", *flags, tmp_path / "c.zg", "-o", tmp_path / "d", check=True)
-        assert result.stderr.decode().count("mzc: warning: not kept: the nodes' colours") == 1, flags
-        assert mzc.decode((tmp_path / "d").read_bytes()).colors is None
+    for tiling in ([], ["--tile", "16"]):
+        kept = run_mzc("encode", "--dwt2d", "--max-error", "0.05", "--colour-max-error", "2", *tiling,
+                       tmp_path / "c.zg", "-o", tmp_path / "c.mzw2", check=True)
+        assert "colours" not in kept.stderr.decode()
+        decoded = mzc.decode((tmp_path / "c.mzw2").read_bytes())
+        assert np.abs(decoded.colors.astype(int) - grid.colors)[grid.valid].max() <= 2
+    result = run_mzc("encode", "--dct", "--quality", "20", tmp_path / "c.zg", "-o", tmp_path / "d", check=True)
+    assert result.stderr.decode().count("mzc: warning: not kept: the nodes' colours") == 1
+    assert mzc.decode((tmp_path / "d").read_bytes()).colors is None
     with warnings.catch_warnings():
         warnings.simplefilter("error", MzcWarning)
-        assert mzc.decode(mzc.encode(grid, "dwt2d", max_error=0.05)).colors is not None
+        for tile in (None, 16):
+            assert mzc.decode(mzc.encode(grid, "dwt2d", max_error=0.05, tile=tile)).colors is not None
     with pytest.warns(MzcWarning, match="the nodes' colours"):
-        data = mzc.encode(grid, "dwt2d", max_error=0.05, tile=16)
+        data = mzc.encode(grid, "dct", quality=20)
     assert mzc.decode(data).colors is None
 
 
 def test_a_coloured_grid_larger_than_a_tile_is_coded_whole_and_keeps_its_colours():
-    """A grid of more nodes than a default tile (1024 x 1024) is tiled, and tiles code the shape
-    alone: with colours, up to COLOURED_WHOLE nodes, it is coded whole unless tiles are asked for."""
+    """A grid of more nodes than a default tile (1024 x 1024) is tiled; with colours, up to
+    COLOURED_WHOLE nodes, it is coded whole (a file smaller than the tiles', its colours of any
+    scale) unless tiles are asked for, which then carry its nodes' colours (11.0)."""
     import warnings
 
     import mzc
@@ -438,8 +440,10 @@ def test_a_coloured_grid_larger_than_a_tile_is_coded_whole_and_keeps_its_colours
     back = mzc.decode(data)
     assert not is_tiled(data) and np.abs(back.colors.astype(int) - colours).max() <= 4
     assert is_tiled(mzc.encode(grid.with_z(grid.z, colors=None), "dwt2d", max_error=0.01))
-    with pytest.warns(MzcWarning, match="the nodes' colours"):
-        assert is_tiled(mzc.encode(grid, "dwt2d", max_error=0.01, tile=DEFAULT_TILE))
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", MzcWarning)
+        tiled = mzc.encode(grid, "dwt2d", max_error=0.01, colour_max_error=4, tile=DEFAULT_TILE)
+    assert tiled.startswith(b"mzc-dwt2d 11.0\n") and np.abs(mzc.decode(tiled).colors.astype(int) - colours).max() <= 4
     side = int(np.sqrt(COLOURED_WHOLE)) + 1
     assert tile_side((side, side), None, coloured=True) == DEFAULT_TILE
     assert tile_side((side - 1, side - 1), None, coloured=True) is None
@@ -635,3 +639,30 @@ def test_slice_samples_a_texture_at_every_node_not_only_at_the_vertices(tmp_path
     away = np.abs(u * columns / 8 - np.round(u * columns / 8)) > 0.1   # off a stripe's edge
     measured = grid.colors[grid.valid][:, 0].astype(int)
     assert away.sum() > 1000 and np.abs(measured - red(u))[away].max() <= 2
+
+
+def test_a_raster_of_a_coloured_grid_names_the_colours_it_drops_and_refuses_charts(tmp_path):
+    """A GeoTIFF or ESRI grid holds heights alone: writing a grid with colours (whole, or a tiled
+    11.0 file tile by tile) says so in one warning; a multi-chart grid is no raster at all."""
+    from test_fine_colour import two_charts
+
+    import mzc
+    from mzc.formats import zgrid
+    from mzc.grid import ZGrid
+    from mzc.ops.slicing import slice_surface
+
+    from conftest import run_mzc
+
+    grid = slice_surface(coloured_surface(), d1=0.2)
+    (tmp_path / "c.zg").write_bytes(zgrid.write(grid, raw="float64"))
+    (tmp_path / "t.mzw2").write_bytes(mzc.encode(grid, "dwt2d", max_error=0.05, tile=16))
+    for source, output, name in (("c.zg", "c.asc", "ESRI ASCII grid"), ("c.zg", "c.tif", "GeoTIFF"),
+                                 ("t.mzw2", "t.tif", "GeoTIFF")):
+        result = run_mzc("decode", source, "-o", output, cwd=tmp_path, check=True)
+        assert result.stderr.decode() == (f"mzc: warning: not kept: the nodes' colours (a {name} holds the heights "
+                                          "alone; the z-grid and a dwt2d file keep them)\n"), source
+    charted = ZGrid(np.ones((2, 4)), 1, 1, charts=two_charts())
+    (tmp_path / "charts.zg").write_bytes(zgrid.write(charted, raw="float64"))
+    result = run_mzc("decode", "charts.zg", "-o", "charts.tif", cwd=tmp_path)
+    assert result.returncode == 1 and b"a raster holds one planar grid" in result.stderr
+    assert not (tmp_path / "charts.tif").exists()

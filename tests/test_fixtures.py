@@ -65,7 +65,8 @@ def written_versions(module):
     body (RAW_VERSION), a third version above both, the georeferenced planar grids of rasters
     (GEOREF_SINCE: a minor version of a major), multi-chart grids (CHARTED_VERSION), grids with
     colours (COLOURED_VERSION) or colours finer than the nodes (FINE_COLOURED_VERSION),
-    tiled rasters of integers (ROUNDED_TILED_VERSION), grids that
+    tiled rasters of integers (ROUNDED_TILED_VERSION), tiled grids with colours
+    (COLOURED_TILED_VERSION), grids that
     record their source's vertex count (COUNTED_SINCE: a minor version of a major) and grids coded
     with models per detail band (BAND_MODELS_VERSION)."""
     return {module.VERSION, module.PROJECTED_VERSION, getattr(module, "RAW_VERSION", module.VERSION),
@@ -74,6 +75,7 @@ def written_versions(module):
             getattr(module, "COLOURED_VERSION", module.VERSION),
             getattr(module, "FINE_COLOURED_VERSION", module.VERSION),
             getattr(module, "ROUNDED_TILED_VERSION", module.VERSION),
+            getattr(module, "COLOURED_TILED_VERSION", module.VERSION),
             getattr(module, "BAND_MODELS_VERSION", module.VERSION)}
 
 

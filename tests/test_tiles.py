@@ -251,3 +251,74 @@ def test_a_z_grid_too_large_to_hold_is_refused_in_one_line_before_any_tile_is_de
     assert result.returncode == 1 and error.count("\n") == 1 and not result.stdout
     assert "12000 x 12000 nodes is too large" in error and "--window" in error and "--format tif" in error
     assert "tiles     3 x 3 of 4096 x 4096 nodes" in run_mzc("info", path, check=True).stdout.decode()
+
+
+# --- tiles with colours (11.0) ------------------------------------------------------------------
+
+
+def coloured(z, seed=0):
+    """``grid_of(z)`` with a colour at every node: ramps along the rows and columns, blue random."""
+    rng = np.random.default_rng(seed)
+    r, c = np.mgrid[0:z.shape[0], 0:z.shape[1]]
+    return grid_of(z, colors=np.stack([c * 7 % 256, r * 5 % 256, rng.integers(0, 256, z.shape)], axis=-1))
+
+
+@settings(max_examples=20, deadline=None)
+@given(rows=st.integers(1, 40), cols=st.integers(1, 40), tile=st.integers(4, 16), seed=st.integers(0, 99),
+       colour_error=st.sampled_from([0, 3]), data=st.data())
+def test_coloured_tiles_keep_every_nodes_colour_and_a_window_its_own(rows, cols, tile, seed, colour_error, data):
+    """A grid with colours in tiles is 11.0: every valid node's colour within the colour bound,
+    0 at the invalid ones, its heights as 5.0 holds them, and a window's colours the whole's, cut."""
+    grid = coloured(terrain(rows, cols, seed), seed)
+    encoded = mzc.encode(grid, "dwt2d", max_error=0.05, colour_max_error=colour_error, tile=tile)
+    assert encoded.startswith(b"mzc-dwt2d 11.0\n") and tiles.is_tiled(encoded)
+    whole = mzc.decode(encoded)
+    assert np.array_equal(whole.valid, grid.valid) and np.nanmax(np.abs(whole.z - grid.z), initial=0) <= 0.05
+    assert np.abs(whole.colors.astype(int) - grid.colors)[grid.valid].max(initial=0) <= colour_error
+    assert not whole.colors[~grid.valid].any()
+    row, col = data.draw(st.integers(0, rows - 1)), data.draw(st.integers(0, cols - 1))
+    window = (row, col, data.draw(st.integers(1, rows - row)), data.draw(st.integers(1, cols - col)))
+    cut = mzc.decode(encoded, window=window)
+    assert cut.colors.tobytes() == whole.colors[row:row + window[2], col:col + window[3]].tobytes()
+
+
+def test_a_grid_without_colours_keeps_5_0_and_finer_colours_leave_their_nodes_in_tiles():
+    """Colours change nothing of an uncoloured grid's tiles (5.0, byte for byte its heights'); a
+    grid with colours finer than its nodes keeps the nodes' in tiles, and says it drops the rest."""
+    from mzc.errors import MzcWarning
+
+    z = terrain(12, 10)
+    plain = mzc.encode(grid_of(z), "dwt2d", max_error=0.05, tile=4)
+    assert plain.startswith(b"mzc-dwt2d 5.0\n")
+    fine = grid_of(z, fine_colors=np.random.default_rng(2).integers(0, 256, (23, 19, 3)))
+    with pytest.warns(MzcWarning, match="the colours 2 times finer than the nodes .* keeps the nodes' colours"):
+        encoded = mzc.encode(fine, "dwt2d", max_error=0.05, colour_max_error=0, tile=4)
+    back = mzc.decode(encoded)
+    assert back.colour_scale == 1 and back.colors[fine.valid].tolist() == fine.colors[fine.valid].tolist()
+    assert mzc.decode(mzc.encode(fine, "dwt2d", max_error=0.05, tile=0)).colour_scale == 2
+
+
+def test_an_11_0_tile_without_its_colours_or_of_another_version_is_refused():
+    """In an 11.0 file a tile must be a 10.x file with a colour section at the nodes: a 3.x tile
+    (5.0's) or a 10.x tile without colours in its place is refused in one line."""
+    from mzc.codecs.dwt2d import encode_whole
+
+    grid = coloured(terrain(10, 9))
+    data = mzc.encode(grid, "dwt2d", max_error=0.05, tile=4)
+    tiled = TiledFile(Bytes(data), "good")
+    block = ZGrid(z=grid.z[:4, :4], **tiled.frame.block_fields(0, 0))
+    others = b"".join(tiled.tile_bytes(i, j) for i in range(3) for j in range(3))[len(tiled.tile_bytes(0, 0)):]
+    head = data[:data.index(b"\ndata\n") + 6]
+    for tile, message in ((encode_whole(block, max_error=0.05, compact=False)[0], "is a dwt2d 10.x stream"),
+                          (encode_whole(block, max_error=0.05)[0], "has no colour section")):
+        lengths = [len(tile), *map(int, np.diff(tiled.offsets)[1:])]
+        index = b"".join(struct.pack("<Q", n) for n in lengths)
+        with pytest.raises(MzcError, match=message) as error:
+            mzc.decode(head + index + struct.pack("<I", zlib.crc32(index)) + tile + others)
+        assert "\n" not in str(error.value)
+
+
+def test_info_says_the_tiles_carry_colours(tmp_path):
+    (tmp_path / "c.mzw2").write_bytes(mzc.encode(coloured(terrain(10, 9)), "dwt2d", max_error=0.05, tile=4))
+    shown = run_mzc("info", tmp_path / "c.mzw2", check=True).stdout.decode()
+    assert "mzc-dwt2d 11.0 (tiled)" in shown and "each a dwt2d file with its nodes' colours" in shown

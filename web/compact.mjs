@@ -5,7 +5,7 @@
 // a prefix of whole sections decodes (`progressiveSections`). 10.0 (Version 10.0) has one body under one
 // CRC-32, its fields as presence bits without implied counts (`tightParts`).
 
-import { fail, crc32, formatNumber, words } from "./header.mjs";
+import { fail, crc32, formatNumber, words, parseMagic } from "./header.mjs";
 
 const TEXT = new TextDecoder("utf-8", { fatal: true });
 const MAX_VARINT_BYTES = 10;   // a header's varints: an unsigned 64-bit integer (as mzc reads them)
@@ -22,6 +22,18 @@ const FIELDS = {
 /** Field id -> the major that added it (8.0: the source's vertex count, 10.1: band_models); the others are 7.0's. */
 const SINCE = { 23: 8, 24: 10 };
 const WORDS = ["planar", "cylindrical", "spherical", "bior4.4", "bior2.2", "integer"];
+const COMPACT = ["mzc-dwt2d 7.", "mzc-dwt2d 8.", "mzc-dwt2d 9.", "mzc-dwt2d 10."].map((text) => new TextEncoder().encode(text));
+
+/** The magic of a binary file (`mzc-dwt2d 7.x` to `10.x`, its line within 16 bytes, a CR included) and
+ * the end of that line; null for a file of text header lines. */
+export function compactMagic(bytes) {
+  if (!COMPACT.some((magic) => magic.every((b, i) => bytes[i] === b))) return null;
+  const end = bytes.subarray(0, 16).indexOf(10) + 1;
+  if (!end) fail(null, "not an mzc file (no `mzc-KIND MAJOR.MINOR` magic line)");
+  const magic = parseMagic(new TextDecoder().decode(bytes.subarray(0, end - 1)).replace(/\r$/, ""));
+  return { ...magic, end };
+}
+
 export const HEADER = 1;
 export const PAYLOAD = 2;
 export const COLOUR = 3;

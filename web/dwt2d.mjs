@@ -2,22 +2,25 @@
 // and 7.0 (binary header and parametric tables, in the sections of compact.mjs), 8.0 (7.0, its mask in mask.mjs),
 // 9.0 (8.0 in sections of levels, coarsest first: a prefix of whole sections decodes to a coarser surface),
 // 10.0 (8.0 in one body under one CRC-32, its header fields tighter, its table records short), 10.1 (10.0 with
-// band_models: each detail band its own contexts' models)
+// band_models: each detail band its own contexts' models), 11.0 (tiles that are 10.x files with their block's
+// colours, decoded by colour.mjs)
 // (spec/dwt2d.md): header, payload (tables, rANS, raw bits), mask, relevance, bands, slope
 // factors, inverse transform, correction layer, chart records, rounding and tiles.
 
 import { fail, headerFields, fieldReader, gridFields, checkChecksum, checkCharts, VIEWS, crc32, splitHeader, parseMagic } from "./header.mjs";
 import { cos } from "./elementary.mjs";
-import { sections, progressiveSections, tightParts, headerLines, HEADER, PAYLOAD, COLOUR, TIGHT_PLACES } from "./compact.mjs";
+import { sections, progressiveSections, tightParts, headerLines, compactMagic, HEADER, PAYLOAD, COLOUR, TIGHT_PLACES } from "./compact.mjs";
 import { inversePeriodized2d, relevantPeriodized2d } from "./pywt.mjs";
 import { decodeFlips } from "./mask.mjs";
 
 const WAVELETS_3 = ["bior4.4", "bior2.2"];
 const WAVELETS_2 = ["bior4.4", "bior2.2", "bior3.3", "db2", "db4", "sym4", "coif1", "haar"];
 
-/** Decodes a dwt2d file (bytes; its header lines; the payload's offset; its magic). */
-export function decodeDwt2d(bytes, lines, body, magic) {
-  if (magic.major === 5) return decodeTiled(bytes, lines, body, magic);
+/** Decodes a dwt2d file (bytes; its header lines; the payload's offset; its magic); `withColours`
+ * (colour.mjs's, given by the caller: colour.mjs reads payloads with this module) decodes the colour
+ * sections of an 11.0 file's tiles. */
+export function decodeDwt2d(bytes, lines, body, magic, withColours) {
+  if (magic.major === 5 || magic.major === 11) return decodeTiled(bytes, lines, body, magic, withColours);
   const fields = headerFields(lines, false);
   checkChecksum(bytes, lines, fields, magic.major >= 4 || (magic.major === 3 && magic.minor >= 1));
   return decodeWhole(fields, [bytes.subarray(body)], magic);
@@ -29,17 +32,27 @@ export function decodeDwt2d(bytes, lines, body, magic) {
  * `withColours` decodes it over the grid's valid nodes and charts). A 10.0 file's CRC-32 is
  * checked before its minor version, as mzc does. */
 export function decodeCompact(bytes, magicEnd, magic) {
-  const newest = magic.major >= 10 ? TIGHT_PLACES.length - 1 : 0;
-  const parts = magic.major >= 10 ? tightParts(bytes, magicEnd, Math.min(magic.minor, newest)) : null;
-  if (magic.minor > newest) fail(null, `mzc-dwt2d version ${magic.major}.${magic.minor} is newer than this decoder reads (${magic.major}.${newest}); upgrade`);
+  if (magic.major >= 10) return decodeTight(bytes, magicEnd, magic).grid;
+  checkMinor(magic, 0);
   if (magic.major === 9) return decodeProgressive(bytes, magicEnd, magic);
-  if (parts) {
-    const grid = decodeWhole(parts.fields, [parts.payload], magic);
-    return parts.colour ? { ...grid, colourSection: parts.colour } : grid;
-  }
   const bodies = sections(bytes, magicEnd, [HEADER, PAYLOAD], COLOUR);
   const grid = decodeWhole(headerLines(bodies[HEADER], magic.major), [bodies[PAYLOAD]], magic);
   return bodies[COLOUR] ? { ...grid, colourSection: bodies[COLOUR] } : grid;
+}
+
+/** A 10.x file's grid (its colour section undecoded as `colourSection`, as `decodeCompact` gives it) and
+ * its header's fields (keyword -> words), its CRC-32 checked before its minor version, as mzc does. */
+function decodeTight(bytes, magicEnd, magic) {
+  const newest = TIGHT_PLACES.length - 1;
+  const parts = tightParts(bytes, magicEnd, Math.min(magic.minor, newest));
+  checkMinor(magic, newest);
+  const grid = decodeWhole(parts.fields, [parts.payload], magic);
+  return { grid: parts.colour ? { ...grid, colourSection: parts.colour } : grid, fields: parts.fields };
+}
+
+/** Refuses a binary file of a minor version newer than `newest`. */
+function checkMinor(magic, newest) {
+  if (magic.minor > newest) fail(null, `mzc-dwt2d version ${magic.major}.${magic.minor} is newer than this decoder reads (${magic.major}.${newest}); upgrade`);
 }
 
 /** Decodes a 9.0 file or a prefix of one (Version 9.0): its base section and each whole level section,
@@ -95,16 +108,18 @@ function roundToSamples(z, grid) {
 
 // ---------------------------------------------------------------------------------------
 // Tiled files (5.0): a header, an index of the tiles' lengths, and tiles that are 3.x files
-// (5.1 with `rounding integer`: 6.0 files rounded to the header's raster type)
+// (5.1 with `rounding integer`: 6.0 files rounded to the header's raster type; 11.0: 10.x files,
+// each with its block's colours)
 
-/** Decodes a 5.x file: checks its header's checksum and lines, the index and its CRC-32, then
- * decodes every tile as a 3.x file (6.0 in a rounded 5.1 file) and puts its values in their place. */
-function decodeTiled(bytes, lines, body, magic) {
+/** Decodes a 5.x or 11.0 file: checks its header's checksum and lines, the index and its CRC-32,
+ * then decodes every tile as a 3.x file (6.0 in a rounded 5.1 file, 10.x with its nodes' colours in
+ * an 11.0 file) and puts its values, and its colours, in their place. */
+function decodeTiled(bytes, lines, body, magic, withColours) {
   const fields = headerFields(lines, false);
   const h = fieldReader(fields);
   checkChecksum(bytes, lines, fields, true, body);
   const grid = gridFields(h, { projected: true, georef: true });
-  const rounded = magic.minor >= 1 && h.word("rounding", ["integer"], false) === "integer";
+  const rounded = magic.major === 5 && magic.minor >= 1 && h.word("rounding", ["integer"], false) === "integer";
   if (rounded && !(grid.raster && SAMPLE_RANGES[grid.raster[2]])) {
     fail("rounding", "rounding integer needs a raster line of an integer sample type");
   }
@@ -114,16 +129,26 @@ function decodeTiled(bytes, lines, body, magic) {
     fail("tiles", `${NR} ${NC} is not ceil(rows / ${T}) and ceil(cols / ${T}), at most 4,194,304 tiles`);
   }
   const lengths = tileIndex(bytes, body, NR * NC);
+  const major = rounded ? 6 : magic.major === 11 ? 10 : 3;
   const z = new Float64Array(grid.rows * grid.cols);
+  const colors = major === 10 ? new Uint8Array(grid.rows * grid.cols * 3) : undefined;
   let at = body + 8 * NR * NC + 4;
   for (let i = 0; i < NR; i++) {
     for (let j = 0; j < NC; j++) {
-      const tile = decodeTile(bytes.subarray(at, at + lengths[i * NC + j]), grid, T, i, j, rounded);
-      for (let r = 0; r < tile.rows; r++) z.set(tile.z.subarray(r * tile.cols, (r + 1) * tile.cols), (i * T + r) * grid.cols + j * T);
+      const tile = decodeTile(bytes.subarray(at, at + lengths[i * NC + j]), grid, T, i, j, major, withColours);
+      place(z, tile.z, 1, tile, grid.cols, i * T, j * T);
+      if (colors) place(colors, tile.colors, 3, tile, grid.cols, i * T, j * T);
       at += lengths[i * NC + j];
     }
   }
-  return { ...grid, z };
+  return colors ? { ...grid, z, colors } : { ...grid, z };
+}
+
+/** Copies a tile's `values` (`width` of them a node, row by row) into the grid's array `into` (`cols`
+ * nodes a row) at node (`top`, `left`). */
+function place(into, values, width, tile, cols, top, left) {
+  const w = tile.cols * width;
+  for (let r = 0; r < tile.rows; r++) into.set(values.subarray(r * w, (r + 1) * w), ((top + r) * cols + left) * width);
 }
 
 /** The index's n lengths (u64 little-endian), its CRC-32 checked, each at least 1 and all
@@ -139,23 +164,42 @@ function tileIndex(bytes, body, n) {
   return lengths;
 }
 
-/** Tile (i, j): a whole mzc-dwt2d 3.x file of its block (``rounded``: 6.0, with the header's raster
- * line, its values integers), its lines those the header implies. */
-function decodeTile(bytes, grid, T, i, j, rounded) {
-  const { lines, body } = splitHeader(bytes);
-  const magic = parseMagic(lines[0]);
-  const major = rounded ? 6 : 3;
-  if (magic.kind !== "dwt2d" || magic.major !== major) fail("data", `tile ${i + 1}, ${j + 1} is not an mzc-dwt2d ${major}.x file`);
-  const tile = decodeDwt2d(bytes, lines, body, magic);
-  const fields = headerFields(lines, false);
+/** Tile (i, j): a whole mzc-dwt2d file of its block, of `major` (3: 3.x; 6: 6.0 of a rounded file,
+ * with the header's raster line, its values integers; 10: 10.x of an 11.0 file, with its nodes'
+ * colours), its lines those the header implies. */
+function decodeTile(bytes, grid, T, i, j, major, withColours) {
+  const name = `tile ${i + 1}, ${j + 1}`;
+  const { tile, fields } = major === 10 ? colouredTile(bytes, name, withColours) : textTile(bytes, name, major);
+  const rounded = major === 6;
   const origin = [grid.origin[0] + j * T * grid.d2, grid.origin[1] + i * T * grid.d1];
   const ok = tile.rows === Math.min((i + 1) * T, grid.rows) - i * T && tile.cols === Math.min((j + 1) * T, grid.cols) - j * T
     && tile.d1 === grid.d1 && tile.d2 === grid.d2 && tile.projection === grid.projection && tile.radius === grid.radius
     && tile.origin[0] === origin[0] && tile.origin[1] === origin[1]
     && !["transform", "units", "nodata", "crs", ...(rounded ? [] : ["raster"])].some((key) => fields.has(key))
     && (!rounded || (String(tile.raster) === String(grid.raster) && tile.z.every((v) => Number.isNaN(v) || Number.isInteger(v))));
-  if (!ok) fail("data", `tile ${i + 1}, ${j + 1}: its lines do not say the block the header gives it`);
+  if (!ok) fail("data", `${name}: its lines do not say the block the header gives it`);
   return tile;
+}
+
+/** A tile of text header lines, which must be an mzc-dwt2d `major`.x file: its grid and its lines
+ * (keyword -> words). */
+function textTile(bytes, name, major) {
+  const { lines, body } = splitHeader(bytes);
+  const magic = parseMagic(lines[0]);
+  if (magic.kind !== "dwt2d" || magic.major !== major) fail("data", `${name} is not an mzc-dwt2d ${major}.x file`);
+  return { tile: decodeDwt2d(bytes, lines, body, magic), fields: headerFields(lines, false) };
+}
+
+/** A tile of an 11.0 file, which must be an mzc-dwt2d 10.x file with a colour section of its nodes'
+ * colours (version 1: finer colours are not tiled): its grid with those colours, decoded as a whole
+ * 10.x file's are (`withColours`), and its fields as header lines. */
+function colouredTile(bytes, name, withColours) {
+  const magic = compactMagic(bytes);
+  if (magic?.major !== 10) fail("data", `${name} is not an mzc-dwt2d 10.x file`);
+  const { grid, fields } = decodeTight(bytes, magic.end, magic);
+  const tile = withColours(grid);
+  if (!tile.colors || tile.fineColors) fail("colour", `${name} has no colour section of its nodes' colours`);
+  return { tile, fields };
 }
 
 /** The codec's header lines (spec/dwt2d.md, Header lines) and the steps of every band. */

@@ -2,7 +2,8 @@
 //
 //   import { decode, writeZgrid } from "./mzc.mjs";
 //   const grid = decode(bytes);     // {kind, version, rows, cols, z: Float64Array, d1, d2, ...,
-//                                   //  colors: Uint8Array rows * cols * 3 of a z-grid 5.x or 6.0,
+//                                   //  colors: Uint8Array rows * cols * 3 of a z-grid 5.x or 6.0
+//                                   //  or a dwt2d file with colours (7.0 to 10.x, 11.0's tiles),
 //                                   //  fineColors, colourScale: a 6.0's samples K times finer}
 //   const zg = writeZgrid(grid);    // the raw float64 z-grid `mzc decode` writes
 //
@@ -10,6 +11,7 @@
 // line of text; nothing is returned half decoded.
 
 import { MzcError, fail, parseMagic, splitHeader, writeZgrid, formatNumber, checkMajor } from "./header.mjs";
+import { compactMagic } from "./compact.mjs";
 import { decodeDwt2d, decodeCompact } from "./dwt2d.mjs";
 import { withColours } from "./colour.mjs";
 import { ROW_CODECS } from "./rows.mjs";
@@ -18,10 +20,10 @@ import { decodeZgrid } from "./zgrid.mjs";
 export { MzcError, writeZgrid, formatNumber };
 
 /** Each format's decoder by the kind of its magic line. */
-const DECODERS = { dwt2d: decodeDwt2d, zgrid: decodeZgrid, ...ROW_CODECS };
+const DECODERS = { dwt2d: (...file) => decodeDwt2d(...file, withColours), zgrid: decodeZgrid, ...ROW_CODECS };
 
 /** The major versions read of each kind, [oldest, newest] (tests/test_web.py asks for them). */
-export const READS = { dwt2d: [2, 10], zgrid: [1, 6], poly: [1, 2], dft: [1, 2], dct: [1, 2], dwt: [1, 2] };
+export const READS = { dwt2d: [2, 11], zgrid: [1, 6], poly: [1, 2], dft: [1, 2], dct: [1, 2], dwt: [1, 2] };
 
 /** Decodes the bytes of an mzc file into its grid; throws MzcError on any bad file. */
 export function decode(bytes) {
@@ -35,18 +37,6 @@ export function decode(bytes) {
   const grid = compact ? withColours(decodeCompact(bytes, compact.end, magic)) : decoder(bytes, lines, body, magic);
   checkMagnitudes(grid);
   return { kind: magic.kind, version: `${magic.major}.${magic.minor}`, ...grid };
-}
-
-const COMPACT = ["mzc-dwt2d 7.", "mzc-dwt2d 8.", "mzc-dwt2d 9.", "mzc-dwt2d 10."].map((text) => new TextEncoder().encode(text));
-
-/** The magic of a binary file (`mzc-dwt2d 7.x` to `10.x`, its line within 16 bytes, a CR included) and
- * the end of that line; null for a file of text header lines. */
-function compactMagic(bytes) {
-  if (!COMPACT.some((magic) => magic.every((b, i) => bytes[i] === b))) return null;
-  const end = bytes.subarray(0, 16).indexOf(10) + 1;
-  if (!end) fail(null, "not an mzc file (no `mzc-KIND MAJOR.MINOR` magic line)");
-  const magic = parseMagic(new TextDecoder().decode(bytes.subarray(0, end - 1)).replace(/\r$/, ""));
-  return { ...magic, end };
 }
 
 const MAX_MAGNITUDE = 1e100;

@@ -14,6 +14,7 @@ header lines its z-grid would carry.""")
 @input_argument
 @click.option("--decode", "decode", is_flag=True, help="Decode the file: valid nodes, value range, bits per node.")
 def command(input, decode):
+    from mzc.codecs.dwt2d.tiles import is_tiled
     from mzc.formats import GRIDS, identified, read_as
     from mzc.formats.header import grid_header_lines
     from mzc.streams import display_name, read_input
@@ -27,7 +28,7 @@ def command(input, decode):
         format_line, header, chart_count = f"{row.name} (a raster, read as its grid)", grid_header_lines(grid), None
     elif row.name in ("prior", "residual"):
         grid, format_line, header, chart_count, tiles = prior_header(row, data, source, decode)
-    elif row.name == "dwt2d" and data.startswith(b"mzc-dwt2d 5."):
+    elif row.name == "dwt2d" and is_tiled(data):
         grid, format_line, header, tiles = tiled_header(data, source, decode)
         chart_count = None
     else:
@@ -192,8 +193,10 @@ def tiled_header(data, source, decode):
                 else tiled.frame.described())
     lines = [f"{keyword} {' '.join(values)}" for keyword, (values, _) in tiled.header.fields.items()]
     (tile_rows, tile_cols), sizes = tiled.counts, np.diff(tiled.offsets)
-    tile_lines = [f"tiles     {tile_rows} x {tile_cols} of {tiled.tile} x {tiled.tile} nodes, each a dwt2d file "
-                  f"of {int(sizes.min())}..{int(sizes.max())} bytes (index {int(tiled.offsets[0])} bytes in)"]
+    coloured = " with its nodes' colours" if tiled.coloured else ""
+    tile_lines = [f"tiles     {tile_rows} x {tile_cols} of {tiled.tile} x {tiled.tile} nodes, each a dwt2d "
+                  f"file{coloured} of {int(sizes.min())}..{int(sizes.max())} bytes (index {int(tiled.offsets[0])} "
+                  "bytes in)"]
     _kind, major, minor = split_magic(data, source)
     return grid, f"mzc-dwt2d {major}.{minor} (tiled)", lines, tile_lines
 

@@ -97,8 +97,9 @@ class Codec:
     ``window_writer(source, options, scheduler)``, for a codec that codes a grid too large to hold
     a window at a time (a raster read by windows, mzc.rasters.windows; on the Dask ``scheduler`` at
     that address, when not None), gives the file's bytes in chunks, or None when it codes that grid
-    whole (the caller then reads it whole); ``keeps_colour(grid, options)`` says whether the file of a
-    grid with colours carries them (mzc.colours.warn_uncoded names them when not).
+    whole (the caller then reads it whole); ``keeps_colour(grid, options)`` says how much of a
+    grid's colours its file carries: 0 none, 1 the nodes', K the colours K times finer than the
+    nodes (mzc.colours.warn_uncoded names what is not carried).
     """
 
     name: str
@@ -116,7 +117,7 @@ class Codec:
     check_options: Callable[[dict[str, Any]], None] = field(default=lambda options: None)
     writer_with_decoded: Callable[..., tuple[bytes, np.ndarray]] | None = None
     window_writer: Callable[[Any, dict[str, Any], str | None], Iterator[bytes] | None] | None = None
-    keeps_colour: Callable[[ZGrid, Mapping[str, Any]], bool] = field(default=lambda grid, options: False)
+    keeps_colour: Callable[[ZGrid, Mapping[str, Any]], int] = field(default=lambda grid, options: 0)
 
     def __post_init__(self) -> None:
         if not self.kind:

@@ -131,9 +131,12 @@ def nodata_token(value):
 
 
 def check_writable(grid):
-    """Refuse a grid that no raster holds: a raster is a planar grid in its CRS's own frame, with
+    """Refuse a grid that no raster holds: a raster is one planar grid in its CRS's own frame, with
     heights and coordinates mzc reads back (mzc.limits)."""
     check_grid_magnitudes(grid)
+    if grid.charts is not None:
+        raise MzcError("a raster holds one planar grid, and this one is charts of a whole object (separate pieces "
+                       "side by side): triangulate it, or write it as a z-grid", field="charts")
     if grid.projection != "planar":
         raise MzcError(f"a raster holds planar grids; this one is {grid.projection}: triangulate it, or slice "
                        "with --projection planar", field="projection")
@@ -230,6 +233,10 @@ def raster_files(path, grid, file_format, float32=False, options=None, cog=False
 
     options, cog = geotiff_options(options, cog, file_format)
     check_writable(grid)
+    if grid.colors is not None:
+        from mzc.colours import warn_raster_drops
+
+        warn_raster_drops(file_format)
     row = named(file_format)
     extras = {"options": options, "cog": cog} if options or cog else {}
     files = [(path, row.load().write(grid, float32, **extras))]

@@ -101,6 +101,10 @@ def write_tiles(path, tiled, float32=False):
 
     described = tiled.frame.described()
     check_writable_frame(described, check_writable)
+    if tiled.coloured:
+        from mzc.colours import warn_raster_drops
+
+        warn_raster_drops("tif")
     folder = None if is_stdio(path) else os.path.dirname(os.path.realpath(path))
     import tempfile
 

@@ -45,6 +45,8 @@ GEOREFERENCED_VERSION = (3, 2)   # 3.1 with the crs and raster lines of a grid r
 CHARTED_VERSION = (4, 0)     # 3.1 with the charts line of a multi-chart grid (its charts side by side)
 TILED_VERSION = (5, 0)       # a grid in independent tiles, each a 3.1 file (mzc.codecs.dwt2d.tiles)
 ROUNDED_TILED_VERSION = (5, 1)   # 5.0 with ``rounding integer``: its tiles are 6.0 files of a raster's integers
+COLOURED_TILED_VERSION = (11, 0)   # 5.0 whose tiles are whole 10.x files, each with its block's colour section
+                                   # (a 5.x reader would refuse the tiles: a new major)
 ROUNDED_VERSION = (6, 0)     # 4.0 with the crs and raster lines and ``rounding integer``: a raster of integers
                              # coded with max_error, whose decoded values are rounded to integers (a new major:
                              # a 4.0 reader, ignoring the line, would decode other values)
@@ -59,14 +61,14 @@ TIGHT_VERSION = (10, 0)      # every grid coded whole by default: 8.0 in one sec
                              # entropy.choose_short_records)
 BAND_MODELS_VERSION = (10, 1)   # 10.0 with ``band_models 1``: each detail band its own contexts' models, written
                                 # where that makes the file smaller (a large DEM's, by 4-6%)
-GEOREF_SINCE = dict([GEOREFERENCED_VERSION, TILED_VERSION, ROUNDED_VERSION, COMPACT_VERSION,
-                     FLIPS_VERSION, PROGRESSIVE_VERSION, TIGHT_VERSION])   # major -> first minor
-                                                                                         # with crs, raster
+GEOREF_SINCE = dict([GEOREFERENCED_VERSION, TILED_VERSION, ROUNDED_VERSION, COMPACT_VERSION, FLIPS_VERSION,
+                     PROGRESSIVE_VERSION, TIGHT_VERSION, COLOURED_TILED_VERSION])   # major -> first minor
+                                                                                    # with crs, raster
 ROUNDING = "integer"         # the one value of the rounding line
 ROUNDING_ULPS = 16           # the coded bound stays this many units in the last place of the largest value below
                              # floor(E) + 1/2, more than the float noise of a decoded value
 OLDEST_MAJOR = 2             # 1.x were drafts
-CHECKSUM_SINCE = {3: 1, 4: 0, 5: 0, 6: 0}   # the crc32 line is required from 3.1 on
+CHECKSUM_SINCE = {3: 1, 4: 0, 5: 0, 6: 0, 11: 0}   # the crc32 line is required from 3.1 on (text headers)
 CODER = "rans-signs-2"     # 2.0 names it on a required line; in 3.0 the version implies it
 # detail contexts, shared by every detail band: activity of parent, siblings, two rows above
 THRESHOLDS = (0.5, 1.0, 1.5, 3.0, 5.0, 8.0, 14.0, 24.0, 40.0, 70.0)
@@ -802,12 +804,15 @@ def colour_section(grid, psnr=None, max_error=None):
 
 
 def keeps_colour(grid, options):
-    """True when the file of ``grid`` with ``options`` carries its colours: coded whole, as 7.0 (the
-    tiles of a 5.0 file are 3.x files, which code the shape alone)."""
+    """The colour scale of ``grid`` that its file with ``options`` carries: coded whole, its own (a
+    colour section of any scale); in tiles, 1 (the nodes' colours, a section a tile of 11.0), but 0
+    for a raster's integers in rounded tiles (6.0 files, which code the shape alone)."""
     from mzc.codecs.dwt2d import tiles
 
-    return tiles.tile_side(grid.shape, options.get("tile"), charted=grid.charts is not None,
-                           coloured=grid.colors is not None) is None
+    if tiles.tile_side(grid.shape, options.get("tile"), charted=grid.charts is not None,
+                       coloured=grid.colors is not None) is None:
+        return grid.colour_scale
+    return 0 if tiles.rounds(tiles.GridSource(grid), options) else 1
 
 
 def rounding_bounds(grid, max_error):

@@ -1,6 +1,7 @@
 """Tiled dwt2d files (``mzc-dwt2d 5.0``): a grid of any size as independent square tiles, each a
 whole dwt2d 3.x file of its block, behind a header and an index of their lengths (spec/dwt2d.md,
-Tiled files).
+Tiled files); of a grid with colours, ``mzc-dwt2d 11.0``, whose tiles are whole 10.x files, each
+with its block's colours (the nodes'; colours finer than the nodes are not tiled).
 
 A grid larger than one default tile is coded tile by tile, as GDAL's tiled GeoTIFFs, COGs and
 SPERR's chunks are: memory is that of one tile however large the grid, the tiles may be coded
@@ -25,13 +26,14 @@ from types import SimpleNamespace
 
 import numpy as np
 
-from mzc.codecs.dwt2d import ROUNDED_TILED_VERSION, TILED_VERSION
+from mzc.codecs.dwt2d import COLOURED_TILED_VERSION, ROUNDED_TILED_VERSION, TIGHT_VERSION, TILED_VERSION
 from mzc.errors import MzcError
 from mzc.limits import check_grid_size
 
 DEFAULT_TILE = 1024        # a 1024 x 1024 tile encodes in about 0.25 GB (1.6 M nodes whole: 0.3 GB)
-COLOURED_WHOLE = 4 * DEFAULT_TILE * DEFAULT_TILE   # nodes of a coloured grid coded whole by default, since tiles
-                                                   # code the shape alone (2.1 M nodes with colours: 0.63 GB)
+COLOURED_WHOLE = 4 * DEFAULT_TILE * DEFAULT_TILE   # nodes of a coloured grid coded whole by default, which keeps
+                                                   # colours finer than the nodes that tiles (11.0) do not
+                                                   # (2.1 M nodes with colours: 0.63 GB)
 MIN_TILE, MAX_TILE = 4, 4096
 MAX_TILES = 1 << 22        # an index of at most 32 MB (a 10^6 x 10^6 grid in 1024-node tiles has 10^6)
 HEADER_LIMIT = 1 << 20     # the text header's bytes (a crs line is at most 16 KB)
@@ -44,8 +46,8 @@ TASKS_AHEAD = 64           # Dask tasks submitted at a time: their results wait,
 def tile_side(shape, tile, charted=False, coloured=False):
     """The side of the tiles of a grid of ``shape`` coded with the ``tile`` option (None: tiles of
     DEFAULT_TILE for a grid larger than one of them, unless it is ``charted``, whose charts are
-    blocks of their own, or ``coloured`` and of at most COLOURED_WHOLE nodes, whose colours only a
-    file coded whole keeps; 0: never), or None when it is coded whole."""
+    blocks of their own, or ``coloured`` and of at most COLOURED_WHOLE nodes, whose colours of
+    any scale a file coded whole keeps; 0: never), or None when it is coded whole."""
     nodes = shape[0] * shape[1]
     whole = charted or nodes <= DEFAULT_TILE * DEFAULT_TILE or (coloured and nodes <= COLOURED_WHOLE)
     if tile == 0 or (tile is None and whole):
@@ -116,7 +118,7 @@ class GridSource:
         if grid.charts is not None:
             raise MzcError("a multi-chart grid is coded whole: its charts are blocks of their own (--tile 0)",
                            field="tile")
-        self.frame, self.z = frame_of(grid), grid.z
+        self.frame, self.z, self.colors = frame_of(grid), grid.z, grid.colors
 
     def integer_samples(self):
         """True when every valid value is one of the grid's raster's samples (an integer raster
@@ -129,6 +131,10 @@ class GridSource:
     def block(self, rows, cols):
         """The values of rows ``rows`` and columns ``cols`` (each a (start, stop)), NaN at invalid nodes."""
         return self.z[rows[0]:rows[1], cols[0]:cols[1]]
+
+    def block_colours(self, rows, cols):
+        """The nodes' colours of that block (None without colours)."""
+        return None if self.colors is None else self.colors[rows[0]:rows[1], cols[0]:cols[1]]
 
 
 # --------------------------------------------------------------------------- encoder
@@ -155,6 +161,12 @@ def rounds(source, options):
             and np.dtype(raster.sample).kind in "iu" and source.integer_samples())
 
 
+def coloured_tiles(source, rounded):
+    """True when the tiles of ``source`` carry its colours (11.0): it has them (a grid in memory's,
+    ``GridSource.colors``), and its tiles are not rounded 6.0 files, which code the shape alone."""
+    return getattr(source, "colors", None) is not None and not rounded
+
+
 def coded_tiles(source, tile, options, rounded, client=None):
     """The bytes of every tile of ``source`` (row by row of tiles, from the grid's first row), each
     a whole dwt2d file of its block coded with the dwt2d ``options`` (checked, without tile), a
@@ -165,8 +177,10 @@ def coded_tiles(source, tile, options, rounded, client=None):
     unit_checked = frame.fields.get("crs") is not None
     places = [(rows, cols) for rows in spans(frame.rows, tile) for cols in spans(frame.cols, tile)]
     if client is None:
+        coloured = coloured_tiles(source, rounded)
         for rows, cols in places:
-            yield coded_block(source.block(rows, cols), frame, rows, cols, options, unit_checked, rounded)
+            colours = source.block_colours(rows, cols) if coloured else None
+            yield coded_block(source.block(rows, cols), frame, rows, cols, options, unit_checked, rounded, colours)
         return
     for start in range(0, len(places), TASKS_AHEAD):
         futures = [client.submit(coded_remotely, source.opener, rows, cols, options, unit_checked, rounded,
@@ -175,18 +189,19 @@ def coded_tiles(source, tile, options, rounded, client=None):
             yield future.result()
 
 
-def coded_block(values, frame, rows, cols, options, unit_checked, rounded=False):
+def coded_block(values, frame, rows, cols, options, unit_checked, rounded=False, colours=None):
     """The dwt2d file of the block of ``frame`` at ``rows`` and ``cols`` (each a (start, stop)) holding
     ``values``, its heights and decoded heights held to mzc.limits as ``Codec.encode`` holds a
-    whole grid's; ``rounded``: a 6.0 file whose values decode to the raster's integers (its
-    raster line lets encode_whole round them)."""
+    whole grid's: a 3.x file; ``rounded``: a 6.0 file whose values decode to the raster's integers
+    (its raster line lets encode_whole round them); with the block's ``colours``, a 10.x file
+    with its colour section at the options' colour target."""
     from mzc.codecs.dwt2d import encode_whole
     from mzc.grid import ZGrid
     from mzc.limits import check_grid_magnitudes, check_magnitude
 
-    grid = ZGrid(z=values, **frame.block_fields(rows[0], cols[0], rounded))
+    grid = ZGrid(z=values, colors=colours, **frame.block_fields(rows[0], cols[0], rounded))
     check_grid_magnitudes(grid)
-    data, decoded = encode_whole(grid, **options, unit_checked=unit_checked, compact=False)
+    data, decoded = encode_whole(grid, **options, unit_checked=unit_checked, compact=colours is not None)
     check_magnitude(decoded, "decoded heights", field="z")
     return data
 
@@ -200,13 +215,15 @@ def coded_remotely(opener, rows, cols, options, unit_checked, rounded):
         source.close()
 
 
-def header_bytes(frame, tile, lengths, options, rounded=False):
+def header_bytes(frame, tile, lengths, options, rounded=False, coloured=False):
     """The text header (through its ``data`` line, with its crc32) and the index of ``lengths``;
-    ``rounded``: the 5.1 header of tiles rounded to integers, whose bound is floor(max_error)."""
+    ``rounded``: the 5.1 header of tiles rounded to integers, whose bound is floor(max_error);
+    ``coloured``: the 11.0 header of tiles with colours."""
     from mzc.codecs.dwt2d import ROUNDING
     from mzc.formats.header import file_bytes, format_number, grid_header_lines, magic_line
 
-    lines = [magic_line("dwt2d", ROUNDED_TILED_VERSION if rounded else TILED_VERSION),
+    version = ROUNDED_TILED_VERSION if rounded else COLOURED_TILED_VERSION if coloured else TILED_VERSION
+    lines = [magic_line("dwt2d", version),
              *grid_header_lines(frame.described(), write_defaults=False),
              f"tile {tile}", f"tiles {len(spans(frame.rows, tile))} {len(spans(frame.cols, tile))}"]
     if rounded:
@@ -223,7 +240,8 @@ def encode(source, tile, options):
     check_targets(source.frame, options)
     rounded = rounds(source, options)
     tiles = list(coded_tiles(source, tile, options, rounded))
-    return header_bytes(source.frame, tile, [len(t) for t in tiles], options, rounded) + b"".join(tiles)
+    return header_bytes(source.frame, tile, [len(t) for t in tiles], options, rounded,
+                        coloured_tiles(source, rounded)) + b"".join(tiles)
 
 
 def file_chunks(source, tile, options, spill_dir=None, scheduler=None) -> Iterator[bytes]:
@@ -244,7 +262,7 @@ def file_chunks(source, tile, options, spill_dir=None, scheduler=None) -> Iterat
         for data in coded_tiles(source, tile, options, rounded, client):
             spill.write(data)
             lengths.append(len(data))
-        yield header_bytes(source.frame, tile, lengths, options, rounded)
+        yield header_bytes(source.frame, tile, lengths, options, rounded, coloured_tiles(source, rounded))
         spill.seek(0)
         while chunk := spill.read(COPY_CHUNK):
             yield chunk
@@ -294,8 +312,8 @@ class File:
 
 
 def is_tiled(head):
-    """True when bytes starting a file are those of a tiled dwt2d file's magic line."""
-    return head.startswith(b"mzc-dwt2d %d." % TILED_VERSION[0])
+    """True when bytes starting a file are those of a tiled dwt2d file's magic line (5.x, 11.x)."""
+    return any(head.startswith(b"mzc-dwt2d %d." % major) for major in (TILED_VERSION[0], COLOURED_TILED_VERSION[0]))
 
 
 class TiledFile:
@@ -309,7 +327,8 @@ class TiledFile:
         head = reader.read(0, min(reader.size, HEADER_LIMIT))
         end = head.find(b"\ndata\n")
         self.header, self.frame, self.tile, counts = self.read_header(head[:end + 6] if end >= 0 else head)
-        self.rounded = read_rounding(self.header, self.frame.fields, ROUNDED_TILED_VERSION)
+        self.coloured = self.header.major == COLOURED_TILED_VERSION[0]   # 11.0 has no rounding line
+        self.rounded = not self.coloured and read_rounding(self.header, self.frame.fields, ROUNDED_TILED_VERSION)
         index_start = end + 6
         count = counts[0] * counts[1]
         if index_start + LENGTH.size * count + INDEX_CHECK.size > reader.size:
@@ -332,9 +351,10 @@ class TiledFile:
         from mzc.codecs.dwt2d import CHECKSUM_SINCE, KIND, OLDEST_MAJOR, PROJECTED_VERSION
         from mzc.formats.header import integer_word, read_grid_fields, read_header
 
-        header, _body, _line = read_header(head, self.source, KIND, TILED_VERSION[0], oldest_major=OLDEST_MAJOR,
-                                           projected_major=PROJECTED_VERSION[0], checksum_since=CHECKSUM_SINCE,
-                                           binary=True, georef_since={TILED_VERSION[0]: 0})
+        header, _body, _line = read_header(head, self.source, KIND, COLOURED_TILED_VERSION[0],
+                                           oldest_major=OLDEST_MAJOR, projected_major=PROJECTED_VERSION[0],
+                                           checksum_since=CHECKSUM_SINCE, binary=True,
+                                           georef_since={TILED_VERSION[0]: 0, COLOURED_TILED_VERSION[0]: 0})
         fields, rows, cols = read_grid_fields(header, whole=False)
         tile = header.integer("tile", MIN_TILE, MAX_TILE)
         try:
@@ -358,17 +378,18 @@ class TiledFile:
         k = i * len(self.col_spans) + j
         return self.reader.read(int(self.offsets[k]), int(self.offsets[k + 1] - self.offsets[k]))
 
-    def tile_values(self, i, j):
-        """The decoded values of tile (``i``, ``j``) (NaN at invalid nodes), its stream checked to be
-        the block the header places there."""
-        from mzc.codecs.dwt2d import ROUNDED_VERSION
+    def tile_grid(self, i, j):
+        """The decoded grid of tile (``i``, ``j``) (NaN at invalid nodes; of an 11.0 file, with its
+        colours), its stream checked to be the block the header places there."""
+        from mzc.codecs.dwt2d import ROUNDED_VERSION, compact
         from mzc.codecs.dwt2d import read as read_stream
         from mzc.formats.header import split_magic
 
         name = f"{self.source} (tile {i}, {j})"
         data = self.tile_bytes(i, j)
-        major = ROUNDED_VERSION[0] if self.rounded else 3
-        if split_magic(data, name)[1] != major:
+        major = ROUNDED_VERSION[0] if self.rounded else TIGHT_VERSION[0] if self.coloured else 3
+        found_major = compact.major(data) if self.coloured else split_magic(data, name)[1]
+        if found_major != major:
             raise MzcError(f"a tile of this file is a dwt2d {major}.x stream", source=name, line=1)
         grid = read_stream(data, name)
         rows, cols = self.row_spans[i], self.col_spans[j]
@@ -385,7 +406,10 @@ class TiledFile:
         if self.rounded and not np.array_equal(grid.z[valid], np.rint(grid.z[valid])):
             raise MzcError("the tile's values are not rounded to integers, as the file's rounding line says",
                            source=name, field="rounding")
-        return grid.z
+        if self.coloured and (grid.colors is None or grid.fine_colors is not None):
+            raise MzcError("a tile of this file has no colour section of its nodes' colours", source=name,
+                           field="colour")
+        return grid
 
     def window(self, row=0, col=0, rows=None, cols=None):
         """The ZGrid of rows ``row``..``row + rows - 1`` and columns ``col``..``col + cols - 1`` (the
@@ -394,19 +418,22 @@ class TiledFile:
         cols = self.frame.cols - col if cols is None else cols
         check_window(self.frame.shape, (row, col, rows, cols), source=self.source)
         z = np.empty((rows, cols))
+        colours = np.empty((rows, cols, 3), dtype=np.uint8) if self.coloured else None
         for i, (r0, r1) in enumerate(self.row_spans):
             for j, (c0, c1) in enumerate(self.col_spans):
                 top, bottom, left, right = max(r0, row), min(r1, row + rows), max(c0, col), min(c1, col + cols)
                 if top < bottom and left < right:
-                    z[top - row:bottom - row, left - col:right - col] = \
-                        self.tile_values(i, j)[top - r0:bottom - r0, left - c0:right - c0]
-        return window_grid(self.frame, z, row, col)
+                    grid, inside = self.tile_grid(i, j), (slice(top - r0, bottom - r0), slice(left - c0, right - c0))
+                    z[top - row:bottom - row, left - col:right - col] = grid.z[inside]
+                    if colours is not None:
+                        colours[top - row:bottom - row, left - col:right - col] = grid.colors[inside]
+        return window_grid(self.frame, z, row, col, colours)
 
     def blocks(self):
         """((row span, column span), values) of every tile, row by row of tiles."""
         for i, rows in enumerate(self.row_spans):
             for j, cols in enumerate(self.col_spans):
-                yield (rows, cols), self.tile_values(i, j)
+                yield (rows, cols), self.tile_grid(i, j).z
 
     def close(self):
         self.reader.close()
