@@ -322,3 +322,21 @@ def test_info_says_the_tiles_carry_colours(tmp_path):
     (tmp_path / "c.mzw2").write_bytes(mzc.encode(coloured(terrain(10, 9)), "dwt2d", max_error=0.05, tile=4))
     shown = run_mzc("info", tmp_path / "c.mzw2", check=True).stdout.decode()
     assert "mzc-dwt2d 11.0 (tiled)" in shown and "each a dwt2d file with its nodes' colours" in shown
+
+
+def test_a_tile_with_lines_only_the_header_may_have_is_refused():
+    """A tile's own transform, units, nodata or crs would say something the file's header says
+    for the whole grid (spec/dwt2d.md, Tiles): such a tile is refused, as web/ refuses it."""
+    from mzc.codecs.dwt2d import encode_whole
+
+    data = made()
+    tiled = TiledFile(Bytes(data), "good")
+    fields = tiled.frame.block_fields(0, 0)
+    head, rest = data[:data.index(b"\ndata\n") + 6], data[int(tiled.offsets[1]):]
+    z = mzc.decode(data).z[:4, :4]
+    for extra in ({"units": "mm"}, {"nodata": "-9999"}, {"transform": np.hstack([np.eye(3), [[1.0], [0], [0]]])}):
+        tile = encode_whole(ZGrid(z=z, **fields, **extra), max_error=0.05, compact=False)[0]
+        lengths = [len(tile), *map(int, np.diff(tiled.offsets)[1:])]
+        index = b"".join(struct.pack("<Q", n) for n in lengths)
+        with pytest.raises(MzcError, match="lines of its own"):
+            mzc.decode(head + index + struct.pack("<I", zlib.crc32(index)) + tile + rest)

@@ -384,6 +384,7 @@ class TiledFile:
         from mzc.codecs.dwt2d import ROUNDED_VERSION, compact
         from mzc.codecs.dwt2d import read as read_stream
         from mzc.formats.header import split_magic
+        from mzc.grid import IDENTITY_TRANSFORM
 
         name = f"{self.source} (tile {i}, {j})"
         data = self.tile_bytes(i, j)
@@ -402,6 +403,10 @@ class TiledFile:
         if grid.shape != (rows[1] - rows[0], cols[1] - cols[0]) or found != expected:
             raise MzcError(f"the tile's grid ({grid.shape[0]} x {grid.shape[1]} nodes at {grid.origin}) is not "
                            f"the block the header places there", source=name, field="rows")
+        if (grid.units, grid.nodata, grid.crs, None if self.rounded else grid.raster) != (None, "nan", None, None) \
+                or not np.array_equal(grid.transform, IDENTITY_TRANSFORM):
+            raise MzcError("the tile has lines of its own (transform, units, nodata, crs or raster) that only the "
+                           "file's header may have", source=name, field="data")
         valid = grid.valid
         if self.rounded and not np.array_equal(grid.z[valid], np.rint(grid.z[valid])):
             raise MzcError("the tile's values are not rounded to integers, as the file's rounding line says",
