@@ -179,19 +179,20 @@ def test_info_shows_the_colour_sections_bytes_and_target(tmp_path):
     assert "\ncolour " not in run_mzc("info", tmp_path / "p.mzw2", check=True).stdout.decode()
 
 
-def test_batch_encode_names_the_colours_a_tiled_file_drops(tmp_path):
-    """One item of mzc batch encode records the warning of colours its file does not carry (here: in
-    tiles) in its manifest row, and none for a file coded whole (which keeps them)."""
+def test_batch_encode_names_the_colours_a_file_drops(tmp_path):
+    """One item of mzc batch encode records the warning of colours its file does not carry (here: a
+    row codec's) in its manifest row, and none for a dwt2d file, whole or in tiles (which keep them)."""
     from mzc.batch import Job, items, work
 
     source = tmp_path / "col.ply"
     source.write_bytes(ascii_ply(coloured_surface()))
-    for options, warned in (({"tile": 16}, True), ({}, False)):
-        settings = {"codec": "dwt2d", "codec_options": {"max_error": 0.05, **options},
+    for name, codec, options, warned in (("dct", "dct", {"quality": 20}, True), ("whole", "dwt2d", {}, False),
+                                         ("tiles", "dwt2d", {"tile": 16}, False)):
+        settings = {"codec": codec, "codec_options": {**({"max_error": 0.05} if codec == "dwt2d" else {}), **options},
                     "slice_options": {"d1": 0.1, "align": "pca"}}
-        row = work.run_item(Job("encode", str(tmp_path), settings), items.Item(str(source), f"c{len(options)}.mzw2"))
+        row = work.run_item(Job("encode", str(tmp_path), settings), items.Item(str(source), f"{name}.mzc"))
         assert row["status"] == "ok" and ("the nodes' colours" in row["warning"]) == warned, row
-        assert (mzc.decode((tmp_path / f"c{len(options)}.mzw2").read_bytes()).colors is None) == warned
+        assert (mzc.decode((tmp_path / f"{name}.mzc").read_bytes()).colors is None) == warned
 
 
 def test_the_benchmarks_colour_error_is_the_surface_colour_at_the_nearest_point():
