@@ -58,33 +58,35 @@ def unpack_rgb(values):
     return packed.view("<u4").view(np.uint8).reshape(-1, 4)[:, 2::-1].copy()
 
 
+KEEPERS = "the z-grid and a dwt2d file keep them"   # the files that keep a grid's nodes' colours
+
+
 def warn_uncoded(grid, codec, options):
     """One MzcWarning when ``grid`` has colours that the file ``codec`` (a Codec) writes with
     ``options`` does not carry (the row codecs, zarr: ``Codec.keeps_colour``), or not as finely (a
     dwt2d file in tiles keeps the nodes'), so that they are not lost without a word (issue 32)."""
     if grid.colors is None:
         return
-    import warnings
-
-    from mzc.errors import MzcWarning
-
     kept = codec.keeps_colour(grid, options)
     if not kept:
-        warnings.warn(MzcWarning(f"not kept: the nodes' colours (this mzc-{codec.kind} file codes the shape "
-                                 "alone; the z-grid and a dwt2d file keep them)"), stacklevel=2)
+        warn_not_kept("the nodes' colours", f"this mzc-{codec.kind} file codes the shape alone; {KEEPERS}")
     elif kept < grid.colour_scale:
-        warnings.warn(MzcWarning(f"not kept: the colours {grid.colour_scale} times finer than the nodes (this "
-                                 f"mzc-{codec.kind} file in tiles keeps the nodes' colours; --tile 0 codes it "
-                                 "whole, with them)"), stacklevel=2)
+        warn_not_kept(f"the colours {grid.colour_scale} times finer than the nodes",
+                      f"this mzc-{codec.kind} file in tiles keeps the nodes' colours; --tile 0 codes it whole, "
+                      "with them")
 
 
 def warn_raster_drops(raster):
     """One MzcWarning that a ``raster`` (tif or asc) written of a grid with colours holds its
     heights alone (issue 32: nothing dropped without a word)."""
+    name = {"tif": "GeoTIFF", "asc": "ESRI ASCII grid"}.get(raster, f"{raster} raster")
+    warn_not_kept("the nodes' colours", f"a {name} holds the heights alone; {KEEPERS}")
+
+
+def warn_not_kept(what, why):
+    """The MzcWarning "not kept: WHAT (WHY)" of colours a file leaves out."""
     import warnings
 
     from mzc.errors import MzcWarning
 
-    name = {"tif": "GeoTIFF", "asc": "ESRI ASCII grid"}.get(raster, f"{raster} raster")
-    warnings.warn(MzcWarning(f"not kept: the nodes' colours (a {name} holds the heights alone; the z-grid and a "
-                             "dwt2d file keep them)"), stacklevel=2)
+    warnings.warn(MzcWarning(f"not kept: {what} ({why})"), stacklevel=3)

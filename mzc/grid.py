@@ -129,6 +129,11 @@ def node_colours(values, valid):
     return colours
 
 
+def fine_shape(shape, scale):
+    """(rows, cols) of a colour image ``scale`` times finer than a grid of ``shape`` nodes."""
+    return tuple((n - 1) * scale + 1 for n in shape[:2])
+
+
 def fine_lattice(count, scale):
     """(low, high, t) of the ``(count - 1) scale + 1`` samples of a node line ``scale`` times finer:
     sample a lies at node position a / scale, between nodes low and high (the same node when a is

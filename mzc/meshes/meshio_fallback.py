@@ -156,12 +156,9 @@ def write_as(kind: str, mesh: Mesh) -> bytes:
     if kind == "stl" and not len(mesh.triangles):
         raise MzcError("STL cannot hold a point cloud (no triangles)")
     if mesh.colors is not None:
-        import warnings
+        from mzc.colours import warn_not_kept
 
-        from mzc.errors import MzcWarning
-
-        warnings.warn(MzcWarning(f"not kept: the vertex colours ({kind.upper()} as mzc writes it has none; write "
-                                 "PLY or OBJ to keep them)"), stacklevel=2)
+        warn_not_kept("the vertex colours", f"{kind.upper()} as mzc writes it has none; write PLY or OBJ to keep them")
     cells = [("triangle", mesh.triangles.astype(np.int32))] if len(mesh.triangles) else []   # as mzc has always written
     with temporary_name(kind) as name:
         with quiet():

@@ -334,11 +334,11 @@ def textured(grid, mesh, obj_path, png_path):
     rows, cols = colours.shape[:2]
     row, col = np.divmod(node, grid.shape[1])
     uv = np.column_stack([(col * scale + 0.5) / cols, (row * scale + 0.5) / rows])
-    texels = triangles.copy()
+    texels = triangles
     if grid.charts is not None:
         label = chart_labels(grid.shape, grid.charts).ravel()[node][triangles]
         across = (label != label[:, :1]).any(axis=1)
-        texels[across] = texels[across, :1]
+        texels = np.where(across[:, None], triangles[:, :1], triangles)
         first = np.argsort(~across, kind="stable")   # the seams' first: a vertex's last corner is its own texel's
         triangles, texels = triangles[first], texels[first]
     folder = os.path.dirname(os.path.abspath(obj_path))

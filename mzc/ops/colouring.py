@@ -37,6 +37,7 @@ def fine_colours(grid, mesh, scale):
     ``scale`` times finer than its nodes, 0 where invalid (``mzc.grid.fine_mask``); a multi-chart
     grid's charts each sample their own block (``chart_fine_colours``), and the samples between
     two charts' blocks are invalid."""
+    from mzc.grid import fine_shape
     from mzc.limits import check_colour_scale
 
     check_colour_scale(scale, *grid.shape, field="colour_scale")
@@ -44,7 +45,7 @@ def fine_colours(grid, mesh, scale):
         raise MzcError("a colour scale samples the source's colours, and it has none", field="colour_scale")
     if grid.charts is None:
         return chart_fine_colours(grid, mesh, scale)
-    colours = np.zeros(((grid.shape[0] - 1) * scale + 1, (grid.shape[1] - 1) * scale + 1, 3), dtype=np.uint8)
+    colours = np.zeros((*fine_shape(grid.shape, scale), 3), dtype=np.uint8)
     for chart, part in zip(grid.charts, grid.chart_grids()):
         colours[chart.block(scale)] = chart_fine_colours(part, mesh, scale)
     return colours

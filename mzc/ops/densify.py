@@ -96,12 +96,10 @@ def kept_fine_colours(grid, n):
     cells unevenly; the nodes keep their colours, mixed for the new rows)."""
     if grid.fine_colors is None or not n:
         return grid.fine_colors
-    import warnings
+    from mzc.colours import warn_not_kept
 
-    from mzc.errors import MzcWarning
-
-    warnings.warn(MzcWarning(f"not kept: the colours {grid.colour_scale} times finer than the nodes (densify "
-                             "keeps the nodes' colours, mixed for the rows it inserts)"), stacklevel=3)
+    warn_not_kept(f"the colours {grid.colour_scale} times finer than the nodes",
+                  "densify keeps the nodes' colours, mixed for the rows it inserts")
     return None
 
 

@@ -30,6 +30,8 @@ class GeoTiffSource:
     """Band 1 of a GeoTIFF on disk as a Frame (mzc.codecs.dwt2d.tiles) and its blocks, in the grid's
     row order (a north-up raster's last row is the grid's first)."""
 
+    colors = None   # a raster's values alone: its tiles carry no colours (mzc.codecs.dwt2d.tiles.coloured_tiles)
+
     def __init__(self, path, source):
         from rasterio.errors import CRSError, RasterioError
 

@@ -43,9 +43,9 @@ MAGIC = b"mzcC"
 VERSION = 1                               # colours at the nodes
 FINE_VERSION = 2                          # colours sampled K times finer than the nodes: the header adds K
 CHARTED_VERSION = 3                       # 2 on a multi-chart grid: no valid sample between two charts
+FINE_HEADER = struct.Struct("<4sBIIBBBHHHBII")   # versions 2 and 3: version 1's with K after cols
 HEADERS = {VERSION: struct.Struct("<4sBIIBBHHHBII"),   # magic, version, rows, cols, levels, transform, 3 steps,
-           FINE_VERSION: struct.Struct("<4sBIIBBBHHHBII"),   # correction, length, crc32; 2 and 3: K after cols
-           CHARTED_VERSION: struct.Struct("<4sBIIBBBHHHBII")}
+           FINE_VERSION: FINE_HEADER, CHARTED_VERSION: FINE_HEADER}   # correction, length, crc32
 LENGTH = 10                               # read_header's index of the payload's length
 LEAD = struct.Struct("<4sB")              # magic and version: which header follows
 CRC_BYTES = 4                             # the CRC-32 (last in the header) covers the header before it and the payload
@@ -413,6 +413,7 @@ def decode_colour(data, mask, source="<bytes>", charts=None):
     a multi-chart grid, ``charts`` its charts: version 3); any damage, a mask of another shape, or
     a section of another kind of grid raises an MzcError."""
     from mzc.codecs.dwt2d.entropy import Decoder
+    from mzc.grid import fine_mask, fine_shape
 
     data = bytes(data)
     _magic, version, rows, cols, levels, number, *rest = read_header(data, source)
@@ -423,8 +424,6 @@ def decode_colour(data, mask, source="<bytes>", charts=None):
     if fault:
         raise MzcError(fault, source=source, field="colour")
     if scale > 1:
-        from mzc.grid import fine_mask
-
         mask = fine_mask(mask, scale, charts)
     transform = TRANSFORMS[number]
     decoder = Decoder(data[HEADERS[version].size:], source, SAME_SIZE)
@@ -445,11 +444,6 @@ def decode_colour(data, mask, source="<bytes>", charts=None):
         image = clipped(image + correction * k, mask)
     decoder.check_end()
     return image.astype(np.uint8)
-
-
-def fine_shape(shape, scale):
-    """The shape of a colour image ``scale`` times finer than a grid of ``shape`` nodes."""
-    return tuple((n - 1) * scale + 1 for n in shape)
 
 
 def charts_fault(version, charts):

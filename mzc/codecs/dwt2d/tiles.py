@@ -164,7 +164,7 @@ def rounds(source, options):
 def coloured_tiles(source, rounded):
     """True when the tiles of ``source`` carry its colours (11.0): it has them (a grid in memory's,
     ``GridSource.colors``), and its tiles are not rounded 6.0 files, which code the shape alone."""
-    return getattr(source, "colors", None) is not None and not rounded
+    return source.colors is not None and not rounded
 
 
 def coded_tiles(source, tile, options, rounded, client=None):
