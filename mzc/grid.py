@@ -103,19 +103,10 @@ class Chart:
 
 
 def check_charts(charts, shape):
-    """Refuse charts that leave the grid, overlap, or are too many."""
+    """Refuse charts that leave the grid, overlap, or are too many; the nodes they cover."""
     if len(charts) > MAX_CHARTS:
         raise MzcError(f"{len(charts)} charts: at most {MAX_CHARTS}", field="charts")
-    covered = np.zeros(shape, dtype=np.int8)
-    for chart in charts:
-        if chart.row0 + chart.rows > shape[0] or chart.col0 + chart.cols > shape[1]:
-            raise MzcError(f"a chart's block (rows {chart.row0}.., columns {chart.col0}..) leaves the "
-                           f"{shape[0]} x {shape[1]} grid", field="charts")
-        block = covered[chart.block()]
-        if block.any():
-            raise MzcError(f"the charts at row {chart.row0}, column {chart.col0} overlap another", field="charts")
-        block[...] = 1
-    return covered.astype(bool)
+    return chart_labels(shape, charts) >= 0
 
 
 def node_colours(values, valid):
@@ -144,10 +135,16 @@ def fine_lattice(count, scale):
 
 def chart_labels(shape, charts):
     """(rows, cols): the number of the chart each node of a multi-chart grid of ``shape`` lies in,
-    -1 outside them."""
+    -1 outside them, refusing charts that leave the grid or overlap."""
     label = np.full(shape, -1, dtype=np.int64)
     for number, chart in enumerate(charts):
-        label[chart.block()] = number
+        if chart.row0 + chart.rows > shape[0] or chart.col0 + chart.cols > shape[1]:
+            raise MzcError(f"a chart's block (rows {chart.row0}.., columns {chart.col0}..) leaves the "
+                           f"{shape[0]} x {shape[1]} grid", field="charts")
+        block = label[chart.block()]
+        if (block >= 0).any():
+            raise MzcError(f"the charts at row {chart.row0}, column {chart.col0} overlap another", field="charts")
+        block[...] = number
     return label
 
 
