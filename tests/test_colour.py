@@ -419,14 +419,14 @@ def test_encoding_a_coloured_grid_keeps_its_colours_or_names_them(tmp_path):
     assert mzc.decode(data).colors is None
 
 
-def test_a_coloured_grid_larger_than_a_tile_is_coded_whole_and_keeps_its_colours():
-    """A grid of more nodes than a default tile (1024 x 1024) is tiled; with colours, up to
-    COLOURED_WHOLE nodes, it is coded whole (a file smaller than the tiles', its colours of any
-    scale) unless tiles are asked for, which then carry its nodes' colours (11.0)."""
+def test_a_coloured_grid_larger_than_a_tile_is_tiled_with_its_colours_unless_they_are_finer():
+    """A grid of more nodes than a default tile (1024 x 1024) is tiled; with colours at its nodes,
+    in 11.0 tiles that keep them; with colours finer than its nodes, up to FINE_COLOURED_WHOLE
+    nodes, it is coded whole (only such a file keeps them) unless tiles are asked for."""
     import warnings
 
     import mzc
-    from mzc.codecs.dwt2d.tiles import COLOURED_WHOLE, DEFAULT_TILE, is_tiled, tile_side
+    from mzc.codecs.dwt2d.tiles import DEFAULT_TILE, FINE_COLOURED_WHOLE, is_tiled, tile_side
     from mzc.errors import MzcWarning
     from mzc.grid import ZGrid
 
@@ -437,16 +437,18 @@ def test_a_coloured_grid_larger_than_a_tile_is_coded_whole_and_keeps_its_colours
     with warnings.catch_warnings():
         warnings.simplefilter("error", MzcWarning)
         data = mzc.encode(grid, "dwt2d", max_error=0.01, colour_max_error=4)
-    back = mzc.decode(data)
-    assert not is_tiled(data) and np.abs(back.colors.astype(int) - colours).max() <= 4
+    assert data.startswith(b"mzc-dwt2d 11.0\n") and np.abs(mzc.decode(data).colors.astype(int) - colours).max() <= 4
     assert is_tiled(mzc.encode(grid.with_z(grid.z, colors=None), "dwt2d", max_error=0.01))
-    with warnings.catch_warnings():
-        warnings.simplefilter("error", MzcWarning)
-        tiled = mzc.encode(grid, "dwt2d", max_error=0.01, colour_max_error=4, tile=DEFAULT_TILE)
-    assert tiled.startswith(b"mzc-dwt2d 11.0\n") and np.abs(mzc.decode(tiled).colors.astype(int) - colours).max() <= 4
-    side = int(np.sqrt(COLOURED_WHOLE)) + 1
-    assert tile_side((side, side), None, coloured=True) == DEFAULT_TILE
-    assert tile_side((side - 1, side - 1), None, coloured=True) is None
+    fine = np.repeat(np.repeat(colours, 2, axis=0), 2, axis=1)[: 2 * rows - 1, : 2 * cols - 1]
+    whole = mzc.encode(grid.with_z(grid.z, colors=colours, fine_colors=fine), "dwt2d", max_error=0.01,
+                       colour_max_error=4)
+    back = mzc.decode(whole)
+    assert not is_tiled(whole) and back.colour_scale == 2
+    assert np.abs(back.fine_colors.astype(int) - fine).max() <= 4
+    side = int(np.sqrt(FINE_COLOURED_WHOLE)) + 1
+    assert tile_side((side, side), None, fine_coloured=True) == DEFAULT_TILE
+    assert tile_side((side - 1, side - 1), None, fine_coloured=True) is None
+    assert tile_side((side - 1, side - 1), None) == DEFAULT_TILE
 
 
 def textured_obj(folder, image_name="skin.png", mtl_name="face.mtl", size=(64, 80)):

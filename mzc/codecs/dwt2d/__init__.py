@@ -708,7 +708,7 @@ def encode_grid_with_decoded(grid, tile=None, compact=True, progressive=None, **
     or, when ``tile`` or its size says so, in tiles (mzc.codecs.dwt2d.tiles)."""
     from mzc.codecs.dwt2d import tiles
 
-    side = tiles.tile_side(grid.shape, tile, charted=grid.charts is not None, coloured=grid.colors is not None)
+    side = tiles.grid_tile_side(grid, tile)
     check_whole(progressive, side)
     if side is None:
         return encode_whole(grid, compact=PROGRESSIVE_VERSION if progressive else compact, **options)
@@ -809,8 +809,7 @@ def keeps_colour(grid, options):
     for a raster's integers in rounded tiles (6.0 files, which code the shape alone)."""
     from mzc.codecs.dwt2d import tiles
 
-    if tiles.tile_side(grid.shape, options.get("tile"), charted=grid.charts is not None,
-                       coloured=grid.colors is not None) is None:
+    if tiles.grid_tile_side(grid, options.get("tile")) is None:
         return grid.colour_scale
     return 0 if tiles.rounds(tiles.GridSource(grid), options) else 1
 
