@@ -72,6 +72,7 @@ TIMING_RMSE, TIMING_BITS = 0.05, 10   # the settings of the speed table: % of D,
 DISC_NEIGHBOUR = 3    # a cloud point's disc reaches to its 3rd nearest neighbour
 DISC_CANDIDATES = 8   # a sample's nearest disc is sought among the discs of its 8 nearest points
 SPEED_OBJECT, SPEED_VERTICES = "ogre", 100_000
+EDGE_NODES = 4   # a node within this many 4-neighbour steps of an invalid one stands at a chart's edge
 CALIBRATION_OBJECT = "hand"   # a closed mesh whose own vertices, as a cloud, calibrate the cloud measure
 # Issue 28's figures
 # the floors (% of D, % of D, and the share of the area within NEAR % of D) are the ones mzc.slice
@@ -335,11 +336,35 @@ def run_item(job):
                 result["points"].append(point)
                 if setting == {MZC: TIMING_RMSE, DRACO: TIMING_BITS}[contender.name]:
                     kept[f"{contender.name} at {setting} {'% D' if contender.family == 'mzc' else 'bits'}"] = rebuild
+        if group != "faces":
+            result["sites"] = error_sites(grid, original.diagonal)
         if check:
             result["check"] = sample_check(original, kept, samples)
     result["warnings"] = sorted({str(w.message) for w in caught})
     result["wall_s"] = time.perf_counter() - started
     return result
+
+
+def error_sites(grid, diagonal):
+    """Where the bytes and the error of the grid's file at TIMING_RMSE % D go: its bytes and its
+    mask's (``anatomy.parts``), the valid nodes, the share of them within EDGE_NODES of a chart's
+    edge and the share of the squared surface error they carry. The error is the encoder's own
+    estimate at the nodes (``Prepared.surface_terms``: each value error weighted by its node's
+    lean and area, as ``--rmse`` aims at it), which places it on the grid."""
+    from scipy import ndimage
+
+    import mzc
+    from mzc.codecs.dwt2d import DEFAULT_WAVELET, SLOPE_LIMIT, Prepared
+    from mzc.codecs.dwt2d.anatomy import parts
+
+    data = mzc.encode(grid, "dwt2d", rmse=TIMING_RMSE * diagonal / 100)
+    valid = grid.valid
+    heights, weight, _ = Prepared(grid, DEFAULT_WAVELET, None, SLOPE_LIMIT).surface_terms
+    squared = (mzc.decode(data).z[valid] - heights) ** 2 * weight
+    steps = ndimage.distance_transform_cdt(np.pad(valid, 1), metric="taxicab")[1:-1, 1:-1][valid]
+    edge = steps <= EDGE_NODES
+    return {"rmse": TIMING_RMSE, "bytes": len(data), "mask_bytes": parts(data)["mask"], "nodes": int(valid.sum()),
+            "edge_nodes": float(np.mean(edge)), "edge_error": float(squared[edge].sum() / max(squared.sum(), 1e-300))}
 
 
 def sample_check(original, rebuilds, samples):
@@ -482,6 +507,20 @@ def smallest_ratio(item):
     return float(min(ratios)), ""
 
 
+def site_words(item):
+    """Where an object's file at TIMING_RMSE goes (``error_sites``), in words: the measured reason
+    behind its ratio to Draco."""
+    sites = item.get("sites")
+    if not sites:
+        return ""
+    nodes, draco = sites["nodes"], front_bytes(item, "peer", sites["rmse"])
+    beside = f", Draco's whole file {draco:,.0f} B at {sites['rmse']}% D" if draco else ""
+    return (f"{item['item']} at --rmse {sites['rmse']}% D: mask {sites['mask_bytes']:,} of {sites['bytes']:,} B"
+            f"{beside}; {nodes:,} valid nodes, {nodes / item['facts']['distinct_positions']:.1f} a distinct "
+            f"vertex; the {100 * sites['edge_nodes']:.0f}% within {EDGE_NODES} nodes of a chart's edge carry "
+            f"{100 * sites['edge_error']:.0f}% of the squared error")
+
+
 def face_unit(item):
     """% of D per mm of a face (faces are in mm)."""
     return 100 / item["diagonal"]
@@ -555,12 +594,12 @@ def verdicts(results, ratios, speed):
         rows.append(verdict(f"Draco / mzc at {target}% D, scanned (geometric mean)", f"{count} of {len(scanned)}",
                             fmt(mean), f">= {SCANNED_RATIO:g}",
                             None if count < len(scanned) else mean >= SCANNED_RATIO,
-                            "; ".join(missing) or f"{mean:.3g}x"))
+                            "; ".join(missing) or "; ".join([f"{mean:.3g}x", *map(site_words, scanned)])))
     for item in scanned:
         smallest, why = smallest_ratio(item)
         rows.append(verdict(f"mzc never larger than Draco at {ISSUE_RANGE[0]}-{ISSUE_RANGE[1]}% D", item["item"],
                             fmt(smallest), ">= 1", None if smallest is None else smallest >= 1,
-                            why or f"Draco / mzc falls to {fmt(smallest)}"))
+                            why or f"Draco / mzc falls to {fmt(smallest)}; {site_words(item)}"))
     faces = [r for r in results if r["group"] == "faces"]
     if faces:
         mean, count = ratios["mm"].get("faces", {}).get(DRACO, [(None, 0)])[0]
@@ -603,6 +642,7 @@ def markdown(document):
         *verdict_section(document["verdicts"]),
         *method_section(settings, document["calibration"]),
         *item_section("Objects", objects, PERCENT_TARGETS[1:]),
+        *sites_section(objects),
         *ratio_section(document["summary"], list(dict.fromkeys(r["group"] for r in results))),
         *item_section("Faces", faces, PERCENT_TARGETS, mm=True),
         *speed_section(document["speed"], settings["load_average"]),
@@ -711,6 +751,27 @@ def item_section(title, items, targets, mm=False):
     notes = {f"{item['item']} at {t}% D: {note}" for item in items for t, r in zip(targets, draco_ratios(item, targets))
              if r is None and (note := ratio_note(item, t))}
     return lines + [""] + [f"- n/a: {note}" for note in sorted(notes)] + ([""] if notes else [])
+
+
+def sites_section(items):
+    """Where each object's file at TIMING_RMSE goes: the mask's share and the chart edges' share of the error."""
+    rows = [r for r in items if r.get("sites")]
+    if not rows:
+        return []
+    lines = [f"## Where mzc's bytes and errors go (the file at --rmse {rows[0]['sites']['rmse']}% D)", "",
+             f"The mask's bytes are its ideal cost in the file's rANS words (`anatomy.parts`). The error is the "
+             f"encoder's own estimate at the valid nodes (each value error weighted by its node's lean and area, "
+             f"as `--rmse` aims at it); 'edge' nodes lie within {EDGE_NODES} steps of an invalid node, where a chart "
+             f"ends and its surface leans furthest from the chart's node lines.", "",
+             "| object | file B | mask B (share) | valid nodes | nodes a distinct vertex | edge nodes | their share of "
+             "the squared error |", "|---|---|---|---|---|---|---|"]
+    for r in rows:
+        s = r["sites"]
+        mask = f"{s['mask_bytes']:,} ({100 * s['mask_bytes'] / s['bytes']:.0f}%)"
+        per_vertex = s["nodes"] / r["facts"]["distinct_positions"]
+        lines.append(f"| {r['item']} | {s['bytes']:,} | {mask} | {s['nodes']:,} | {per_vertex:.1f} | "
+                     f"{100 * s['edge_nodes']:.0f}% | {100 * s['edge_error']:.0f}% |")
+    return lines + [""]
 
 
 def grid_words(fields):
