@@ -237,10 +237,11 @@ def read_mask(data, rows, cols):
 
 
 def filled(grid):
-    """Heights with invalid nodes filled smoothly (mzc's own harmonic fill), for codecs without a mask."""
-    from mzc.codecs.dwt2d.wavelet import laplace_fill
+    """Heights with invalid nodes filled smoothly (the biharmonic fill mzc's own encoder codes), for
+    codecs without a mask."""
+    from mzc.codecs.dwt2d.wavelet import smooth_fill
 
-    return laplace_fill(grid.z, grid.valid)
+    return smooth_fill(grid.z, grid.valid)
 
 
 def masked_mesh(grid, z, valid):

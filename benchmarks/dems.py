@@ -10,7 +10,7 @@ sample DEMs as mzc.samples reads them) is coded by each contender in the same ru
   memory in the DEM's sample type with its no-data value; bytes = the GeoTIFF file. The raw
   blob of the ``lerc`` package (``lerc.encode``, its own mask inside) is reported beside it.
 - SPERR (imagecodecs): point-wise error mode on the float64 heights, no-data cells filled by
-  mzc's harmonic fill, in the container of benchmarks/contenders.py (grid header, the mask
+  mzc's encoder's biharmonic fill, in the container of benchmarks/contenders.py (grid header, the mask
   coded by mzc's mask coder, SPERR's payload without its own header).
 
 At equal max error E every contender is asked for E; at an RMSE target R the peers' knob
@@ -361,7 +361,7 @@ def method_section():
         "bytes = the file as stored; read back through rasterio with its mask. `lerc blob` is the `lerc` "
         "package's own blob (`lerc.encode`, mask inside) of the same values: LERC without the TIFF.",
         "- SPERR: `imagecodecs.sperr_encode(z, E, 'pwe', header=False)` on the float64 heights with no-data "
-        "cells filled by mzc's harmonic fill (SPERR has no mask), in the container of "
+        "cells filled by mzc's encoder's biharmonic fill (SPERR has no mask), in the container of "
         "`benchmarks/contenders.py` (`grid_file`: a 133-byte binary grid header, the validity mask coded by "
         "mzc's dwt2d mask coder, and the payload; SPERR's own 10-byte header left out). It decodes float64: "
         "never integers.",

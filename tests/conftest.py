@@ -44,6 +44,16 @@ def mzc():
 
 
 @pytest.fixture
+def harmonic_fill(monkeypatch):
+    """The dwt2d encoder as it wrote spec/dwt2d.md's worked examples: its invalid nodes filled
+    harmonically (wavelet.laplace_fill), before the thin plate (smooth_fill) took over. The fill is
+    the encoder's alone, so the examples decode as ever; their bytes are its output of that day."""
+    from mzc.codecs.dwt2d import wavelet
+
+    monkeypatch.setattr(wavelet, "smooth_fill", wavelet.laplace_fill)
+
+
+@pytest.fixture
 def small_disk(tmp_path):
     """A 1 MiB tmpfs (root only; skipped otherwise), unmounted afterwards."""
     if not (hasattr(os, "geteuid") and os.geteuid() == 0):

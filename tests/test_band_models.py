@@ -44,9 +44,10 @@ def rechecked(body):
     return body + compact.CRC.pack(zlib.crc32(body))
 
 
-def test_the_spec_examples_of_10_0_and_10_1_are_one_grid_at_one_step_in_each_layout():
-    """The 3.0 example's input on its sphere, coded at the 10.0 example's steps: the shared layout is the
-    10.0 example byte for byte, band models the 10.1 example, and both decode to the same heights."""
+def test_the_spec_examples_of_10_0_and_10_1_are_one_grid_at_one_step_in_each_layout(harmonic_fill):
+    """The 3.0 example's input on its sphere, coded at the 10.0 example's steps (by the encoder of the
+    examples' day, ``harmonic_fill``): the shared layout is the 10.0 example byte for byte, band models
+    the 10.1 example, and both decode to the same heights."""
     *_older, (tight, heights), (band_models, same_heights) = spec_examples()
     z = np.array([[10, 10.5, 11, 11.2, 11.1, 10.8], [10.2, 10.9, 11.6, 11.9, 11.7, 11],
                   [10.1, 10.8, np.nan, 12.1, 11.8, 11.1], [9.8, 10.3, 10.9, 11.3, 11.2, 10.7]])

@@ -55,10 +55,11 @@ def test_bigger_bounds_give_smaller_files(f18):
 
 def surface_rms(grid, data):
     """What --rmse aims at: the height error times cos(slope), area-weighted (1/cos) over the valid
-    nodes, the slope of a node beside a depth jump taken on its own side."""
+    nodes, the slope from the grid the encoder fills (spec/dwt2d.md), a node beside a depth jump's
+    taken on its own side."""
     error = errors(grid, data)
     geometry = w2.Geometry.of(grid.d1, grid.d2, grid.origin, grid.shape, grid.projection, grid.radius)
-    lean, metric = w2.node_areas(w2.laplace_fill(grid.z, grid.valid, grid.periodic), geometry, jump_edges(grid))
+    lean, metric = w2.node_areas(w2.smooth_fill(grid.z, grid.valid, grid.periodic), geometry, jump_edges(grid))
     lean, metric = lean[grid.valid], metric[grid.valid]
     return np.sqrt(np.sum(error ** 2 * metric / lean) / np.sum(metric * lean))
 

@@ -435,7 +435,7 @@ class Prepared:
         self.valid = grid.valid
         self.levels = w2.default_levels(grid.shape, self.transform.coarsest) if levels is None else int(levels)
         self.geometry = w2.Geometry.of(grid.d1, grid.d2, grid.origin, grid.shape, grid.projection, grid.radius)
-        self.filled = w2.laplace_fill(grid.z, self.valid, self.geometry.periodic)
+        self.filled = w2.smooth_fill(grid.z, self.valid, self.geometry.periodic)
         periodic = self.geometry.periodic
         self.bands = w2.flatten(self.transform.forward(self.filled, wavelet, self.levels, periodic))
         self.relevant = w2.flatten(self.transform.relevance(self.valid, wavelet, self.levels, periodic))

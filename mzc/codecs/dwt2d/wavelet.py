@@ -56,15 +56,54 @@ def laplace_fill(z, valid, periodic=False):
     filled = np.where(valid, z, 0.0)
     if valid.all() or not valid.any():
         return filled
+    return harmonic_solve(filled, valid, periodic)[0]
+
+
+def harmonic_solve(filled, valid, periodic):
+    """(``filled`` with its invalid nodes set to the harmonic fill, in place; the multigrid of those nodes)."""
     fine, rhs = FillLevel.of_mask(filled, valid, periodic)
     levels = [fine]
     while levels[-1].size > 1:
         levels.append(levels[-1].coarser())
-    filled[fine.rows, fine.cols] = conjugate_gradients(Multigrid(levels), rhs)
+    multigrid = Multigrid(levels)
+    filled[fine.rows, fine.cols] = conjugate_gradients(multigrid, rhs)
+    return filled, multigrid
+
+
+def smooth_fill(z, valid, periodic=False):
+    """``z`` with invalid nodes replaced by the discrete biharmonic extension of the valid ones: the
+    values that make the sum of the squared 5-point Laplacian over every node of the grid least,
+    the valid nodes held (a thin plate's bending energy; the free grid border as in laplace_fill).
+
+    The harmonic fill meets the surface at a crease: its height runs on across the mask's edge but
+    not its slope, and the wavelet coefficients whose support straddles the edge pay for the crease.
+    This one carries the slope on too, so they shrink. Where the mask's edges are long, as between
+    a multi-chart grid's charts, the file at equal whole-surface RMS is 12-25% smaller (armadillo and
+    hand at 0.05 and 0.1% D; a face's, whose invalid nodes lie outside one outline, 1-2%). Only the
+    encoder fills: files are read as before. Solved by conjugate gradients from the harmonic fill,
+    preconditioned by one cycle of that fill's multigrid (the harmonic operator is most of this
+    one's square root; ThinPlate), for SMOOTH_ITERATIONS steps at most: the far corners of the fill
+    converge slowly, but the nodes near the mask, which the coefficients see, do not need them (the
+    armadillo's file at 16 steps is within 2% of the exact solution's, solved by a sparse LU, with
+    3.6 times its fill's time). The same numbers on every CPU: the stencils are compiled and
+    numpy's elementwise arithmetic, the sums ``inner``'s and ``np.bincount``'s, in a fixed order."""
+    filled = np.where(valid, z, 0.0)
+    if valid.all() or not valid.any():
+        return filled
+    known = filled.copy()
+    filled, multigrid = harmonic_solve(filled, valid, periodic)
+    fine = multigrid.finest
+    plate = ThinPlate(multigrid, valid, periodic)
+    b = -plate.squared(known)[fine.rows, fine.cols]
+    filled[fine.rows, fine.cols] = conjugate_gradients(plate, b, filled[fine.rows, fine.cols], SMOOTH_TOLERANCE,
+                                                             SMOOTH_ITERATIONS)
     return filled
 
 
 FILL_TOLERANCE = 1e-6       # relative residual: the fill moves < 1e-4 of the height range, files not at all
+SMOOTH_ITERATIONS = 16      # smooth_fill's steps at most (armadillo at 0.05% D: 8 steps 11,420 B, 16 11,175, 24 11,046;
+                            # each 16 ms on its 241,596 invalid nodes)...
+SMOOTH_TOLERANCE = 1e-2     # ...or fewer, once the residual is this share of the harmonic fill's
 FILL_OVERCORRECTION = 1.5   # coarse corrections of aggregates undershoot; 1.5 halved the iterations
 FILL_W_CYCLE = 2000         # levels with more nodes are visited twice per cycle (iterations stay ~8 at any size)
 NEIGHBOURS = ((0, 1), (0, -1), (1, 0), (-1, 0))
@@ -195,23 +234,90 @@ class Multigrid:
         checked(_fill.apply(out, v, self.finest.neighbours, self.finest.diagonal))
 
 
+class ThinPlate:
+    """smooth_fill's system on the invalid nodes: ``times`` applies L_I^T L_I, L the 5-point graph
+    Laplacian of the whole grid (as the harmonic fill's: free border, columns wrapping when
+    ``periodic``) and _I its columns of the invalid nodes; ``cycle`` is the harmonic fill's multigrid
+    cycle, its preconditioner. L_I^T L_I = L_II^2 + L_VI^T L_VI: the harmonic stencil twice (compiled),
+    and a correction through the *ring*, the valid nodes beside invalid ones: (L_VI v)_r is minus the
+    sum of ring node r's invalid neighbours' values, and L_VI^T hands it back to them, negated."""
+
+    def __init__(self, multigrid, valid, periodic):
+        self.cycle, self.finest, self.periodic = multigrid.cycle, multigrid.finest, periodic
+        rows, cols = ring_of(valid, periodic)
+        at = (rows + 1) * (valid.shape[1] + 2) + (cols + 1)
+        self.ring = np.stack([self.finest.index.ravel()[at + dr * (valid.shape[1] + 2) + dc]
+                              for dr, dc in NEIGHBOURS])   # 4 x ring: invalid neighbours, finest.size if none
+        self.once = np.zeros(self.finest.size)
+
+    def squared(self, grid):
+        """L L ``grid``: the Laplacian of the Laplacian of a whole grid of values."""
+        return grid_laplacian(grid_laplacian(grid, self.periodic), self.periodic)
+
+    def times(self, v, out):
+        """L_I^T L_I ``v`` (one value per invalid node) into ``out``."""
+        from mzc.codecs.dwt2d import _fill
+
+        fine = self.finest
+        checked(_fill.apply(self.once, v, fine.neighbours, fine.diagonal))
+        checked(_fill.apply(out, self.once, fine.neighbours, fine.diagonal))
+        sums = np.append(v, 0.0)[self.ring].sum(axis=0)
+        out += np.bincount(self.ring.ravel(), np.tile(sums, 4), minlength=fine.size + 1)[:-1]
+
+
+def ring_of(valid, periodic):
+    """(rows, cols) of the valid nodes beside an invalid one (across the seam of periodic columns)."""
+    invalid, beside = ~valid, np.zeros(valid.shape, dtype=bool)
+    beside[1:] |= invalid[:-1]
+    beside[:-1] |= invalid[1:]
+    beside[:, 1:] |= invalid[:, :-1]
+    beside[:, :-1] |= invalid[:, 1:]
+    if periodic and valid.shape[1] > 1:
+        beside[:, 0] |= invalid[:, -1]
+        beside[:, -1] |= invalid[:, 0]
+    return np.nonzero(valid & beside)
+
+
+def grid_laplacian(u, periodic=False):
+    """The 5-point graph Laplacian of a grid of values (each node's value times its neighbour count
+    less their values; no neighbours beyond the border, but across the seam of periodic columns)."""
+    out = np.zeros_like(u)
+    across = u[:, 1:] - u[:, :-1]
+    out[:, 1:] += across
+    out[:, :-1] -= across
+    down = u[1:] - u[:-1]
+    out[1:] += down
+    out[:-1] -= down
+    if periodic and u.shape[1] > 1:
+        seam = u[:, 0] - u[:, -1]
+        out[:, 0] += seam
+        out[:, -1] -= seam
+    return out
+
+
 def checked(status):
     """Refuse a compiled fill kernel's error status (levels that disagree with their buffers)."""
     if status:
         raise MzcError("the hole fill's multigrid levels are inconsistent (an internal error)", field="fill")
 
 
-def conjugate_gradients(multigrid, b):
-    """Solve the finest level's system x = b to FILL_TOLERANCE (relative residual) by conjugate
-    gradients preconditioned with the multigrid cycle. Every vector is updated in place (the
-    same numbers: x += length * direction and so on), as fresh ones cost a big grid more in
-    the kernel's page handling than in the arithmetic."""
-    x, preconditioned, image, change = (np.zeros_like(b) for _ in range(4))
-    residual = b.copy()
+def conjugate_gradients(multigrid, b, start=None, tolerance=FILL_TOLERANCE, iterations=100):
+    """Solve the system of ``multigrid`` (its ``times``: the finest level's, or a ThinPlate's) for
+    ``b`` to ``tolerance`` (the residual over the start's) by conjugate gradients preconditioned with the
+    multigrid cycle, from ``start`` (None: 0). Every vector is updated in place (the same
+    numbers: x += length * direction and so on), as fresh ones cost a big grid more in the
+    kernel's page handling than in the arithmetic."""
+    preconditioned, image, change = (np.zeros_like(b) for _ in range(3))
+    if start is None:
+        x, residual = np.zeros_like(b), b.copy()
+    else:
+        x = start.copy()
+        multigrid.times(x, image)
+        residual = b - image
     multigrid.cycle(residual, preconditioned)
     direction = preconditioned.copy()
-    product, limit = inner(residual, preconditioned), FILL_TOLERANCE * np.sqrt(inner(b, b))
-    for _ in range(100):
+    product, limit = inner(residual, preconditioned), tolerance * np.sqrt(inner(residual, residual))
+    for _ in range(iterations):
         if np.sqrt(inner(residual, residual)) <= limit:   # before the first step too: b = 0 is solved by 0
             break
         multigrid.times(direction, image)
