@@ -67,17 +67,30 @@ def small_disk(tmp_path):
     subprocess.run(["umount", str(disk)], check=True)
 
 
-def sliced_shared_object(name):
-    """(the mesh of ../shared/data/objects/NAME, the rebuild of its default grid, its bounding-box
-    diagonal D): the lossless floor the whole-object tests measure; skips when the data is absent."""
+def shared_object(name):
+    """The mesh of ../shared/data/objects/NAME; skips when the data is absent."""
     from mzc.meshes import read_mesh
-    from mzc.ops.slicing import slice_surface
-    from mzc.ops.triangulation import grid_to_mesh
 
     path = REPO.parent / "shared" / "data" / "objects" / name
     if not path.is_file():
         pytest.skip(f"shared object data not available ({path})")
-    mesh = read_mesh(path)
+    return read_mesh(path)
+
+
+def shared_object_grid(name):
+    """The default grid of ../shared/data/objects/NAME; skips when the data is absent."""
+    from mzc.ops.slicing import slice_surface
+
+    return slice_surface(shared_object(name))
+
+
+def sliced_shared_object(name):
+    """(the mesh of ../shared/data/objects/NAME, the rebuild of its default grid, its bounding-box
+    diagonal D): the lossless floor the whole-object tests measure; skips when the data is absent."""
+    from mzc.ops.slicing import slice_surface
+    from mzc.ops.triangulation import grid_to_mesh
+
+    mesh = shared_object(name)
     return mesh, grid_to_mesh(slice_surface(mesh)), float(np.linalg.norm(np.ptp(mesh.points, axis=0)))
 
 

@@ -237,6 +237,52 @@ def test_the_fill_of_a_full_or_empty_or_one_node_grid():
     assert not w2.laplace_fill(np.array([[np.nan, 0.0]]), np.array([[False, True]])).any()   # zero data: zero fill
 
 
+@settings(max_examples=60, deadline=None)
+@given(st.integers(1, 12), st.integers(1, 12), st.integers(0, 2 ** 32 - 1), st.booleans())
+def test_the_thin_plate_system_is_the_laplacian_squared_at_the_invalid_nodes(rows, cols, seed, periodic):
+    """ThinPlate.times (the harmonic stencil twice and the ring's correction) is L L of the whole grid
+    with the invalid nodes' values and zeros elsewhere, at the invalid nodes, seams and borders included."""
+    rng = np.random.default_rng(seed)
+    valid = rng.random((rows, cols)) < 0.5
+    if valid.all() or not valid.any():
+        return
+    _, multigrid = w2.harmonic_solve(np.where(valid, 0.0, 0.0), valid, periodic)
+    plate, fine = w2.ThinPlate(multigrid, valid, periodic), multigrid.finest
+    values, out = rng.normal(size=fine.size), np.zeros(fine.size)
+    plate.times(values, out)
+    grid = np.zeros(valid.shape)
+    grid[fine.rows, fine.cols] = values
+    np.testing.assert_allclose(out, plate.squared(grid)[fine.rows, fine.cols], atol=1e-9)
+
+
+def test_the_smooth_fill_carries_a_bowls_slope_across_the_edge_of_its_holes():
+    """Holes in a paraboloid: the harmonic fill meets it at a crease, 0.56 out next to the edge (of a
+    height range of 100); the thin plate continues it, 15 times closer there."""
+    from scipy import ndimage
+
+    rows, cols = np.mgrid[0:120, 0:160]
+    bowl = ((rows - 60.0) ** 2 + (cols - 80.0) ** 2) / 100.0
+    valid = np.hypot(rows - 60, cols - 80) > 25
+    valid[30:40, 100:150] = False
+    harmonic = w2.laplace_fill(np.where(valid, bowl, np.nan), valid)
+    smooth = w2.smooth_fill(np.where(valid, bowl, np.nan), valid)
+    assert np.array_equal(smooth[valid], bowl[valid])
+    near = ~valid & (ndimage.distance_transform_cdt(~valid, metric="taxicab") <= 2)
+    assert np.abs(smooth - bowl)[near].max() < 0.15 * np.abs(harmonic - bowl)[near].max()
+    assert np.array_equal(w2.smooth_fill(bowl, np.ones(bowl.shape, dtype=bool)), bowl)
+
+
+def test_the_smooth_fill_makes_a_whole_objects_file_smaller(monkeypatch):
+    """The hand's multi-chart grid at one --rmse: measured 4,040 bytes, where the harmonic fill's file
+    took 5,375 (the decoder and the estimate of the error the same)."""
+    from conftest import shared_object_grid
+
+    grid = shared_object_grid("hand.ply")
+    smooth = dwt2d.write(grid, rmse=0.00066)
+    monkeypatch.setattr(w2, "smooth_fill", w2.laplace_fill)
+    assert len(smooth) < 0.85 * len(dwt2d.write(grid, rmse=0.00066))
+
+
 def fill_multigrid(shape=(40, 50), seed=0):
     """The packed levels and right-hand side of a fill with holes (several levels)."""
     rng = np.random.default_rng(seed)

@@ -33,6 +33,18 @@ MAX_QUANTUM = 1 << 45       # largest |quantised value|; keeps every class below
 
 # --------------------------------------------------------------------------- fill
 
+FILL_TOLERANCE = 1e-6       # relative residual: the fill moves < 1e-4 of the height range, files not at all
+SMOOTH_ITERATIONS = 16      # smooth_fill's steps at most (armadillo at 0.05% D: 12 steps 11,308 B, 16 11,228, 20
+                            # 11,180; each about 10 ms on its 241,596 invalid nodes)...
+SMOOTH_TOLERANCE = 1e-2     # ...or fewer, once the residual is this share of the harmonic fill's, which starts it
+SMOOTH_START = 1e-2         # to this relative residual (3 steps where FILL_TOLERANCE takes 8; the same files)
+SMOOTH_W_CYCLE = 1 << 62    # its preconditioner visits every level once (W-cycles: 0.2-0.6% smaller files,
+                            # a third more of the fill's time)
+FILL_OVERCORRECTION = 1.5   # coarse corrections of aggregates undershoot; 1.5 halved the iterations
+FILL_W_CYCLE = 2000         # levels with more nodes are visited twice per cycle (iterations stay ~8 at any size)
+NEIGHBOURS = ((0, 1), (0, -1), (1, 0), (-1, 0))
+FILL_BLOCK = 1 << 14        # nodes a half-sweep updates at a time (the numpy sweeps' blocks, kept for their numbers)
+
 
 def laplace_fill(z, valid, periodic=False):
     """``z`` with invalid nodes replaced by the discrete harmonic interpolant of the valid ones.
@@ -59,14 +71,15 @@ def laplace_fill(z, valid, periodic=False):
     return harmonic_solve(filled, valid, periodic)[0]
 
 
-def harmonic_solve(filled, valid, periodic):
-    """(``filled`` with its invalid nodes set to the harmonic fill, in place; the multigrid of those nodes)."""
+def harmonic_solve(filled, valid, periodic, tolerance=FILL_TOLERANCE):
+    """(``filled`` with its invalid nodes set to the harmonic fill, to ``tolerance``, in place; the
+    multigrid of those nodes)."""
     fine, rhs = FillLevel.of_mask(filled, valid, periodic)
     levels = [fine]
     while levels[-1].size > 1:
         levels.append(levels[-1].coarser())
     multigrid = Multigrid(levels)
-    filled[fine.rows, fine.cols] = conjugate_gradients(multigrid, rhs)
+    filled[fine.rows, fine.cols] = conjugate_gradients(multigrid, rhs, tolerance=tolerance)
     return filled, multigrid
 
 
@@ -81,33 +94,24 @@ def smooth_fill(z, valid, periodic=False):
     a multi-chart grid's charts, the file at equal whole-surface RMS is 12-25% smaller (armadillo and
     hand at 0.05 and 0.1% D; a face's, whose invalid nodes lie outside one outline, 1-2%). Only the
     encoder fills: files are read as before. Solved by conjugate gradients from the harmonic fill,
-    preconditioned by one cycle of that fill's multigrid (the harmonic operator is most of this
+    preconditioned by one V-cycle of that fill's multigrid (the harmonic operator is most of this
     one's square root; ThinPlate), for SMOOTH_ITERATIONS steps at most: the far corners of the fill
     converge slowly, but the nodes near the mask, which the coefficients see, do not need them (the
-    armadillo's file at 16 steps is within 2% of the exact solution's, solved by a sparse LU, with
-    3.6 times its fill's time). The same numbers on every CPU: the stencils are compiled and
-    numpy's elementwise arithmetic, the sums ``inner``'s and ``np.bincount``'s, in a fixed order."""
+    armadillo's file at 16 steps is within 2.5% of the exact solution's, solved by a sparse LU in
+    4 times the time; the fill takes 0.36 s there, the harmonic one 0.21 s). The same numbers on
+    every CPU: the stencils are compiled and numpy's elementwise arithmetic, the sums ``inner``'s and
+    ``np.bincount``'s, in a fixed order."""
     filled = np.where(valid, z, 0.0)
     if valid.all() or not valid.any():
         return filled
     known = filled.copy()
-    filled, multigrid = harmonic_solve(filled, valid, periodic)
+    filled, multigrid = harmonic_solve(filled, valid, periodic, SMOOTH_START)
     fine = multigrid.finest
     plate = ThinPlate(multigrid, valid, periodic)
     b = -plate.squared(known)[fine.rows, fine.cols]
     filled[fine.rows, fine.cols] = conjugate_gradients(plate, b, filled[fine.rows, fine.cols], SMOOTH_TOLERANCE,
                                                              SMOOTH_ITERATIONS)
     return filled
-
-
-FILL_TOLERANCE = 1e-6       # relative residual: the fill moves < 1e-4 of the height range, files not at all
-SMOOTH_ITERATIONS = 16      # smooth_fill's steps at most (armadillo at 0.05% D: 8 steps 11,420 B, 16 11,175, 24 11,046;
-                            # each 16 ms on its 241,596 invalid nodes)...
-SMOOTH_TOLERANCE = 1e-2     # ...or fewer, once the residual is this share of the harmonic fill's
-FILL_OVERCORRECTION = 1.5   # coarse corrections of aggregates undershoot; 1.5 halved the iterations
-FILL_W_CYCLE = 2000         # levels with more nodes are visited twice per cycle (iterations stay ~8 at any size)
-NEIGHBOURS = ((0, 1), (0, -1), (1, 0), (-1, 0))
-FILL_BLOCK = 1 << 14        # nodes a half-sweep updates at a time (the numpy sweeps' blocks, kept for their numbers)
 
 
 class FillLevel:
@@ -220,12 +224,13 @@ class Multigrid:
         self.parents = np.concatenate([np.zeros(0, dtype=np.int32)] + [level.parent for level in levels[:-1]])
         self.space = np.empty(3 * int(self.sizes[1:].sum()) + FILL_BLOCK)   # the cycle's, lent at every call
 
-    def cycle(self, b, out):
-        """The preconditioner: approximately solve the finest level's system for ``b``, into ``out``."""
+    def cycle(self, b, out, w_cycle=FILL_W_CYCLE):
+        """The preconditioner: approximately solve the finest level's system for ``b``, into ``out``
+        (levels of more than ``w_cycle`` nodes visited twice)."""
         from mzc.codecs.dwt2d import _fill
 
         checked(_fill.cycle(out, b, self.sizes, self.reds, self.neighbours, self.weights, self.diagonals,
-                            self.parents, self.space, FILL_BLOCK, FILL_W_CYCLE, FILL_OVERCORRECTION))
+                            self.parents, self.space, FILL_BLOCK, w_cycle, FILL_OVERCORRECTION))
 
     def times(self, v, out):
         """The finest level's stencil applied to ``v`` (one value per node), into ``out``."""
@@ -243,7 +248,8 @@ class ThinPlate:
     sum of ring node r's invalid neighbours' values, and L_VI^T hands it back to them, negated."""
 
     def __init__(self, multigrid, valid, periodic):
-        self.cycle, self.finest, self.periodic = multigrid.cycle, multigrid.finest, periodic
+        self.cycle = functools.partial(multigrid.cycle, w_cycle=SMOOTH_W_CYCLE)
+        self.finest, self.periodic = multigrid.finest, periodic
         rows, cols = ring_of(valid, periodic)
         at = (rows + 1) * (valid.shape[1] + 2) + (cols + 1)
         self.ring = np.stack([self.finest.index.ravel()[at + dr * (valid.shape[1] + 2) + dc]
