@@ -459,7 +459,7 @@ class Prepared:
         if surface is not self.grid:
             geometry = w2.Geometry.of(surface.d1, surface.d2, surface.origin, surface.shape, surface.projection,
                                       surface.radius)
-            filled = w2.laplace_fill(surface.z, self.valid, geometry.periodic)
+            filled = w2.smooth_fill(surface.z, self.valid, geometry.periodic)
         lean, metric = w2.node_areas(filled, geometry, jump_edges(surface))
         lean, metric = lean[self.valid], metric[self.valid]
         return self.grid.z[self.valid], metric / lean, float(np.sum(metric * lean))
