@@ -91,8 +91,9 @@ def smooth_fill(z, valid, periodic=False):
     The harmonic fill meets the surface at a crease: its height runs on across the mask's edge but
     not its slope, and the wavelet coefficients whose support straddles the edge pay for the crease.
     This one carries the slope on too, so they shrink. Where the mask's edges are long, as between
-    a multi-chart grid's charts, the file at equal whole-surface RMS is 12-25% smaller (armadillo and
-    hand at 0.05 and 0.1% D; a face's, whose invalid nodes lie outside one outline, 1-2%). Only the
+    a multi-chart grid's charts, the file at equal whole-surface RMS is 11-22% smaller (armadillo and
+    hand at 0.05 and 0.1% D, benchmarks/objects-results.md; a face's, whose invalid nodes lie outside
+    one outline, 1-2%). Only the
     encoder fills: files are read as before. Solved by conjugate gradients from the harmonic fill,
     preconditioned by one V-cycle of that fill's multigrid (the harmonic operator is most of this
     one's square root; ThinPlate), for SMOOTH_ITERATIONS steps at most: the far corners of the fill
@@ -242,10 +243,11 @@ class Multigrid:
 class ThinPlate:
     """smooth_fill's system on the invalid nodes: ``times`` applies L_I^T L_I, L the 5-point graph
     Laplacian of the whole grid (as the harmonic fill's: free border, columns wrapping when
-    ``periodic``) and _I its columns of the invalid nodes; ``cycle`` is the harmonic fill's multigrid
-    cycle, its preconditioner. L_I^T L_I = L_II^2 + L_VI^T L_VI: the harmonic stencil twice (compiled),
-    and a correction through the *ring*, the valid nodes beside invalid ones: (L_VI v)_r is minus the
-    sum of ring node r's invalid neighbours' values, and L_VI^T hands it back to them, negated."""
+    ``periodic``) and _I its columns of the invalid nodes; ``cycle``, its preconditioner, is a V-cycle
+    of the harmonic fill's multigrid (SMOOTH_W_CYCLE). L_I^T L_I = L_II^2 + L_VI^T L_VI: the harmonic
+    stencil twice (compiled), and a correction through the *ring*, the valid nodes beside invalid
+    ones: (L_VI v)_r is minus the sum of ring node r's invalid neighbours' values, and L_VI^T hands it
+    back to them, negated."""
 
     def __init__(self, multigrid, valid, periodic):
         self.cycle = functools.partial(multigrid.cycle, w_cycle=SMOOTH_W_CYCLE)
