@@ -574,8 +574,9 @@ def test_a_piece_left_alone_beyond_60_degrees_of_its_view_takes_the_view_that_fa
 
 def test_a_thin_pieces_widened_nodes_are_those_within_a_spacing_of_its_nearest_triangle():
     """``widened`` measures each node only against the triangles whose grown box holds it: the same
-    heights as measuring every node against every triangle, the nearest triangle's plane at each."""
-    from mzc.ops.charts import widened
+    heights as measuring every node against every triangle, the nearest triangle's plane at each
+    where it rises at most WIDENED_RISE spacings beyond the triangle's heights."""
+    from mzc.ops.charts import WIDENED_RISE, widened
 
     rng = np.random.default_rng(3)
     corners = np.concatenate([rng.uniform(0, 12, (9, 3, 2)), rng.uniform(1, 3, (9, 3, 1))], axis=2)
@@ -586,10 +587,12 @@ def test_a_thin_pieces_widened_nodes_are_those_within_a_spacing_of_its_nearest_t
             reach = [min(segment_distance((x, y), t[k, :2], t[(k + 1) % 3, :2]) for k in range(3)) for t in corners]
             t = corners[int(np.argmin(reach))]
             normal = np.cross(t[1] - t[0], t[2] - t[0])
-            if min(reach) > 1.0 or normal[2] <= 0:
+            with np.errstate(divide="ignore", invalid="ignore"):
+                expected = t[0, 2] - (normal[0] * (x - t[0, 0]) + normal[1] * (y - t[0, 1])) / normal[2]
+            rises = not t[:, 2].min() - WIDENED_RISE <= expected <= t[:, 2].max() + WIDENED_RISE
+            if min(reach) > 1.0 or normal[2] <= 0 or rises:
                 assert np.isnan(heights[row, col])
             else:
-                expected = t[0, 2] - (normal[0] * (x - t[0, 0]) + normal[1] * (y - t[0, 1])) / normal[2]
                 assert heights[row, col] == pytest.approx(expected, abs=1e-9)
 
 
@@ -598,3 +601,28 @@ def segment_distance(point, a, b):
     point, a, b = (np.asarray(v, dtype=float) for v in (point, a, b))
     along = np.clip(np.dot(point - a, b - a) / max(np.dot(b - a, b - a), 1e-300), 0, 1)
     return float(np.linalg.norm(point - (a + along * (b - a))))
+
+
+def test_a_thin_piece_carries_its_plane_to_the_nodes_beside_it_but_not_a_slivers():
+    """``widened``: a triangle facing its view carries its plane a spacing off it; a sliver nearly
+    edge-on, whose plane there would stand 500 above it, carries nothing."""
+    from mzc.ops.charts import widened
+
+    xs = ys = np.arange(-1.0, 2.5, 0.5)
+    facing = widened(np.array([[[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.5]]]), xs, ys, 1.0)
+    assert facing[np.searchsorted(ys, 1.5), np.searchsorted(xs, 0.5)] == pytest.approx(0.75)   # z = y / 2
+    sliver = widened(np.array([[[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.001, 1.0]]]), xs, ys, 1.0)
+    assert np.nanmax(np.abs(sliver)) <= 3.0 and np.isnan(sliver[np.searchsorted(ys, 0.5), np.searchsorted(xs, 0.5)])
+
+
+def test_a_cloud_sliced_coarse_keeps_its_heights_within_the_object():
+    """The armadillo's cloud at 3 times its own spacing: three nodes of a thin piece once stood 10^12
+    away (a sliver's plane carried to them); every height lies within the object's box now."""
+    from mzc.ops.slicing import source_spacing
+
+    from conftest import shared_object
+
+    mesh = shared_object("armadillo.ply")
+    grid = slice_surface(mesh, d1=3 * source_spacing(mesh))
+    extent = float(np.linalg.norm(np.ptp(mesh.points, axis=0)))
+    assert np.abs(grid.z[grid.valid]).max() <= extent

@@ -51,6 +51,8 @@ SAME_SURFACE = 1.0      # ...whose grid, where both meet a node line, meets it w
 LAYER_TOLERANCE = 3.0   # spacings: a triangle this far behind its chart's surface is hidden by it
 MAX_LAYERS = 8          # layers peeled off one direction's pieces
 CLOUD_NEIGHBOURS = 8    # a cloud point's neighbours, for its chart's smoothing and connection
+WIDENED_RISE = 2.0      # a thin piece's plane carried a spacing off it rises at most this many spacings (a
+                        # triangle facing its view within 60 degrees: tan 60 = 1.73)
 
 
 def directions():
@@ -116,7 +118,9 @@ def makes_cells(valid):
 def widened(corners, xs, ys, spacing):
     """(len(ys), len(xs)): at each node within a spacing of the triangles ``corners`` (t, 3, 3) seen
     along z, the height of the plane of the nearest of them there (the first of equally near ones;
-    NaN elsewhere, and for a triangle seen edge-on): a thin piece's surface carried to the nodes
+    NaN elsewhere, for a triangle seen edge-on, and where the plane rises more than WIDENED_RISE
+    spacings beyond the triangle's own heights, as a sliver nearly edge-on does: a cloud's armadillo
+    at 3 times its spacing had three nodes at 10^12): a thin piece's surface carried to the nodes
     about it, off it by at most a spacing. Only the nodes in each triangle's box grown by a spacing
     are measured against it (``box_pairs``): a long thin piece's box may hold many nodes."""
     triangle, row, col = box_pairs(corners[..., :2], xs, ys, spacing)
@@ -131,8 +135,12 @@ def widened(corners, xs, ys, spacing):
     seen = normal[:, 2] > 0
     first, chosen, normal = first[seen], chosen[seen], normal[seen]
     across = normal[:, 0] * (point[first, 0] - chosen[:, 0, 0]) + normal[:, 1] * (point[first, 1] - chosen[:, 0, 1])
+    carried = chosen[:, 0, 2] - across / normal[:, 2]
+    heights = chosen[..., 2]
+    near = (carried >= heights.min(axis=1) - WIDENED_RISE * spacing) & (carried <= heights.max(axis=1)
+                                                                          + WIDENED_RISE * spacing)
     height = np.full(len(ys) * len(xs), np.nan)
-    height[node[first]] = chosen[:, 0, 2] - across / normal[:, 2]
+    height[node[first][near]] = carried[near]
     return height.reshape(len(ys), len(xs))
 
 
