@@ -140,7 +140,7 @@ class FillLevel:
         index = np.full(shape, self.size, dtype=np.int32)
         index[self.rows, self.cols] = np.arange(self.size)
         self.index = self.padded(index, self.size)
-        self.at = (self.rows + 1) * (shape[1] + 2) + (self.cols + 1)   # each node's place in a padded grid
+        self.at = padded_place(self.rows, self.cols, shape)
 
     @classmethod
     def of_mask(cls, filled, valid, periodic):
@@ -159,18 +159,12 @@ class FillLevel:
         return level, rhs
 
     def padded(self, grid, outside):
-        """``grid`` (of this level's shape) in a border one node wide: ``outside`` beyond the
-        rows and the ends of the rows, except that periodic columns wrap (never onto the node
-        itself: a grid of one column has no neighbours along its rows)."""
-        out = np.full((self.shape[0] + 2, self.shape[1] + 2), outside, dtype=grid.dtype)
-        out[1:-1, 1:-1] = grid
-        if self.periodic and self.shape[1] > 1:
-            out[1:-1, 0], out[1:-1, -1] = grid[:, -1], grid[:, 0]
-        return out
+        """``grid`` (of this level's shape) in ``padded``'s border."""
+        return padded(grid, outside, self.periodic)
 
-    def beside(self, padded, dr, dc):
+    def beside(self, grid, dr, dc):
         """Each node's neighbour (dr, dc) away in a ``padded`` grid."""
-        return padded.ravel()[self.at + (dr * padded.shape[1] + dc)]
+        return beside(grid, self.at, dr, dc)
 
     def connect(self, neighbours, weights, leak):
         """Set the stencil: the diagonal is the leak plus every edge's weight."""
@@ -252,10 +246,9 @@ class ThinPlate:
     def __init__(self, multigrid, valid, periodic):
         self.cycle = functools.partial(multigrid.cycle, w_cycle=SMOOTH_W_CYCLE)
         self.finest, self.periodic = multigrid.finest, periodic
-        rows, cols = ring_of(valid, periodic)
-        at = (rows + 1) * (valid.shape[1] + 2) + (cols + 1)
-        self.ring = np.stack([self.finest.index.ravel()[at + dr * (valid.shape[1] + 2) + dc]
-                              for dr, dc in NEIGHBOURS])   # 4 x ring: invalid neighbours, finest.size if none
+        at = padded_place(*ring_of(valid, periodic), valid.shape)
+        self.ring = np.stack([beside(self.finest.index, at, *step)
+                              for step in NEIGHBOURS])   # 4 x ring: invalid neighbours, finest.size if none
         self.once = np.zeros(self.finest.size)
 
     def squared(self, grid):
@@ -273,33 +266,50 @@ class ThinPlate:
         out += np.bincount(self.ring.ravel(), np.tile(sums, 4), minlength=fine.size + 1)[:-1]
 
 
+def padded(grid, outside, periodic):
+    """``grid`` in a border one node wide: ``outside`` beyond the rows and the ends of the rows,
+    except that periodic columns wrap (never onto the node itself: a grid of one column has no
+    neighbours along its rows). Every neighbour of a node is then one step away, with no test
+    for the border or the seam."""
+    out = np.full((grid.shape[0] + 2, grid.shape[1] + 2), outside, dtype=grid.dtype)
+    out[1:-1, 1:-1] = grid
+    if periodic and grid.shape[1] > 1:
+        out[1:-1, 0], out[1:-1, -1] = grid[:, -1], grid[:, 0]
+    return out
+
+
+def padded_place(rows, cols, shape):
+    """The flat places of the nodes (rows, cols) of a grid of ``shape`` in its ``padded`` grid."""
+    return (rows + 1) * (shape[1] + 2) + (cols + 1)
+
+
+def beside(grid, at, dr, dc):
+    """The neighbour (dr, dc) away of the nodes at the flat places ``at`` of a ``padded`` grid."""
+    return grid.ravel()[at + (dr * grid.shape[1] + dc)]
+
+
+def neighbour_grids(grid, outside, periodic):
+    """The four neighbours (NEIGHBOURS' order) of every node of ``grid``, each a grid of its shape:
+    ``outside`` beyond the border, wrapping across the seam of periodic columns (``padded``)."""
+    out = padded(grid, outside, periodic)
+    rows, cols = grid.shape
+    return [out[1 + dr:1 + dr + rows, 1 + dc:1 + dc + cols] for dr, dc in NEIGHBOURS]
+
+
 def ring_of(valid, periodic):
     """(rows, cols) of the valid nodes beside an invalid one (across the seam of periodic columns)."""
-    invalid, beside = ~valid, np.zeros(valid.shape, dtype=bool)
-    beside[1:] |= invalid[:-1]
-    beside[:-1] |= invalid[1:]
-    beside[:, 1:] |= invalid[:, :-1]
-    beside[:, :-1] |= invalid[:, 1:]
-    if periodic and valid.shape[1] > 1:
-        beside[:, 0] |= invalid[:, -1]
-        beside[:, -1] |= invalid[:, 0]
-    return np.nonzero(valid & beside)
+    right, left, down, up = neighbour_grids(~valid, False, periodic)
+    return np.nonzero(valid & (right | left | down | up))
 
 
 def grid_laplacian(u, periodic=False):
-    """The 5-point graph Laplacian of a grid of values (each node's value times its neighbour count
-    less their values; no neighbours beyond the border, but across the seam of periodic columns)."""
+    """The 5-point graph Laplacian of a grid of values: the sum over each node's neighbours of its
+    value less theirs (no neighbours beyond the border, but across the seam of periodic columns;
+    ``neighbour_grids``)."""
     out = np.zeros_like(u)
-    across = u[:, 1:] - u[:, :-1]
-    out[:, 1:] += across
-    out[:, :-1] -= across
-    down = u[1:] - u[:-1]
-    out[1:] += down
-    out[:-1] -= down
-    if periodic and u.shape[1] > 1:
-        seam = u[:, 0] - u[:, -1]
-        out[:, 0] += seam
-        out[:, -1] -= seam
+    present = neighbour_grids(np.ones(u.shape, dtype=bool), False, periodic)
+    for here, neighbour in zip(present, neighbour_grids(u, 0.0, periodic)):
+        out += np.where(here, u - neighbour, 0.0)
     return out
 
 
