@@ -119,6 +119,29 @@ def test_a_rebuild_of_a_face_at_its_own_vertex_count_stays_within_its_grids_erro
     assert mzc.compare(original, fewer)["surface_rms"] <= 1.2 * mzc.compare(original, full)["surface_rms"]
 
 
+def test_a_mesh_in_other_units_is_simplified_to_the_same_mesh_in_those_units():
+    """The simplifier's thresholds are absolute, so it works where the median edge is about 1
+    (``unit_scale``): the blob's grid mesh 1024 times larger or smaller comes back as the same
+    mesh, as many times larger or smaller, to the bit; and f18 sliced in metres is rebuilt as close
+    to its scan as in millimetres (in the mesh's own units it came back 16% further)."""
+    import mzc
+    from mzc.meshes import Mesh
+    from mzc.ops.simplify import simplified
+    from mzc.samples import blob
+
+    full = grid_to_mesh(mzc.slice(blob()))
+    base = simplified(full, 20_000)
+    assert 16_000 <= len(base.points) <= 24_000
+    for factor in (1024.0, 1 / 1024):
+        other = simplified(Mesh(full.points * factor, full.triangles), 20_000)
+        np.testing.assert_array_equal(other.triangles, base.triangles)
+        np.testing.assert_array_equal(other.points, base.points * factor)
+    millimetres = mzc.read(face_path("f18.ply"))
+    metres = Mesh(millimetres.points / 1000, millimetres.triangles)
+    errors = [mzc.compare(mesh, mzc.triangulate(mzc.slice(mesh)))["surface_rms"] for mesh in (millimetres, metres)]
+    assert errors[1] * 1000 == pytest.approx(errors[0], rel=0.05)
+
+
 def test_triangulate_vertices_through_the_command_line(tmp_path):
     mesh, grid = tmp_path / "blob.obj", tmp_path / "blob.zg"
     run_mzc("sample", "blob", "-o", mesh, check=True)

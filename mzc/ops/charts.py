@@ -271,10 +271,9 @@ def facing_labels(normal, pairs):
     allowed = cosine >= FACING
     labels = np.argmax(cosine, axis=1)
     degree = np.bincount(pairs.ravel(), minlength=len(normal)).astype(float)
+    element, neighbour = np.concatenate([pairs, pairs[:, ::-1]]).T
     for _ in range(SMOOTHING):
-        votes = np.zeros_like(cosine)
-        np.add.at(votes, (pairs[:, 0], labels[pairs[:, 1]]), 1.0)
-        np.add.at(votes, (pairs[:, 1], labels[pairs[:, 0]]), 1.0)
+        votes = np.bincount(element * len(VIEWS) + labels[neighbour], minlength=cosine.size).reshape(cosine.shape)
         score = cosine + NEIGHBOUR_WEIGHT * votes / np.maximum(degree, 1)[:, None]
         labels = np.argmax(np.where(allowed, score, -np.inf), axis=1)
     return labels
@@ -376,16 +375,16 @@ def merged_into_neighbours(groups, frames, triangles, cosine, pairs, area, spaci
         piece[members] = number
     views, members = [view for view, _ in groups], [members for _, members in groups]
     sizes = np.array([area[group].sum() for group in members])
-    seams = pairs[piece[pairs[:, 0]] != piece[pairs[:, 1]]]   # pieces only grow: a seam stays one or vanishes
+    ends = piece[pairs[piece[pairs[:, 0]] != piece[pairs[:, 1]]]]   # the pieces either side of each seam edge
     for small in np.argsort(sizes, kind="stable"):
         if sizes[small] >= MERGE_CELLS * spacing * spacing:
             break
-        for other in neighbours_by_edges(piece[seams], small):
+        for other in neighbours_by_edges(ends, small):
             view = views[other]
             if cosine[members[small], view].min() >= FACING and \
                     one_layer(frames[view], triangles[members[small]], triangles[members[other]], spacing):
                 members[other] = np.concatenate([members[other], members[small]])
-                piece[members[small]], sizes[other] = other, sizes[other] + sizes[small]
+                ends[ends == small], sizes[other] = other, sizes[other] + sizes[small]
                 members[small], sizes[small] = members[small][:0], 0.0
                 break
     return [(view, group) for view, group in zip(views, members) if len(group)]
