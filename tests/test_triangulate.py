@@ -120,7 +120,7 @@ def test_a_rebuild_of_a_face_at_its_own_vertex_count_stays_within_its_grids_erro
 
 
 def test_a_mesh_in_other_units_is_simplified_to_the_same_mesh_in_those_units():
-    """The simplifier's thresholds are absolute, so it works where the median edge is about 1
+    """The simplifier's thresholds are absolute, so it works where the median edge is UNIT_EDGE
     (``unit_scale``): the blob's grid mesh 1024 times larger or smaller comes back as the same
     mesh, as many times larger or smaller, to the bit; and f18 sliced in metres is rebuilt as close
     to its scan as in millimetres (in the mesh's own units it came back 16% further)."""

@@ -6,8 +6,8 @@ edge collapse (Garland and Heckbert 1997; fast-simplification's implementation o
 Fast-Quadric-Mesh-Simplification) takes the vertices away where the surface is flat and keeps
 them where it bends, so the count falls to the one asked for at little cost in distance. At
 the originals' own vertex counts, against the whole-surface RMS distance of the full grid's
-mesh: f18 1.14 times (30,281 vertices from 81,219, 0.24 s), the hand 1.03, the ogre 0.98 (62,180
-from 156,213, 0.63 s); a smooth synthetic mesh whose grid is all but exact, the blob sample, 7.6
+mesh: f18 1.15 times (30,268 vertices from 81,219, 0.25 s), the hand 1.03, the ogre 0.98 (62,183
+from 156,213, 0.67 s); a smooth synthetic mesh whose grid is all but exact, the blob sample, 7.7
 times (0.013 mm on a 100 mm ball: a new mesh's facets are not the original's). The simplifier
 works in ``unit_scale``'s frame, so a mesh's units do not change what it keeps.
 
@@ -23,8 +23,11 @@ from mzc.meshes import Mesh
 
 PASSES = (7.0, 9.0)   # fast-simplification's aggressiveness (0 careful and slow .. 10 fast; 7 its default), in
                       # ``unit_scale``'s frame: a pass, then a faster one if the count is still over SLACK times
-                      # the target (5 then 7 in the mesh's own units: the same or 1.1 times the RMS distance on
-                      # the hand, f18 and the 100,000-vertex ogre, in 1.1-1.5 times the time)
+                      # the target
+UNIT_EDGE = 0.5       # the median edge in that frame. The simplifier's care and work grow with the frame's scale:
+                      # at 1/2, against 5 then 7 in the meshes' own units, the RMS distance to the scan is 0.94
+                      # times on the hand, 1.00 on f18, 0.99 on m56, 1.03 on the 100k-vertex ogre, in the same
+                      # time (0.57 s on the ogre's decoded grid); at 1/8, 0.47 s, but the blob 1.18 times further
 SLACK = 1.2
 ALL = "all"   # a vertex count asked for: every valid node of the grid
 
@@ -91,8 +94,8 @@ def simplified(mesh: Mesh, vertices: int, warn: bool = True) -> Mesh:
 
 
 def unit_scale(mesh: Mesh) -> float:
-    """The power of two that brings ``mesh``'s median edge nearest 1 (the first edge of each
-    triangle). The simplifier's thresholds are absolute (Fast-Quadric-Mesh-Simplification
+    """The power of two that brings ``mesh``'s median edge (the first edge of each triangle)
+    nearest UNIT_EDGE. The simplifier's thresholds are absolute (Fast-Quadric-Mesh-Simplification
     collapses the edges whose quadric error is below 1e-9 (iteration + 3) ^ aggressiveness), so
     in the mesh's own units a surface in metres and the same in millimetres were simplified
     differently: f18 in metres came back 16% further from its scan than in millimetres, the hand
@@ -101,4 +104,4 @@ def unit_scale(mesh: Mesh) -> float:
     from mzc.vectors import lengths
 
     edge = float(np.median(lengths(mesh.points[mesh.triangles[:, 1]] - mesh.points[mesh.triangles[:, 0]])))
-    return 2.0 ** -round(np.log2(edge)) if edge > 0 else 1.0
+    return 2.0 ** -round(np.log2(edge / UNIT_EDGE)) if edge > 0 else 1.0
