@@ -226,33 +226,41 @@ def charted_mesh(grid, jump_angle=None):
     from mzc.meshes import Mesh
 
     points, triangles, node = zipped_charts(grid, jump_angle)
-    colors = None if grid.colors is None else grid.colors.reshape(-1, 3)[node]
+    colors = None if grid.colors is None else grid.colors.reshape(-1, 3)[every_node(points, node)]
     return Mesh(points, triangles, grid=grid, colors=colors)
 
 
 def zipped_charts(grid, jump_angle=None):
-    """(points, triangles, node of each point) of a multi-chart grid: each chart's GridMesh, one
-    after the other, its jumps those of CHART_JUMP_ANGLE unless ``jump_angle`` is given
-    (spec/zgrid.md, Charts), zipped along their seams into one surface (``mzc.ops.zipper``);
-    ``node`` is the flat number of the grid node each point is, or for a point the zipper adds,
-    of the charts' point nearest it (whose colour and texel it takes)."""
+    """(points, triangles, node of each chart point) of a multi-chart grid: each chart's GridMesh,
+    one after the other, its jumps those of CHART_JUMP_ANGLE unless ``jump_angle`` is given
+    (spec/zgrid.md, Charts), zipped along their seams into one surface (``mzc.ops.zipper``); the
+    charts' points come first, each with the flat number of its grid node in ``node``, then the
+    points the zipper adds (``every_node`` gives them theirs)."""
     from mzc.ops.zipper import zip_charts
 
     angle = CHART_JUMP_ANGLE if jump_angle is None else jump_angle
     points, triangles, chart, node = chart_meshes(grid, angle)
     zipped, stitched = zip_charts(points, triangles, chart, max(grid.d1, grid.d2))
-    if len(zipped) > len(points):
-        from mzc.ops.colouring import nearest_sources
-
-        node = np.concatenate([node, node[nearest_sources(zipped[len(points):], points)]])
     return zipped, stitched, node
+
+
+def every_node(points, node):
+    """The grid node of each of ``points`` (``zipped_charts``'): the charts' own points have theirs in
+    ``node``; a point the zipper added takes that of the charts' point nearest it (whose colour and
+    texel it takes)."""
+    if len(points) == len(node):
+        return node
+    from mzc.ops.colouring import nearest_sources
+
+    return np.concatenate([node, node[nearest_sources(points[len(node):], points[:len(node)])]])
 
 
 def node_mesh(grid, jump_angle=None):
     """(points, triangles, node of each point) of a grid's mesh, whole: a GridMesh's used nodes,
     or a multi-chart grid's ``zipped_charts`` (what a texture places in the grid's colour image)."""
     if grid.charts is not None:
-        return zipped_charts(grid, jump_angle)
+        points, triangles, node = zipped_charts(grid, jump_angle)
+        return points, triangles, every_node(points, node)
     mesh = GridMesh(grid, jump_angle)
     return mesh.points, mesh.triangles, np.flatnonzero(mesh.used)
 
