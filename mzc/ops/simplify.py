@@ -6,8 +6,8 @@ edge collapse (Garland and Heckbert 1997; fast-simplification's implementation o
 Fast-Quadric-Mesh-Simplification) takes the vertices away where the surface is flat and keeps
 them where it bends, so the count falls to the one asked for at little cost in distance. At
 the originals' own vertex counts, against the whole-surface RMS distance of the full grid's
-mesh: f18 1.15 times (30,268 vertices from 81,219, 0.25 s), the hand 1.03, the ogre 0.98 (62,183
-from 156,213, 0.67 s); a smooth synthetic mesh whose grid is all but exact, the blob sample, 7.7
+mesh: f18 1.14 times (30,281 vertices from 81,219, 0.24 s), the hand 1.03, the ogre 0.98 (62,180
+from 156,213, 0.63 s); a smooth synthetic mesh whose grid is all but exact, the blob sample, 7.6
 times (0.013 mm on a 100 mm ball: a new mesh's facets are not the original's). The simplifier
 works in ``unit_scale``'s frame, so a mesh's units do not change what it keeps.
 
@@ -24,10 +24,11 @@ from mzc.meshes import Mesh
 PASSES = (7.0, 9.0)   # fast-simplification's aggressiveness (0 careful and slow .. 10 fast; 7 its default), in
                       # ``unit_scale``'s frame: a pass, then a faster one if the count is still over SLACK times
                       # the target
-UNIT_EDGE = 0.5       # the median edge in that frame. The simplifier's care and work grow with the frame's scale:
-                      # at 1/2, against 5 then 7 in the meshes' own units, the RMS distance to the scan is 0.94
-                      # times on the hand, 1.00 on f18, 0.99 on m56, 1.03 on the 100k-vertex ogre, in the same
-                      # time (0.57 s on the ogre's decoded grid); at 1/8, 0.47 s, but the blob 1.18 times further
+UNIT_EDGE = 1.0       # the median edge in that frame. Against 5 then 7 in the meshes' own units, the RMS distance
+                      # to the scan is 0.93 times on the hand, 1.00 on f18, 0.99 on m56, 1.03 on the 100k-vertex
+                      # ogre (0.58 s on its decoded grid, 0.57 before), 0.48 on fran, a face in metres. The
+                      # simplifier's care and work grow with the frame's scale: at 1/8 the ogre took 0.47 s,
+                      # but the blob came back 1.18 times further and fran's colours 1 level further
 SLACK = 1.2
 ALL = "all"   # a vertex count asked for: every valid node of the grid
 
