@@ -18,7 +18,7 @@ from test_zipper import bored_box, cube, hemisphere, sphere, torus, two_spheres
 from mzc.formats import read_any, zgrid
 from mzc.grid import Chart, ZGrid
 from mzc.meshes.obj import write as obj_bytes
-from mzc.ops.colouring import nearest_colours
+from mzc.ops.colouring import nearest_sources
 from mzc.ops.triangulation import CHART_JUMP_ANGLE, GridMesh, grid_to_mesh
 from mzc.ops.zipper import zip_charts
 
@@ -247,7 +247,7 @@ process.stdout.write(JSON.stringify(cases.map(({ points, count, colors }) =>
 
 def test_points_the_zipper_adds_take_their_nearest_points_colour(tmp_path):
     """nearestColours colours the points mzc's zipper adds (zip_charts on the zipper cases) as
-    mzc.ops.colouring.nearest_colours does: the colour of the nearest of the charts' points, where
+    mzc.ops.triangulation.every_node does (nearest_sources): the colour of the nearest of the charts' points, where
     one is nearest; of equally near ones (an added point midway on a cube's edge) the spec names
     none (mzc takes its search tree's), web/ the first: both then give one of theirs."""
     import json
@@ -269,7 +269,7 @@ def test_points_the_zipper_adds_take_their_nearest_points_colour(tmp_path):
     for (name, zipped, count, colours), made in zip(cases, json.loads(run.stdout), strict=True):
         made = np.reshape(made, (-1, 3))
         assert np.array_equal(made[:count], colours), name
-        mzc_colours = nearest_colours(zipped[count:], zipped[:count], colours)
+        mzc_colours = colours[nearest_sources(zipped[count:], zipped[:count])]
         for point, got, want in zip(zipped[count:], made[count:], mzc_colours):
             distances = ((zipped[:count] - point) ** 2).sum(axis=1)
             nearest = colours[distances == distances.min()].tolist()

@@ -134,16 +134,10 @@ def point_triangles(count):
     return np.repeat(np.arange(count), 3).reshape(-1, 3)
 
 
-def nearest_colours(points, sources, colours):
-    """(n, 3) uint8: for each of ``points``, the colour of the nearest of ``sources`` (``colours``
-    theirs): the colour of a vertex a step adds, such as the simplifier's."""
-    return colours[nearest_sources(points, sources)]
-
-
 def nearest_sources(points, sources):
     """(n,) the number of the nearest of ``sources`` to each of ``points`` (the first of equals),
-    by mzc's exact search: what a vertex a step adds (the zipper's, ``mzc.ops.zipper``) takes
-    its colour and texel from."""
+    by mzc's exact search: what a vertex the zipper adds (``mzc.ops.triangulation.every_node``)
+    takes its colour and texel from."""
     from mzc.measure.metrics import nearest_triangles
 
     if not len(points):

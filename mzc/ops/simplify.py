@@ -61,8 +61,9 @@ def simplified(mesh: Mesh, vertices: int, warn: bool = True) -> Mesh:
     """``mesh`` with about ``vertices`` vertices (quadric edge collapse); a mesh that has no more
     than that, or no triangles, as it is. The count of triangles asked for keeps the mesh's own
     ratio of triangles to vertices, so an open grid's mesh and a closed one both land near it.
-    Colours stay: each kept vertex takes the colour of the mesh's vertex nearest it. With ``warn``,
-    a count the simplifier cannot reach is named in a warning."""
+    Colours stay: each kept vertex takes the mesh's colour at the point of its surface nearest it
+    (``surface_colours``; the nearest vertex's colour left fran's coded face 0.3 levels further
+    from its texture). With ``warn``, a count the simplifier cannot reach is named in a warning."""
     if vertices < 4:
         raise MzcError(f"must be at least 4, not {vertices}", field="vertices")
     if len(mesh.points) <= vertices or not len(mesh.triangles):
@@ -87,10 +88,10 @@ def simplified(mesh: Mesh, vertices: int, warn: bool = True) -> Mesh:
                       stacklevel=2)
     points /= scale
     colors = None
-    if mesh.colors is not None:   # a collapse moves a kept vertex: the colour of the source vertex nearest it
-        from mzc.ops.colouring import nearest_colours
+    if mesh.colors is not None:   # a collapse moves a kept vertex: the colour of the surface where it now lies
+        from mzc.ops.colouring import surface_colours
 
-        colors = nearest_colours(points, mesh.points, mesh.colors)
+        colors = np.clip(np.round(surface_colours(points, mesh)), 0, 255).astype(np.uint8)
     return Mesh(points, np.asarray(triangles, dtype=np.int64), colors=colors)
 
 
