@@ -136,6 +136,8 @@ def test_a_mesh_in_other_units_is_simplified_to_the_same_mesh_in_those_units():
         other = simplified(Mesh(full.points * factor, full.triangles), 20_000)
         np.testing.assert_array_equal(other.triangles, base.triangles)
         np.testing.assert_array_equal(other.points, base.points * factor)
+    tiny = simplified(Mesh(full.points * 2.0 ** -1070, full.triangles), 20_000, warn=False)   # 2^1070 would overflow
+    assert np.isfinite(tiny.points).all()
     millimetres = mzc.read(face_path("f18.ply"))
     metres = Mesh(millimetres.points / 1000, millimetres.triangles)
     errors = [mzc.compare(mesh, mzc.triangulate(mzc.slice(mesh)))["surface_rms"] for mesh in (millimetres, metres)]

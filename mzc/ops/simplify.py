@@ -29,6 +29,7 @@ UNIT_EDGE = 1.0       # the median edge in that frame. Against 5 then 7 in the m
                       # ogre (0.58 s on its decoded grid, 0.57 before), 0.48 on fran, a face in metres. The
                       # simplifier's care and work grow with the frame's scale: at 1/8 the ogre took 0.47 s,
                       # but the blob came back 1.18 times further and fran's colours 1 level further
+UNIT_RANGE = 64       # ``unit_scale`` scales by 2^64 at most either way
 SLACK = 1.2
 ALL = "all"   # a vertex count asked for: every valid node of the grid
 
@@ -102,8 +103,11 @@ def unit_scale(mesh: Mesh) -> float:
     in the mesh's own units a surface in metres and the same in millimetres were simplified
     differently: f18 in metres came back 16% further from its scan than in millimetres, the hand
     in its own units 7% further than in thousandths. Scaled by a power of two, the points go in
-    and come back exactly."""
+    and come back exactly; by 2^64 at most either way, so that no finite mesh's points overflow
+    (a median edge of 0, or not finite, leaves the mesh as it is)."""
     from mzc.vectors import lengths
 
     edge = float(np.median(lengths(mesh.points[mesh.triangles[:, 1]] - mesh.points[mesh.triangles[:, 0]])))
-    return 2.0 ** -round(np.log2(edge / UNIT_EDGE)) if edge > 0 else 1.0
+    if not 0 < edge < np.inf:
+        return 1.0
+    return float(np.ldexp(1.0, int(np.clip(-round(np.log2(edge / UNIT_EDGE)), -UNIT_RANGE, UNIT_RANGE))))
