@@ -144,6 +144,22 @@ def test_a_mesh_in_other_units_is_simplified_to_the_same_mesh_in_those_units():
     assert errors[1] * 1000 == pytest.approx(errors[0], rel=0.05)
 
 
+def test_a_far_reduction_keeps_a_cad_parts_rebuild_as_close_as_its_grid():
+    """The featuretype (a machined part of 5,096 vertices) sliced into 94,089 grid vertices comes
+    back by default at its own count within 1.2 times the full grid mesh's whole-surface RMS
+    distance (measured 0.98: a fast pass to 4 times the count first; one careful pass left it 1.73
+    times, and the cycloidal 32 times)."""
+    import mzc
+
+    from conftest import shared_object
+
+    part = shared_object("featuretype.ply")
+    grid = mzc.slice(part)
+    rebuilt = mzc.triangulate(grid)
+    assert len(rebuilt.points) <= 1.2 * len(part.points) < len(mzc.triangulate(grid, vertices="all").points) / 10
+    assert mzc.compare(part, rebuilt)["surface_rms"] <= 1.2 * mzc.compare(part, grid_to_mesh(grid))["surface_rms"]
+
+
 def test_triangulate_vertices_through_the_command_line(tmp_path):
     mesh, grid = tmp_path / "blob.obj", tmp_path / "blob.zg"
     run_mzc("sample", "blob", "-o", mesh, check=True)
