@@ -136,9 +136,8 @@ def widened(corners, xs, ys, spacing):
     first, chosen, normal = first[seen], chosen[seen], normal[seen]
     across = normal[:, 0] * (point[first, 0] - chosen[:, 0, 0]) + normal[:, 1] * (point[first, 1] - chosen[:, 0, 1])
     carried = chosen[:, 0, 2] - across / normal[:, 2]
-    heights = chosen[..., 2]
-    near = (carried >= heights.min(axis=1) - WIDENED_RISE * spacing) & (carried <= heights.max(axis=1)
-                                                                          + WIDENED_RISE * spacing)
+    lowest, highest = chosen[..., 2].min(axis=1), chosen[..., 2].max(axis=1)
+    near = (carried >= lowest - WIDENED_RISE * spacing) & (carried <= highest + WIDENED_RISE * spacing)
     height = np.full(len(ys) * len(xs), np.nan)
     height[node[first][near]] = carried[near]
     return height.reshape(len(ys), len(xs))

@@ -69,8 +69,7 @@ def chart_fine_colours(grid, mesh, scale):
     valid = ~np.isnan(values)
     colours = np.zeros((*values.shape, 3), dtype=np.uint8)
     if valid.any():
-        mixed = surface_colours(grid.to_input_frame(points[valid]), mesh)
-        colours[valid] = np.clip(np.round(mixed), 0, 255).astype(np.uint8)
+        colours[valid] = surface_levels(grid.to_input_frame(points[valid]), mesh)
     return colours
 
 
@@ -86,9 +85,14 @@ def sampled_colours(grid, mesh):
         valid = part.valid
         if not valid.any():
             continue
-        mixed = surface_colours(part.to_input_frame(part.node_points()[valid]), mesh)
-        colours[block][valid] = np.clip(np.round(mixed), 0, 255).astype(np.uint8)
+        colours[block][valid] = surface_levels(part.to_input_frame(part.node_points()[valid]), mesh)
     return colours
+
+
+def surface_levels(points, mesh):
+    """(n, 3) uint8: ``surface_colours`` rounded to 8-bit levels, what a grid node or a rebuilt
+    vertex keeps."""
+    return np.clip(np.round(surface_colours(points, mesh)), 0, 255).astype(np.uint8)
 
 
 def surface_colours(points, mesh):

@@ -67,7 +67,7 @@ def simplified(mesh: Mesh, vertices: int, warn: bool = True) -> Mesh:
     than that, or no triangles, as it is. The count of triangles asked for keeps the mesh's own
     ratio of triangles to vertices, so an open grid's mesh and a closed one both land near it.
     Colours stay: each kept vertex takes the mesh's colour at the point of its surface nearest it
-    (``surface_colours``; the nearest vertex's colour left fran's coded face 0.3 levels further
+    (``surface_levels``; the nearest vertex's colour left fran's coded face 0.3 levels further
     from its texture). With ``warn``, a count the simplifier cannot reach is named in a warning."""
     if vertices < 4:
         raise MzcError(f"must be at least 4, not {vertices}", field="vertices")
@@ -94,24 +94,24 @@ def simplified(mesh: Mesh, vertices: int, warn: bool = True) -> Mesh:
     points /= scale
     colors = None
     if mesh.colors is not None:   # a collapse moves a kept vertex: the colour of the surface where it now lies
-        from mzc.ops.colouring import surface_colours
+        from mzc.ops.colouring import surface_levels
 
-        colors = np.clip(np.round(surface_colours(points, mesh)), 0, 255).astype(np.uint8)
+        colors = surface_levels(points, mesh)
     return Mesh(points, np.asarray(triangles, dtype=np.int64), colors=colors)
 
 
 def unit_scale(mesh: Mesh) -> float:
-    """The power of two that brings ``mesh``'s median edge (the first edge of each triangle)
-    nearest UNIT_EDGE. The simplifier's thresholds are absolute (Fast-Quadric-Mesh-Simplification
+    """The power of two that brings ``mesh``'s median edge (slicing's ``median_edge``) nearest
+    UNIT_EDGE. The simplifier's thresholds are absolute (Fast-Quadric-Mesh-Simplification
     collapses the edges whose quadric error is below 1e-9 (iteration + 3) ^ aggressiveness), so
     in the mesh's own units a surface in metres and the same in millimetres were simplified
     differently: f18 in metres came back 16% further from its scan than in millimetres, the hand
     in its own units 7% further than in thousandths. Scaled by a power of two, the points go in
     and come back exactly; by 2^64 at most either way, so that no finite mesh's points overflow
     (a median edge of 0, or not finite, leaves the mesh as it is)."""
-    from mzc.vectors import lengths
+    from mzc.ops.slicing import median_edge
 
-    edge = float(np.median(lengths(mesh.points[mesh.triangles[:, 1]] - mesh.points[mesh.triangles[:, 0]])))
+    edge = median_edge(mesh.points, mesh.triangles)
     if not 0 < edge < np.inf:
         return 1.0
     return float(np.ldexp(1.0, int(np.clip(-round(np.log2(edge / UNIT_EDGE)), -UNIT_RANGE, UNIT_RANGE))))
