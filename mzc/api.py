@@ -261,17 +261,25 @@ def slicing_numbers(options: dict[str, Any]) -> dict[str, Any]:
     return checked
 
 
-def encode(grid: ZGrid | np.ndarray, codec: str = DEFAULT_CODEC, *, prior: Any = None,
+def encode(grid: ZGrid | Mesh | np.ndarray, codec: str = DEFAULT_CODEC, *, prior: Any = None,
            **options: Unpack[EncodeOptions]) -> bytes:
     """Compress a z-grid (or a 2D array) with a registered codec (``mzc encode``); ``options`` are
     the codec's, e.g. ``max_error=0.01`` for dwt2d, ``quality=20`` for dct. With ``prior`` (a prior
     file's path or bytes, or a ``mzc.prior.Prior``: :func:`train`) a grid cut on the prior's lattice
     is coded by dwt2d alone and as its residual from the prior's mean, the smaller written
-    (``mzc.prior.encode``)."""
+    (``mzc.prior.encode``). A ``Mesh`` (a mesh or cloud, as :func:`read` gives) is sliced first: with
+    dwt2d's ``rmse`` at the spacing that codes it within that RMS error over its whole surface in the
+    fewest bytes (``mzc.targets``), else as :func:`slice` cuts it."""
     from mzc.codecs import get_codec
     from mzc.colours import warn_uncoded
+    from mzc.meshes import Mesh
 
-    chosen, grid = get_codec(codec), as_grid(grid)
+    chosen = get_codec(codec)
+    if isinstance(grid, Mesh):
+        from mzc.targets import encode_surface
+
+        return encode_surface(grid, chosen, prior, chosen.checked(options))
+    grid = as_grid(grid)
     if prior is not None:
         if chosen.name != "dwt2d":
             raise MzcError(f"a prior codes with dwt2d, not {chosen.name}", field="prior")

@@ -7,7 +7,7 @@ options of all codecs, one click option per name. Nothing here knows a particula
 
 import click
 
-from mzc.cli.options import input_argument, output_option, read_grid
+from mzc.cli.options import input_argument, output_option, read_grid_or_surface
 
 HELP = """Compress a z-grid.
 
@@ -20,14 +20,18 @@ times). Errors are along the node lines: heights on planar grids, distances alon
 of central ones. The thesis's codecs code each row's valid span on its own: a polynomial
 of a given degree, or the DFT, DCT or DWT with quality Q (the percentage of coefficients
 kept); holes inside a span are recorded and come back invalid. Reads a z-grid (or any mzc
-file) from INPUT or stdin; writes the compressed file to -o or stdout.
+file) from INPUT or stdin; writes the compressed file to -o or stdout. A mesh or point
+cloud is sliced first: with --dwt2d --rmse E at the spacing that codes it within E over its
+whole surface in the fewest bytes (E as mzc diff --surface measures it), else as mzc slice
+cuts it.
 
 \b
   mzc encode --rmse 0.05 face.zg -o face.mzw2
   mzc encode --dwt2d --max-error 0.05 < face.zg > face.mzw2
   mzc encode --dct -q 20 face.zg -o face.mzd
   mzc encode --poly 30 face.zg -o face.mzp
-  mzc encode --prior faces.mzp --rmse 0.1 face.zg -o face.mzw2"""
+  mzc encode --prior faces.mzp --rmse 0.1 face.zg -o face.mzw2
+  mzc encode --rmse 0.08 statue.ply -o statue.mzw2"""
 SHORT_NAMES = {"quality": "-q"}
 
 
@@ -167,6 +171,7 @@ def build_command():
     def run(input, output, scheduler, prior, **values):
         from mzc.colours import warn_uncoded
         from mzc.errors import MzcError, about
+        from mzc.meshes import Mesh
         from mzc.streams import STDOUT_NAME, check_not_input, display_name, is_terminal, write_output
 
         codec = chosen_codec(codecs, values)
@@ -180,10 +185,16 @@ def build_command():
         if scheduler is not None:
             raise click.UsageError("--scheduler codes the tiles of a GeoTIFF file coded in tiles (--dwt2d on a "
                                    "raster of more than one tile, or with --tile N), not this input")
-        grid = read_grid(input)
+        item = read_grid_or_surface(input)
         with about(display_name(input), f"encoding it with {codec.name}"):
-            data = codec.encode(grid, **options) if prior is None else encoded_with_prior(grid, codec, prior, options)
-        warn_uncoded(grid, codec, options)
+            if isinstance(item, Mesh):
+                from mzc.targets import encode_surface
+
+                data = encode_surface(item, codec, prior, options)
+            else:
+                data = codec.encode(item, **options) if prior is None else encoded_with_prior(item, codec, prior,
+                                                                                             options)
+                warn_uncoded(item, codec, options)
         write_output(output, data)
 
     scheduler = click.Option(["--scheduler"], metavar="ADDRESS",

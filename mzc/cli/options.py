@@ -26,6 +26,14 @@ def read_grid(path):
         return read_file(path, GRIDS)
 
 
+def read_grid_or_surface(path):
+    """Read a grid (as ``read_grid``) or a surface (a Mesh: a mesh or point cloud) from ``path`` or stdin."""
+    from mzc.formats import KINDS, read_file
+
+    with about(display_name(path), "reading it"):
+        return read_file(path, KINDS)
+
+
 plain_option = click.option("--plain", is_flag=True,
                             help="Write the z-grid as text, one line of heights per row (mzc-zgrid 1.0/2.0) "
                                  "[default: raw, exact binary heights, mzc-zgrid 3.0].")
