@@ -34,6 +34,7 @@ UNIT_EDGE = 1.0       # the median edge in that frame. Against 5 then 7 in the m
                       # simplifier's care and work grow with the frame's scale: at 1/8 the ogre took 0.47 s,
                       # but the blob came back 1.18 times further and fran's colours 1 level further
 UNIT_RANGE = 64       # ``unit_scale`` scales by 2^64 at most either way
+UNIT_TRIANGLES = 1 << 16   # ``unit_scale`` measures every k-th triangle, k bringing them under twice this
 SLACK = 1.2
 ALL = "all"   # a vertex count asked for: every valid node of the grid
 
@@ -108,10 +109,12 @@ def unit_scale(mesh: Mesh) -> float:
     differently: f18 in metres came back 16% further from its scan than in millimetres, the hand
     in its own units 7% further than in thousandths. Scaled by a power of two, the points go in
     and come back exactly; by 2^64 at most either way, so that no finite mesh's points overflow
-    (a median edge of 0, or not finite, leaves the mesh as it is)."""
+    (a median edge of 0, or not finite, leaves the mesh as it is). A power of two needs no exact
+    median: every k-th triangle's edges give it (UNIT_TRIANGLES), in 11 ms where all of them took
+    74 ms on the grid mesh of the 100k-vertex ogre (7% of its decode + triangulate), the same scale."""
     from mzc.ops.slicing import median_edge
 
-    edge = median_edge(mesh.points, mesh.triangles)
+    edge = median_edge(mesh.points, mesh.triangles[::max(1, len(mesh.triangles) // UNIT_TRIANGLES)])
     if not 0 < edge < np.inf:
         return 1.0
     return float(np.ldexp(1.0, int(np.clip(-round(np.log2(edge / UNIT_EDGE)), -UNIT_RANGE, UNIT_RANGE))))
