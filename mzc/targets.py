@@ -30,10 +30,10 @@ SAMPLES = 100_000   # drawn on each surface to measure an error (mzc diff's coun
 
 def whole_rms(surface, grid):
     """RMS distance between ``surface`` (a Mesh: triangles, or a cloud) and ``grid``'s mesh."""
-    from mzc.api import triangulate
     from mzc.measure.metrics import distance_to_mesh, surface_distance
+    from mzc.ops.triangulation import grid_to_mesh
 
-    rebuilt = triangulate(grid, vertices="all")
+    rebuilt = grid_to_mesh(grid)
     if len(surface.triangles):
         pair = (surface.points, surface.triangles), (rebuilt.points, rebuilt.triangles)
         return surface_distance(*pair, samples=SAMPLES)["rms"]
@@ -50,15 +50,15 @@ def sliced_for(surface, rmse):
     larger (the blob's at 0.05: 259 bytes at 8 times, 237 at the default). The floor grows with the
     spacing, so the search walks from FIRST: up while the next factor passes, else down to one that
     does."""
-    from mzc.api import slice
+    from mzc.ops.slicing import slice_surface
 
-    default = slice(surface)
+    default = slice_surface(surface)
     cuts = {}
 
     def cut(index):
         if index not in cuts:
             factor = FACTORS[index]
-            grid = default if factor == 1 else slice(surface, d1=factor * default.d1, d2=factor * default.d2)
+            grid = default if factor == 1 else slice_surface(surface, d1=factor * default.d1, d2=factor * default.d2)
             cuts[index] = grid, whole_rms(surface, grid)
         return cuts[index]
 
@@ -78,9 +78,10 @@ def sliced_for(surface, rmse):
 def encode_surface(surface, codec, prior, options):
     """The file of ``surface`` (a Mesh) coded by ``codec`` (a Codec) with its checked ``options``:
     for dwt2d's ``rmse``, within it over the whole surface (``encoded_for``); else its default grid's."""
-    from mzc.api import slice
     from mzc.colours import warn_uncoded
     from mzc.errors import MzcError
+    from mzc.meshes import warn_dropped
+    from mzc.ops.slicing import slice_surface
 
     if prior is not None:
         raise MzcError("a prior codes a grid cut on its lattice: slice the surface with the prior first",
@@ -88,8 +89,9 @@ def encode_surface(surface, codec, prior, options):
     if codec.name == "dwt2d" and "rmse" in options:
         grid, data = encoded_for(surface, codec, **options)
     else:
-        grid = slice(surface)
+        grid = slice_surface(surface)
         data = codec.encode(grid, **options)
+    warn_dropped(surface)
     warn_uncoded(grid, codec, options)
     return data
 
