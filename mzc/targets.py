@@ -23,14 +23,14 @@ FACTORS = (1.0, 1.5, 2.0, 3.0, 4.0, 6.0, 8.0)   # spacings tried, in times the d
 FIRST = 2           # the index in FACTORS the search starts from
 FLOOR_SHARE = 0.8   # of the target: the largest floor a grid coded for it may have
 LEAST_BUDGET = 0.3  # of the target: the coding budget when the floor leaves less
-ATTEMPTS = 2        # budgets tried: the first, then one corrected by what its rebuild measured
 MAX_CORRECTION = 4.0   # times a budget may grow or shrink at a correction
 SAMPLES = 100_000   # drawn on each surface to measure an error (mzc diff's count)
 
 
 def whole_rms(surface, grid):
-    """RMS distance between ``surface`` (a Mesh: triangles, or a cloud) and ``grid``'s mesh."""
-    from mzc.measure.metrics import distance_to_mesh, surface_distance
+    """RMS distance between ``surface`` (a Mesh: triangles, or a cloud) and ``grid``'s mesh: as ``mzc
+    diff`` measures them, but for a cloud of more than SAMPLES points, which SAMPLES of them stand for."""
+    from mzc.measure.metrics import distance_stats, distance_to_mesh, surface_distance
     from mzc.ops.triangulation import grid_to_mesh
 
     rebuilt = grid_to_mesh(grid)
@@ -40,7 +40,7 @@ def whole_rms(surface, grid):
     points = surface.points
     if len(points) > SAMPLES:
         points = points[np.random.default_rng(0).choice(len(points), SAMPLES, replace=False)]
-    return float(np.sqrt(np.mean(distance_to_mesh(points, rebuilt.points, rebuilt.triangles) ** 2)))
+    return distance_stats(distance_to_mesh(points, rebuilt.points, rebuilt.triangles))["rmse"]
 
 
 def sliced_for(surface, rmse):
@@ -99,7 +99,7 @@ def encode_surface(surface, codec, prior, options):
 def encoded_for(surface, codec, rmse, **options):
     """(grid, its file): the ``codec`` (dwt2d) file of ``surface`` whose rebuild is within ``rmse``
     of it over its whole surface in the fewest bytes, of the grids ``sliced_for`` gives, each coded
-    at the budgets ``attempts`` tries (the most accurate file when none is within ``rmse``);
+    at the two budgets ``attempts`` tries (the most accurate file when none is within ``rmse``);
     ``options`` the codec's others."""
     files = [(error > rmse, len(data) if error <= rmse else error, grid, data)
              for grid, floor in sliced_for(surface, rmse)
@@ -108,14 +108,14 @@ def encoded_for(surface, codec, rmse, **options):
 
 
 def attempts(surface, codec, grid, floor, rmse, options):
-    """(file, its whole-surface error) of ``grid`` (whose floor is ``floor``) coded at the budget
+    """[(file, its whole-surface error)] of ``grid`` (whose floor is ``floor``) coded at the budget
     ``wanted`` that sums with the floor to ``rmse`` (in squares), then at the budget that brings
     the coding error to ``wanted`` as the first file measured it (within MAX_CORRECTION times)."""
-    wanted = max(np.sqrt(max(rmse**2 - floor**2, 0.0)), LEAST_BUDGET * rmse)
-    budget = wanted
-    for _ in range(ATTEMPTS):
+    def coded(budget):
         data, heights = codec.encode_with_decoded(grid, rmse=budget, **options)
-        error = whole_rms(surface, grid.with_z(heights))
-        yield data, error
-        coding = np.sqrt(max(error**2 - floor**2, (LEAST_BUDGET * wanted) ** 2))
-        budget *= min(max(wanted / coding, 1 / MAX_CORRECTION), MAX_CORRECTION)
+        return data, whole_rms(surface, grid.with_z(heights))
+
+    wanted = max(np.sqrt(max(rmse**2 - floor**2, 0.0)), LEAST_BUDGET * rmse)
+    first = coded(wanted)
+    coding = np.sqrt(max(first[1] ** 2 - floor**2, (LEAST_BUDGET * wanted) ** 2))
+    return [first, coded(wanted * min(max(wanted / coding, 1 / MAX_CORRECTION), MAX_CORRECTION))]

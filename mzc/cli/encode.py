@@ -7,7 +7,7 @@ options of all codecs, one click option per name. Nothing here knows a particula
 
 import click
 
-from mzc.cli.options import input_argument, output_option, read_grid_or_surface
+from mzc.cli.options import input_argument, output_option, read_grid
 
 HELP = """Compress a z-grid.
 
@@ -185,7 +185,7 @@ def build_command():
         if scheduler is not None:
             raise click.UsageError("--scheduler codes the tiles of a GeoTIFF file coded in tiles (--dwt2d on a "
                                    "raster of more than one tile, or with --tile N), not this input")
-        item = read_grid_or_surface(input)
+        item = read_grid(input, surfaces=True)
         with about(display_name(input), f"encoding it with {codec.name}"):
             if isinstance(item, Mesh):
                 from mzc.targets import encode_surface

@@ -18,20 +18,13 @@ jump_angle_option = click.option(
          "(spec/zgrid.md; 0 joins every neighbour) [default: 3].")
 
 
-def read_grid(path):
-    """Read a grid from ``path`` or stdin: a z-grid, a compressed mzc file (decoded) or a raster."""
-    from mzc.formats import GRIDS, read_file
+def read_grid(path, surfaces=False):
+    """Read a grid from ``path`` or stdin: a z-grid, a compressed mzc file (decoded) or a raster;
+    with ``surfaces`` a mesh or point cloud too (a Mesh)."""
+    from mzc.formats import GRIDS, KINDS, read_file
 
-    with about(display_name(path), "decoding it"):
-        return read_file(path, GRIDS)
-
-
-def read_grid_or_surface(path):
-    """Read a grid (as ``read_grid``) or a surface (a Mesh: a mesh or point cloud) from ``path`` or stdin."""
-    from mzc.formats import KINDS, read_file
-
-    with about(display_name(path), "reading it"):
-        return read_file(path, KINDS)
+    with about(display_name(path), "reading it" if surfaces else "decoding it"):
+        return read_file(path, KINDS if surfaces else GRIDS)
 
 
 plain_option = click.option("--plain", is_flag=True,
