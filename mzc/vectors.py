@@ -37,6 +37,20 @@ def inner(a, b):
     return float(np.sum(a * b))
 
 
+def unit_scaled(solve, values):
+    """``solve(values)`` for a ``solve`` linear in ``values`` (NaN where none), worked on ``values``
+    scaled by the power of two that brings the largest finite one's size into [0.5, 1) and scaled
+    back. A power of two scales every sum, product and quotient exactly, so values of any ordinary
+    size come back as the same numbers bit for bit, and values near the ends of the floats' range
+    as well as any others: conjugate gradients on heights of 1e-162 divided by an inner product
+    underflowed to 0. Values all 0 (or none finite) are solved as they are."""
+    largest = float(np.max(np.abs(values), where=np.isfinite(values), initial=0.0))
+    if not largest:
+        return solve(values)
+    exponent = int(np.frexp(largest)[1])
+    return np.ldexp(solve(np.ldexp(values, -exponent)), exponent)
+
+
 def dotted(vectors, others):
     """The dot product of (..., 3) ``vectors`` with (..., 3) ``others`` (one direction (3,), or one each)."""
     return vectors[..., 0] * others[..., 0] + vectors[..., 1] * others[..., 1] + vectors[..., 2] * others[..., 2]

@@ -169,6 +169,23 @@ def test_biharmonic_minimises_the_thin_plate_energy_with_holes(n):
     np.testing.assert_allclose(result, thin_plate_minimiser(z, n, step, D2), atol=1e-9, equal_nan=True)
 
 
+@pytest.mark.parametrize("method", ["biharmonic", "laplace"])
+@pytest.mark.parametrize("scale", [2.0 ** -540, 2.0 ** 300, 1e-162])
+def test_heights_of_any_size_densify_as_the_same_numbers_scaled(method, scale):
+    """Densifying is linear in the heights and works at the ends of the floats' range: heights of
+    about 1e-162 once made the biharmonic's conjugate gradients divide by an inner product
+    underflowed to 0. Scaled by a power of two, the dense grid is the same numbers, scaled."""
+    rng = np.random.default_rng(3)
+    z = rng.normal(size=(6, 25)).cumsum(axis=1)
+    z[2, 5:9] = np.nan
+    unit = densify(z, N, D1, D2, method=method)
+    scaled = densify(z * scale, N, D1, D2, method=method)
+    if np.log2(scale).is_integer():
+        np.testing.assert_array_equal(scaled, unit * scale)
+    else:
+        np.testing.assert_allclose(scaled / scale, unit, rtol=1e-9, atol=1e-9)
+
+
 @pytest.mark.parametrize("method", METHODS)
 def test_holes_stay_holes_and_original_rows_are_untouched(method):
     rng = np.random.default_rng(1)

@@ -237,6 +237,28 @@ def test_the_fill_of_a_full_or_empty_or_one_node_grid():
     assert not w2.laplace_fill(np.array([[np.nan, 0.0]]), np.array([[False, True]])).any()   # zero data: zero fill
 
 
+@pytest.mark.parametrize("fill", [w2.laplace_fill, w2.smooth_fill])
+@pytest.mark.parametrize("scale", [2.0 ** -540, 1e-162, 1e-300, 1e150, 1e300])
+def test_the_fills_take_heights_of_any_size_and_scale_with_them(fill, scale):
+    """A fill is linear in the heights, and fills them at the ends of the floats' range as well
+    (hypothesis found one valid height of 4e-162 whose conjugate gradients divided by an inner
+    product underflowed to 0): scaled by a power of two the fill is the same numbers, scaled;
+    by any other scale, within rounding."""
+    rng = np.random.default_rng(11)
+    z, valid = rng.normal(size=(23, 31)), rng.random((23, 31)) < 0.4
+    valid[0, 0] = True
+    unit = fill(np.where(valid, z, np.nan), valid)
+    scaled = fill(np.where(valid, z * scale, np.nan), valid)
+    assert np.isfinite(scaled).all() and np.array_equal(scaled[valid], z[valid] * scale)
+    if scale == 2.0 ** -540:
+        assert np.array_equal(scaled, unit * scale)
+    else:
+        np.testing.assert_allclose(scaled / scale, unit, rtol=1e-9, atol=1e-9)
+    one = np.full((1, 5), np.nan)
+    one[0, 0] = 3.9589971e-162
+    np.testing.assert_allclose(fill(one, np.isfinite(one)), 3.9589971e-162, rtol=1e-9, atol=0)   # its height
+
+
 @settings(max_examples=60, deadline=None)
 @given(st.integers(1, 12), st.integers(1, 12), st.integers(0, 2 ** 32 - 1), st.booleans())
 def test_the_thin_plate_system_is_the_laplacian_squared_at_the_invalid_nodes(rows, cols, seed, periodic):

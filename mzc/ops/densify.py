@@ -53,7 +53,7 @@ import numpy as np
 
 from mzc.errors import MzcError
 from mzc.limits import MAX_INSERTED, MAX_ITERATIONS, check_grid_size, length_problem
-from mzc.vectors import inner
+from mzc.vectors import inner, unit_scaled
 
 METHODS = ("thesis", "laplace", "biharmonic")
 DEFAULT_METHOD = "biharmonic"
@@ -338,8 +338,14 @@ def biharmonic_inserted(z, n, gaps, step, d2):
     the across-row second differences centred on the original rows; within a gap A is a
     band of half-width 2n (unknowns numbered column by column, row by row). The unknowns
     are numbered even gaps first, then odd ones, so each half is one band and the coupling
-    only joins the halves (``solve_plate``).
+    only joins the halves (``solve_plate``). Solved on the heights scaled by a power of two
+    (``unit_scaled``: the same numbers, and heights of 1e-162 as any others).
     """
+    return unit_scaled(lambda heights: plate_inserted(heights, n, gaps, step, d2), z)
+
+
+def plate_inserted(z, n, gaps, step, d2):
+    """biharmonic_inserted's rows, solved on heights ``z`` as they are."""
     domain = gaps.domain
     inside = np.where(domain[:, None, :], straight_lines(z, n), np.nan)
     if domain.any():

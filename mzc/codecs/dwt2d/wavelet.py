@@ -23,7 +23,7 @@ import numpy as np
 from mzc import elementary, projections
 from mzc.codecs.dwt2d import lifting
 from mzc.errors import MzcError
-from mzc.vectors import inner
+from mzc.vectors import inner, unit_scaled
 
 WAVELETS = ("bior4.4", "bior2.2", "bior3.3", "db2", "db4", "sym4", "coif1", "haar")   # of dwt2d 2.0
 MODE = "periodization"
@@ -68,7 +68,7 @@ def laplace_fill(z, valid, periodic=False):
     filled = np.where(valid, z, 0.0)
     if valid.all() or not valid.any():
         return filled
-    return harmonic_solve(filled, valid, periodic)[0]
+    return unit_scaled(lambda values: harmonic_solve(values, valid, periodic)[0], filled)
 
 
 def harmonic_solve(filled, valid, periodic, tolerance=FILL_TOLERANCE):
@@ -105,6 +105,11 @@ def smooth_fill(z, valid, periodic=False):
     filled = np.where(valid, z, 0.0)
     if valid.all() or not valid.any():
         return filled
+    return unit_scaled(lambda values: thin_plate_solve(values, valid, periodic), filled)
+
+
+def thin_plate_solve(filled, valid, periodic):
+    """``filled`` (the valid heights, zeros elsewhere) with its invalid nodes set to smooth_fill's values."""
     known = filled.copy()
     filled, multigrid = harmonic_solve(filled, valid, periodic, SMOOTH_START)
     fine = multigrid.finest
