@@ -282,7 +282,7 @@ def encode(grid: ZGrid | Mesh | np.ndarray, codec: str = DEFAULT_CODEC, *, prior
     grid = as_grid(grid)
     if prior is not None:
         if chosen.name != "dwt2d":
-            raise MzcError(f"a prior codes with dwt2d, not {chosen.name}", field="prior")
+            raise MzcError(f"codes with dwt2d alone, not {chosen.name}", field="prior", options=("prior",))
         from mzc.prior import as_prior
         from mzc.prior import encode as encode_with_prior
 
@@ -499,7 +499,7 @@ def batch_encode(sources: Any, dest: PathLike, codec: str = DEFAULT_CODEC, *,
         from mzc.prior import refuse_shaping
 
         if chosen.name != "dwt2d":
-            raise MzcError(f"a prior codes with dwt2d, not {chosen.name}", field="prior")
+            raise MzcError(f"codes with dwt2d alone, not {chosen.name}", field="prior", options=("prior",))
         refuse_shaping(slicing)
         settings["prior"] = batch_prior(prior)
     return run_batch_job("encode", sources, dest, settings, sliceable_extensions(), chosen.extension, verify=verify,

@@ -152,16 +152,6 @@ def written_by_windows(codec, path, output, options, scheduler=None):
         source.close()
 
 
-def encoded_with_prior(grid, codec, path, options):
-    """The bytes of ``grid`` coded against the prior at ``path`` (mzc.prior.encode): dwt2d alone."""
-    from mzc.errors import MzcError
-    from mzc.prior import as_prior, encode
-
-    if codec.name != "dwt2d":
-        raise MzcError(f"--prior codes with --dwt2d, not {flag(codec.name)}", field="prior")
-    return encode(grid, as_prior(path), **options)
-
-
 def build_command():
     """The ``mzc encode`` command over the codecs registered now."""
     from mzc.codecs import codec_names, get_codec
@@ -169,9 +159,8 @@ def build_command():
     codecs = [get_codec(name) for name in codec_names()]
 
     def run(input, output, scheduler, prior, **values):
-        from mzc.colours import warn_uncoded
+        from mzc.api import encode
         from mzc.errors import MzcError, about
-        from mzc.meshes import Mesh
         from mzc.streams import STDOUT_NAME, check_not_input, display_name, is_terminal, write_output
 
         codec = chosen_codec(codecs, values)
@@ -187,14 +176,7 @@ def build_command():
                                    "raster of more than one tile, or with --tile N), not this input")
         item = read_grid(input, surfaces=True)
         with about(display_name(input), f"encoding it with {codec.name}"):
-            if isinstance(item, Mesh):
-                from mzc.targets import encode_surface
-
-                data = encode_surface(item, codec, prior, options)
-            else:
-                data = codec.encode(item, **options) if prior is None else encoded_with_prior(item, codec, prior,
-                                                                                             options)
-                warn_uncoded(item, codec, options)
+            data = encode(item, codec.name, prior=prior, **options)
         write_output(output, data)
 
     scheduler = click.Option(["--scheduler"], metavar="ADDRESS",
