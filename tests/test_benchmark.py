@@ -18,6 +18,7 @@ from conftest import REPO, face_path, run_mzc
 BENCHMARK = REPO / "benchmarks" / "rd.py"
 sys.path.insert(0, str(BENCHMARK.parent))
 
+import codec_limits  # noqa: E402
 import contenders  # noqa: E402
 import encoder_gains  # noqa: E402
 import rd  # noqa: E402
@@ -63,6 +64,33 @@ def test_every_encoder_gains_variant_writes_a_file_the_unchanged_decoder_reads(n
     expanded = dwt2d.expand_steps(steps, 1 + 3 * levels)
     if ratio is not None:
         np.testing.assert_allclose(np.array(expanded[1:-3]) / np.array(expanded[4:]), ratio, rtol=1e-3)
+
+
+def test_codec_limits_rebuilds_as_the_decoder_and_finds_the_axis_of_a_symmetric_surface():
+    """benchmarks/codec_limits.py's studies stand on two pieces of their own: its reconstruction
+    with no offset is the decoder's, node for node, on a rough generated surface (so an offset's
+    figure is the decoder's own with that one change), and the mirror axis it finds on a surface
+    symmetric about column 40 (with a lopsided mask) is that column, with no asymmetry."""
+    import mzc
+    from mzc.codecs import dwt2d
+
+    rng = np.random.default_rng(7)
+    z = rng.normal(scale=0.3, size=(70, 90)).cumsum(axis=0).cumsum(axis=1) / 20
+    z[:8, :5] = np.nan
+    grid = ZGrid(z, 1.0, 1.0)
+    data = mzc.encode(grid, "dwt2d", rmse=0.05)
+    prepared = dwt2d.Prepared(grid, dwt2d.DEFAULT_WAVELET, None, dwt2d.SLOPE_LIMIT)
+    step = codec_limits.file_step(data, grid)
+    qflat, _ = prepared.decoded(step)
+    rebuilt = codec_limits.offset_decoded(prepared, qflat, step, 0.0)
+    np.testing.assert_array_equal(rebuilt[grid.valid], mzc.decode(data).z[grid.valid])
+    assert not np.array_equal(codec_limits.offset_decoded(prepared, qflat, step, 0.1)[grid.valid],
+                              rebuilt[grid.valid])
+    columns = np.arange(81)
+    symmetric = np.tile(np.cos((columns - 40) / 9.0) * 5, (30, 1)) + np.arange(30)[:, None] * 0.1
+    symmetric[:, 75:] = np.nan   # a mask that is not symmetric: the axis is found where both sides are valid
+    twice, asymmetry = codec_limits.mirror_axis(ZGrid(symmetric, 1.0, 1.0))
+    assert (twice, asymmetry) == (80, 0.0)
 
 
 def test_a_face_against_itself_is_zero():
