@@ -90,8 +90,8 @@ def offset_decoded(prepared, qflat, step, delta):
 
     written = dwt2d.header_steps(step, prepared.levels)
     steps = dwt2d.band_steps(prepared.geometry, written, [q.shape for q in qflat], qflat[0], prepared.slope_limit)
-    bands = [qflat[0] * steps[0]] + [(q - delta * np.sign(q)) * s for q, s in zip(qflat[1:], steps[1:])]
-    return prepared.transform.inverse(w2.unflatten(bands, prepared.levels), prepared.grid.shape, prepared.wavelet,
+    moved = [qflat[0]] + [q - delta * np.sign(q) for q in qflat[1:]]
+    return prepared.transform.inverse(w2.dequantise(moved, steps), prepared.grid.shape, prepared.wavelet,
                                       prepared.levels, prepared.geometry.periodic)
 
 

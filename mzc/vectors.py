@@ -37,18 +37,19 @@ def inner(a, b):
     return float(np.sum(a * b))
 
 
-def unit_scaled(solve, values):
-    """``solve(values)`` for a ``solve`` linear in ``values`` (NaN where none), worked on ``values``
-    scaled by the power of two that brings the largest finite one's size into [0.5, 1) and scaled
-    back. A power of two scales every sum, product and quotient exactly, so values of any ordinary
-    size come back as the same numbers bit for bit, and values near the ends of the floats' range
-    as well as any others: conjugate gradients on heights of 1e-162 divided by an inner product
-    underflowed to 0. Values all 0 (or none finite) are solved as they are."""
-    largest = float(np.max(np.abs(values), where=np.isfinite(values), initial=0.0))
+def unit_scaled(solve, *values):
+    """``solve(*values)`` for a ``solve`` linear in its ``values`` together (arrays, NaN where none,
+    or None), worked on them scaled by the power of two that brings the largest finite one's size
+    into [0.5, 1) and scaled back. A power of two scales every sum, product and quotient exactly,
+    so values of any ordinary size come back as the same numbers bit for bit, and values near the
+    ends of the floats' range as well as any others: conjugate gradients on heights of 1e-162
+    divided by an inner product underflowed to 0. Values all 0 (or none finite) are solved as they are."""
+    largest = max((float(np.max(np.abs(v), where=np.isfinite(v), initial=0.0)) for v in values if v is not None),
+                  default=0.0)
     if not largest:
-        return solve(values)
+        return solve(*values)
     exponent = int(np.frexp(largest)[1])
-    return np.ldexp(solve(np.ldexp(values, -exponent)), exponent)
+    return np.ldexp(solve(*(None if v is None else np.ldexp(v, -exponent) for v in values)), exponent)
 
 
 def dotted(vectors, others):

@@ -338,14 +338,8 @@ def biharmonic_inserted(z, n, gaps, step, d2):
     the across-row second differences centred on the original rows; within a gap A is a
     band of half-width 2n (unknowns numbered column by column, row by row). The unknowns
     are numbered even gaps first, then odd ones, so each half is one band and the coupling
-    only joins the halves (``solve_plate``). Solved on the heights scaled by a power of two
-    (``unit_scaled``: the same numbers, and heights of 1e-162 as any others).
+    only joins the halves (``solve_plate``).
     """
-    return unit_scaled(lambda heights: plate_inserted(heights, n, gaps, step, d2), z)
-
-
-def plate_inserted(z, n, gaps, step, d2):
-    """biharmonic_inserted's rows, solved on heights ``z`` as they are."""
     domain = gaps.domain
     inside = np.where(domain[:, None, :], straight_lines(z, n), np.nan)
     if domain.any():
@@ -430,7 +424,14 @@ def solve_plate(band, rhs, start, evens, pairs, weight, rtol=1e-12, max_steps=10
     (O p = r + beta O p_before, since O z = r for the preconditioned residual z), so O's band
     is factored in place. Inner products are plain numpy sums, not BLAS: threaded BLAS on a
     busy machine costs more in synchronisation than these short vectors take to multiply.
+    Solved on ``rhs`` and ``start`` scaled by a power of two (``unit_scaled``: the same numbers,
+    and heights of 1e-162 as any others).
     """
+    return unit_scaled(lambda b, first: plate_steps(band, b, first, evens, pairs, weight, rtol, max_steps), rhs, start)
+
+
+def plate_steps(band, rhs, start, evens, pairs, weight, rtol, max_steps):
+    """solve_plate's steps, on ``rhs`` and ``start`` as they are."""
     from mzc.ops import _plate
 
     even_factor, odd_band = band_factor(band[:evens]), band[evens:]

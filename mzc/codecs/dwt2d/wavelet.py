@@ -68,7 +68,7 @@ def laplace_fill(z, valid, periodic=False):
     filled = np.where(valid, z, 0.0)
     if valid.all() or not valid.any():
         return filled
-    return unit_scaled(lambda values: harmonic_solve(values, valid, periodic)[0], filled)
+    return harmonic_solve(filled, valid, periodic)[0]
 
 
 def harmonic_solve(filled, valid, periodic, tolerance=FILL_TOLERANCE):
@@ -105,11 +105,6 @@ def smooth_fill(z, valid, periodic=False):
     filled = np.where(valid, z, 0.0)
     if valid.all() or not valid.any():
         return filled
-    return unit_scaled(lambda values: thin_plate_solve(values, valid, periodic), filled)
-
-
-def thin_plate_solve(filled, valid, periodic):
-    """``filled`` (the valid heights, zeros elsewhere) with its invalid nodes set to smooth_fill's values."""
     known = filled.copy()
     filled, multigrid = harmonic_solve(filled, valid, periodic, SMOOTH_START)
     fine = multigrid.finest
@@ -329,7 +324,13 @@ def conjugate_gradients(multigrid, b, start=None, tolerance=FILL_TOLERANCE, iter
     ``b`` to ``tolerance`` (the residual over the start's) by conjugate gradients preconditioned with the
     multigrid cycle, from ``start`` (None: 0). Every vector is updated in place (the same
     numbers: x += length * direction and so on), as fresh ones cost a big grid more in the
-    kernel's page handling than in the arithmetic."""
+    kernel's page handling than in the arithmetic. Solved on ``b`` and ``start`` scaled by a power
+    of two (``unit_scaled``: the same numbers, and heights of 1e-162 as any others)."""
+    return unit_scaled(lambda rhs, first: conjugate_steps(multigrid, rhs, first, tolerance, iterations), b, start)
+
+
+def conjugate_steps(multigrid, b, start, tolerance, iterations):
+    """conjugate_gradients' steps, on ``b`` and ``start`` as they are."""
     preconditioned, image, change = (np.zeros_like(b) for _ in range(3))
     if start is None:
         x, residual = np.zeros_like(b), b.copy()
